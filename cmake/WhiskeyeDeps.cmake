@@ -1,0 +1,19 @@
+# Every third-party dependency, found once for the whole tree. All come from Debian 12 packages
+# installed by scripts/install-deps.
+find_package(PkgConfig REQUIRED)
+# Debian's LCM 1.3.1 ships no CMake package; pkg-config's lcm.pc needs glib-2.0 (libglib2.0-dev).
+pkg_check_modules(LCM REQUIRED IMPORTED_TARGET lcm)
+find_program(LCM_GEN_EXECUTABLE lcm-gen REQUIRED)
+find_file(LCM_JAR lcm.jar PATHS /usr/share/java REQUIRED NO_DEFAULT_PATH)
+find_package(Java 11 REQUIRED COMPONENTS Development)
+
+find_package(Threads REQUIRED)
+find_package(Eigen3 3.3 REQUIRED NO_MODULE)
+find_package(OpenCVParts REQUIRED)  # OpenCV::core, OpenCV::imgproc, OpenCV::imgcodecs
+find_package(yaml-cpp REQUIRED)
+find_package(CLI11 REQUIRED)
+find_package(GTest REQUIRED)
+find_package(Python3 REQUIRED COMPONENTS Interpreter)
+if(WHISKEYE_BUILD_BENCHMARKS)
+  find_package(benchmark REQUIRED)
+endif()

@@ -1,0 +1,35 @@
+# whiskeye_add_gtest(NAME LABEL <unit|integration|vm> SOURCES ... [LIBS ...] [TIMEOUT s] [NETNS])
+# One gtest binary, each TEST discovered as its own ctest test and labelled, so
+# `ctest -L unit` runs the fast suite and the sanitizer build can build only what it runs.
+include(GoogleTest)
+
+function(whiskeye_add_gtest name)
+  cmake_parse_arguments(ARG "NETNS" "LABEL;TIMEOUT" "SOURCES;LIBS" ${ARGN})
+  if(NOT ARG_LABEL)
+    message(FATAL_ERROR "whiskeye_add_gtest(${name}): LABEL is required")
+  endif()
+  if(NOT ARG_TIMEOUT)
+    set(ARG_TIMEOUT 120)
+  endif()
+  add_executable(${name} ${ARG_SOURCES})
+  if(ARG_NETNS)
+    # Tests that use udpm:// run (and are discovered) inside a private network namespace.
+    set_target_properties(${name} PROPERTIES CROSSCOMPILING_EMULATOR ${PROJECT_SOURCE_DIR}/scripts/netns-run)
+  endif()
+  target_link_libraries(${name} PRIVATE ${ARG_LIBS} GTest::gmock GTest::gtest_main)
+  gtest_discover_tests(${name}
+    PROPERTIES LABELS ${ARG_LABEL} TIMEOUT ${ARG_TIMEOUT}
+    DISCOVERY_TIMEOUT 60)
+  set_property(GLOBAL APPEND PROPERTY WHISKEYE_TESTS_${ARG_LABEL} ${name})
+endfunction()
+
+# Targets `tests_unit`, `tests_integration`, `tests_vm`: build just the binaries of one label.
+function(whiskeye_finish_test_targets)
+  foreach(label unit integration vm)
+    get_property(targets GLOBAL PROPERTY WHISKEYE_TESTS_${label})
+    add_custom_target(tests_${label})
+    if(targets)
+      add_dependencies(tests_${label} ${targets})
+    endif()
+  endforeach()
+endfunction()

@@ -1,0 +1,192 @@
+// The message transport seam. Node code talks to a Bus; the same code then runs
+//   - on the robot over LCM (LcmBus, udpm://),
+//   - on a recorded log (LogReader feeding handlers, LogWriterBus collecting output),
+//   - in a unit test (MemoryBus, synchronous, in-process).
+// Typed helpers encode/decode LCM types; a message that fails to decode is counted and reported to
+// DecodeErrors, never thrown at the node.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+namespace lcm {
+class LCM;
+class LogFile;
+}  // namespace lcm
+
+namespace whiskeye {
+
+struct MessageInfo {
+  std::string channel;
+  int64_t recv_utime = 0;  // when the transport received it (log event time on a log)
+};
+
+class Bus {
+ public:
+  using RawHandler = std::function<void(std::span<const uint8_t> data, const MessageInfo& info)>;
+
+  virtual ~Bus() = default;
+  virtual void publish_raw(const std::string& channel, std::span<const uint8_t> data) = 0;
+  // `channel` is a POSIX extended regex matched against the whole channel name, as in LCM.
+  virtual void subscribe_raw(const std::string& channel, RawHandler handler) = 0;
+};
+
+// Counts messages that failed to decode, per channel; optionally tells a callback (to log).
+class DecodeErrors {
+ public:
+  using Callback = std::function<void(const std::string& channel, const std::string& reason)>;
+  void set_callback(Callback cb);
+  void record(const std::string& channel, const std::string& reason);
+  int64_t total() const { return total_.load(); }
+  int64_t count(const std::string& channel) const;
+
+ private:
+  std::atomic<int64_t> total_{0};
+  mutable std::mutex mutex_;
+  std::map<std::string, int64_t> per_channel_;
+  Callback callback_;
+};
+
+// Encodes an LCM message. Throws std::runtime_error if the message cannot be encoded (e.g. an
+// array shorter than its length field).
+template <typename T>
+std::vector<uint8_t> encode_message(const T& msg) {
+  const int size = msg.getEncodedSize();
+  std::vector<uint8_t> buf(static_cast<std::size_t>(size));
+  if (size < 0 || msg.encode(buf.data(), 0, size) != size) {
+    throw std::runtime_error(std::string("cannot encode ") + T::getTypeName() +
+                             ": array length fields disagree with the data");
+  }
+  return buf;
+}
+
+// Decodes an LCM message; false with a reason on a fingerprint mismatch, truncation or trailing bytes.
+template <typename T>
+bool decode_message(std::span<const uint8_t> data, T& out, std::string* reason = nullptr) {
+  const int n = out.decode(data.data(), 0, static_cast<int>(data.size()));
+  if (n < 0 || static_cast<std::size_t>(n) != data.size()) {
+    if (reason) {
+      *reason = std::string("cannot decode ") + std::to_string(data.size()) + " bytes as whiskeye." +
+                T::getTypeName() +
+                (n < 0 ? " (wrong type fingerprint or truncated)" : " (trailing bytes)");
+    }
+    return false;
+  }
+  return true;
+}
+
+template <typename T>
+void publish(Bus& bus, const std::string& channel, const T& msg) {
+  const std::vector<uint8_t> buf = encode_message(msg);
+  bus.publish_raw(channel, buf);
+}
+
+// Subscribes with decoding. handler is void(const T&) or void(const T&, const MessageInfo&).
+template <typename T, typename Handler>
+void subscribe(Bus& bus, const std::string& channel, Handler handler, DecodeErrors& errors) {
+  bus.subscribe_raw(channel, [handler = std::move(handler), &errors](std::span<const uint8_t> data,
+                                                                     const MessageInfo& info) {
+    T msg;
+    std::string reason;
+    if (!decode_message(data, msg, &reason)) {
+      errors.record(info.channel, reason);
+      return;
+    }
+    if constexpr (std::is_invocable_v<Handler, const T&, const MessageInfo&>) {
+      handler(msg, info);
+    } else {
+      handler(msg);
+    }
+  });
+}
+
+// In-process bus: publish delivers synchronously to every matching subscription. For tests.
+class MemoryBus : public Bus {
+ public:
+  void publish_raw(const std::string& channel, std::span<const uint8_t> data) override;
+  void subscribe_raw(const std::string& channel, RawHandler handler) override;
+  // Time stamped on delivered messages (recv_utime).
+  void set_time(int64_t utime) { now_utime_ = utime; }
+
+ private:
+  struct Sub;
+  std::vector<std::shared_ptr<Sub>> subs_;
+  int64_t now_utime_ = 0;
+};
+
+// LCM over a URL ("" = $LCM_DEFAULT_URL or LCM's default). Throws std::runtime_error if LCM cannot
+// start (e.g. no multicast route for udpm://).
+class LcmBus : public Bus {
+ public:
+  explicit LcmBus(const std::string& url = "");
+  ~LcmBus() override;
+  LcmBus(const LcmBus&) = delete;
+  LcmBus& operator=(const LcmBus&) = delete;
+
+  void publish_raw(const std::string& channel, std::span<const uint8_t> data) override;
+  void subscribe_raw(const std::string& channel, RawHandler handler) override;
+  // Dispatches at most one message; 0 on timeout, >0 if handled, <0 on error.
+  int handle_timeout(int timeout_ms);
+  int fileno();
+
+ private:
+  struct Adapter;
+  std::unique_ptr<lcm::LCM> lcm_;
+  std::vector<std::unique_ptr<Adapter>> adapters_;
+};
+
+// One event of an LCM log file.
+struct LogEvent {
+  int64_t utime = 0;  // the logger's receive time
+  std::string channel;
+  std::vector<uint8_t> data;
+};
+
+// Reads an LCM log (as written by lcm-logger) directly, in file order.
+class LogReader {
+ public:
+  explicit LogReader(const std::string& path);  // throws std::runtime_error naming the file
+  ~LogReader();
+  LogReader(const LogReader&) = delete;
+  LogReader& operator=(const LogReader&) = delete;
+  // False at the end of the log.
+  bool next(LogEvent& event);
+  // Fraction of the file read, 0..1 (for progress bars).
+  double progress() const;
+
+ private:
+  std::unique_ptr<lcm::LogFile> log_;
+  long size_ = 0;
+};
+
+// A Bus that appends every published message to an LCM log file, stamped with set_time().
+// Subscriptions are delivered synchronously (like MemoryBus) so a node can also read its own output.
+class LogWriterBus : public Bus {
+ public:
+  explicit LogWriterBus(const std::string& path);  // throws std::runtime_error naming the file
+  ~LogWriterBus() override;
+  LogWriterBus(const LogWriterBus&) = delete;
+  LogWriterBus& operator=(const LogWriterBus&) = delete;
+
+  void publish_raw(const std::string& channel, std::span<const uint8_t> data) override;
+  void subscribe_raw(const std::string& channel, RawHandler handler) override;
+  void set_time(int64_t utime);
+  int64_t events_written() const { return events_; }
+
+ private:
+  std::unique_ptr<lcm::LogFile> log_;
+  MemoryBus local_;
+  int64_t now_utime_ = 0;
+  int64_t events_ = 0;
+};
+
+}  // namespace whiskeye

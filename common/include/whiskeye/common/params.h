@@ -1,0 +1,128 @@
+// Loading YAML parameters into plain structs, strictly.
+//
+// Every module has one parameter struct with working defaults and a loader of the form
+//   void load(const ParamNode& node, MyParams& p) { node.get("rate_hz", p.rate_hz, 1.0, 1000.0); ... }
+// A key absent from the file keeps its default. A wrong type, a value out of range, or a key that no
+// loader asked for (a typo) is a ParamError whose message names the file and the full key path.
+// dump() lists every parameter asked for, with its value and whether it came from the file, so a
+// daemon can print exactly what it runs with.
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace whiskeye {
+
+class ParamError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+class ParamNode {
+ public:
+  // Parses a YAML file; a missing or unparsable file is a ParamError naming it.
+  static ParamNode from_file(const std::string& path);
+  static ParamNode from_string(const std::string& yaml, const std::string& source = "<string>");
+  // No file: every get() keeps its default.
+  static ParamNode empty(const std::string& source = "<defaults>");
+
+  // A nested map. A missing section is an empty node (defaults apply); a non-map is an error.
+  ParamNode section(const std::string& key) const;
+  // A list of maps (e.g. the walls of a world). A missing list is empty; a non-list is an error.
+  std::vector<ParamNode> list(const std::string& key) const;
+  bool has(const std::string& key) const;
+
+  // Optional scalar or list-of-scalars parameter: keeps `value` when the key is absent.
+  template <typename T>
+  void get(const std::string& key, T& value) const;
+  // Same, then checks min <= value <= max.
+  template <typename T>
+  void get(const std::string& key, T& value, T min, T max) const;
+  // Mandatory parameter: absent is an error.
+  template <typename T>
+  void require(const std::string& key, T& value) const;
+
+  // Throws ParamError naming the first key in the document that no get/section/list asked for.
+  void check_no_unknown_keys() const;
+  // One line "path: value" per parameter asked for, "  (default)" where the file did not set it.
+  std::string dump() const;
+  const std::string& source() const;
+  std::string path_of(const std::string& key) const;
+
+ private:
+  struct State;
+  ParamNode(std::shared_ptr<State> state, YAML::Node node, std::string prefix);
+
+  YAML::Node lookup(const std::string& key) const;
+  void mark_leaf(const std::string& key, const std::string& value, bool from_file) const;
+  [[noreturn]] void fail(const std::string& key, const std::string& what) const;
+  static std::string describe(const YAML::Node& node);
+
+  template <typename T>
+  static std::string to_text(const T& value);
+
+  std::shared_ptr<State> state_;
+  YAML::Node node_;
+  std::string prefix_;
+};
+
+// ---- implementation of the templates ----
+
+template <typename T>
+std::string ParamNode::to_text(const T& value) {
+  std::ostringstream out;
+  out.precision(10);
+  if constexpr (std::is_same_v<T, std::string>) {
+    out << '"' << value << '"';
+  } else if constexpr (std::is_same_v<T, bool>) {
+    out << (value ? "true" : "false");
+  } else if constexpr (std::is_arithmetic_v<T>) {
+    out << +value;
+  } else {
+    out << '[';
+    bool first = true;
+    for (const auto& v : value) {
+      out << (first ? "" : ", ") << to_text(v);
+      first = false;
+    }
+    out << ']';
+  }
+  return out.str();
+}
+
+template <typename T>
+void ParamNode::get(const std::string& key, T& value) const {
+  const YAML::Node n = lookup(key);
+  if (!n || n.IsNull()) {
+    mark_leaf(key, to_text(value), false);
+    return;
+  }
+  try {
+    value = n.as<T>();
+  } catch (const YAML::Exception&) {
+    fail(key, "has the wrong type: " + describe(n));
+  }
+  mark_leaf(key, to_text(value), true);
+}
+
+template <typename T>
+void ParamNode::get(const std::string& key, T& value, T min, T max) const {
+  get(key, value);
+  if (!(value >= min && value <= max)) {
+    fail(key, "= " + to_text(value) + " is out of range [" + to_text(min) + ", " + to_text(max) + "]");
+  }
+}
+
+template <typename T>
+void ParamNode::require(const std::string& key, T& value) const {
+  const YAML::Node n = lookup(key);
+  if (!n || n.IsNull()) fail(key, "is required but missing");
+  get(key, value);
+}
+
+}  // namespace whiskeye

@@ -1,0 +1,152 @@
+#include "whiskeye/common/params.h"
+
+#include <set>
+
+namespace whiskeye {
+
+struct ParamNode::State {
+  std::string source;
+  YAML::Node root;
+  std::set<std::string> leaves;    // keys read as values: their whole subtree is known
+  std::set<std::string> sections;  // maps and lists descended into: their children are checked
+  std::vector<std::string> dump_lines;
+};
+
+ParamNode::ParamNode(std::shared_ptr<State> state, YAML::Node node, std::string prefix)
+    : state_(std::move(state)), node_(std::move(node)), prefix_(std::move(prefix)) {}
+
+ParamNode ParamNode::from_string(const std::string& yaml, const std::string& source) {
+  auto state = std::make_shared<State>();
+  state->source = source;
+  try {
+    state->root = YAML::Load(yaml);
+  } catch (const YAML::Exception& e) {
+    throw ParamError(source + ": not valid YAML: " + e.what());
+  }
+  if (state->root.IsNull()) state->root = YAML::Node(YAML::NodeType::Map);
+  if (!state->root.IsMap()) throw ParamError(source + ": the document must be a map of keys");
+  return ParamNode(state, state->root, "");
+}
+
+ParamNode ParamNode::from_file(const std::string& path) {
+  auto state = std::make_shared<State>();
+  state->source = path;
+  try {
+    state->root = YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    throw ParamError(path + ": cannot open the file");
+  } catch (const YAML::Exception& e) {
+    throw ParamError(path + ": not valid YAML: " + e.what());
+  }
+  if (state->root.IsNull()) state->root = YAML::Node(YAML::NodeType::Map);
+  if (!state->root.IsMap()) throw ParamError(path + ": the document must be a map of keys");
+  return ParamNode(state, state->root, "");
+}
+
+ParamNode ParamNode::empty(const std::string& source) { return from_string("{}", source); }
+
+const std::string& ParamNode::source() const { return state_->source; }
+
+std::string ParamNode::path_of(const std::string& key) const {
+  return prefix_.empty() ? key : prefix_ + "." + key;
+}
+
+YAML::Node ParamNode::lookup(const std::string& key) const {
+  if (!node_ || !node_.IsMap()) return YAML::Node();
+  const YAML::Node& const_node = node_;
+  return const_node[key];
+}
+
+bool ParamNode::has(const std::string& key) const {
+  const YAML::Node n = lookup(key);
+  return n && !n.IsNull();
+}
+
+std::string ParamNode::describe(const YAML::Node& node) {
+  std::string text;
+  if (node.IsScalar()) {
+    text = "'" + node.Scalar() + "'";
+  } else if (node.IsSequence()) {
+    text = "a list";
+  } else if (node.IsMap()) {
+    text = "a map";
+  } else {
+    text = "nothing";
+  }
+  if (node.Mark().line >= 0) text += " (line " + std::to_string(node.Mark().line + 1) + ")";
+  return text;
+}
+
+void ParamNode::fail(const std::string& key, const std::string& what) const {
+  throw ParamError(state_->source + ": '" + path_of(key) + "' " + what);
+}
+
+void ParamNode::mark_leaf(const std::string& key, const std::string& value, bool from_file) const {
+  const std::string path = path_of(key);
+  state_->leaves.insert(path);
+  state_->dump_lines.push_back(path + ": " + value + (from_file ? "" : "  (default)"));
+}
+
+ParamNode ParamNode::section(const std::string& key) const {
+  const std::string path = path_of(key);
+  state_->sections.insert(path);
+  const YAML::Node n = lookup(key);
+  if (!n || n.IsNull()) return ParamNode(state_, YAML::Node(YAML::NodeType::Map), path);
+  if (!n.IsMap()) fail(key, "must be a map of keys, got " + describe(n));
+  return ParamNode(state_, n, path);
+}
+
+std::vector<ParamNode> ParamNode::list(const std::string& key) const {
+  const std::string path = path_of(key);
+  state_->sections.insert(path);
+  const YAML::Node n = lookup(key);
+  std::vector<ParamNode> items;
+  if (!n || n.IsNull()) return items;
+  if (!n.IsSequence()) fail(key, "must be a list, got " + describe(n));
+  for (std::size_t i = 0; i < n.size(); ++i) {
+    const std::string item_path = path + "[" + std::to_string(i) + "]";
+    if (!n[i].IsMap()) {
+      throw ParamError(state_->source + ": '" + item_path + "' must be a map of keys, got " + describe(n[i]));
+    }
+    state_->sections.insert(item_path);
+    items.push_back(ParamNode(state_, n[i], item_path));
+  }
+  return items;
+}
+
+namespace {
+
+void check_node(const YAML::Node& node, const std::string& path, const std::set<std::string>& leaves,
+                const std::set<std::string>& sections, const std::string& source) {
+  if (node.IsMap()) {
+    for (const auto& kv : node) {
+      const std::string key = kv.first.Scalar();
+      const std::string child = path.empty() ? key : path + "." + key;
+      if (leaves.count(child)) continue;
+      if (sections.count(child)) {
+        check_node(kv.second, child, leaves, sections, source);
+        continue;
+      }
+      throw ParamError(source + ": unknown key '" + child + "' (line " +
+                       std::to_string(kv.first.Mark().line + 1) + ")");
+    }
+  } else if (node.IsSequence()) {
+    for (std::size_t i = 0; i < node.size(); ++i) {
+      check_node(node[i], path + "[" + std::to_string(i) + "]", leaves, sections, source);
+    }
+  }
+}
+
+}  // namespace
+
+void ParamNode::check_no_unknown_keys() const {
+  check_node(state_->root, "", state_->leaves, state_->sections, state_->source);
+}
+
+std::string ParamNode::dump() const {
+  std::string out;
+  for (const auto& line : state_->dump_lines) out += line + "\n";
+  return out;
+}
+
+}  // namespace whiskeye

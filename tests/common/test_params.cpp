@@ -1,0 +1,145 @@
+#include "whiskeye/common/params.h"
+
+#include <gtest/gtest.h>
+#include <gmock/gmock.h>
+
+#include <cstdio>
+#include <fstream>
+
+namespace whiskeye {
+namespace {
+
+using ::testing::HasSubstr;
+
+struct Example {
+  double rate_hz = 50.0;
+  int cells = 21;
+  bool enabled = true;
+  std::string name = "default";
+  std::vector<double> gains{1.0, 2.0};
+  double inner = 0.5;
+  bool operator==(const Example&) const = default;
+};
+
+void load(const ParamNode& n, Example& p) {
+  n.get("rate_hz", p.rate_hz, 1.0, 1000.0);
+  n.get("cells", p.cells, 3, 200);
+  n.get("enabled", p.enabled);
+  n.get("name", p.name);
+  n.get("gains", p.gains);
+  n.section("nested").get("inner", p.inner, 0.0, 1.0);
+  n.check_no_unknown_keys();
+}
+
+std::string error_of(const std::string& yaml) {
+  try {
+    Example p;
+    load(ParamNode::from_string(yaml, "test.yaml"), p);
+  } catch (const ParamError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Params, AbsentKeysKeepDefaults) {
+  Example p;
+  load(ParamNode::empty(), p);
+  EXPECT_EQ(p, Example{});
+}
+
+TEST(Params, LoadsEveryType) {
+  Example p;
+  load(ParamNode::from_string("rate_hz: 100\ncells: 30\nenabled: false\nname: arena\n"
+                              "gains: [3, 4.5]\nnested: {inner: 0.25}\n"),
+       p);
+  EXPECT_DOUBLE_EQ(p.rate_hz, 100.0);
+  EXPECT_EQ(p.cells, 30);
+  EXPECT_FALSE(p.enabled);
+  EXPECT_EQ(p.name, "arena");
+  EXPECT_EQ(p.gains, (std::vector<double>{3.0, 4.5}));
+  EXPECT_DOUBLE_EQ(p.inner, 0.25);
+}
+
+TEST(Params, RejectsUnknownKeyByFullPath) {
+  EXPECT_THAT(error_of("rate_hz: 10\nnested: {inner: 0.1, innr: 2}\n"),
+              HasSubstr("test.yaml: unknown key 'nested.innr'"));
+  EXPECT_THAT(error_of("rate_hzz: 10\n"), HasSubstr("unknown key 'rate_hzz' (line 1)"));
+}
+
+TEST(Params, RejectsWrongTypeNamingKeyAndLine) {
+  const std::string e = error_of("rate_hz: 10\ncells: many\n");
+  EXPECT_THAT(e, HasSubstr("test.yaml: 'cells' has the wrong type"));
+  EXPECT_THAT(e, HasSubstr("'many' (line 2)"));
+  EXPECT_THAT(error_of("cells: 2.5\n"), HasSubstr("'cells' has the wrong type"));
+  EXPECT_THAT(error_of("nested: 3\n"), HasSubstr("'nested' must be a map"));
+}
+
+TEST(Params, RejectsOutOfRange) {
+  EXPECT_THAT(error_of("rate_hz: 0\n"), HasSubstr("'rate_hz' = 0 is out of range [1, 1000]"));
+  EXPECT_THAT(error_of("nested: {inner: 1.5}\n"), HasSubstr("'nested.inner' = 1.5 is out of range"));
+  EXPECT_THAT(error_of("rate_hz: .nan\n"), HasSubstr("'rate_hz' = nan is out of range"));
+}
+
+TEST(Params, RequireFailsWhenMissing) {
+  auto n = ParamNode::from_string("a: 1\n", "r.yaml");
+  int a = 0;
+  int b = 0;
+  n.require("a", a);
+  EXPECT_EQ(a, 1);
+  try {
+    n.require("b", b);
+    FAIL() << "missing key accepted";
+  } catch (const ParamError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("r.yaml: 'b' is required but missing"));
+  }
+}
+
+TEST(Params, ListsOfMapsAreCheckedPerItem) {
+  auto n = ParamNode::from_string("walls:\n  - {x: 1}\n  - {x: 2, colour: red}\n", "w.yaml");
+  std::vector<double> xs;
+  for (const auto& item : n.list("walls")) {
+    double x = 0;
+    item.get("x", x);
+    xs.push_back(x);
+  }
+  EXPECT_EQ(xs, (std::vector<double>{1, 2}));
+  try {
+    n.check_no_unknown_keys();
+    FAIL() << "unknown key accepted";
+  } catch (const ParamError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("unknown key 'walls[1].colour'"));
+  }
+}
+
+TEST(Params, DumpListsValuesAndDefaults) {
+  Example p;
+  load(ParamNode::from_string("cells: 30\n"), p);
+  auto n = ParamNode::from_string("cells: 30\n");
+  load(n, p);
+  const std::string d = n.dump();
+  EXPECT_THAT(d, HasSubstr("cells: 30\n"));
+  EXPECT_THAT(d, HasSubstr("rate_hz: 50  (default)\n"));
+  EXPECT_THAT(d, HasSubstr("nested.inner: 0.5  (default)\n"));
+  EXPECT_THAT(d, HasSubstr("gains: [1, 2]  (default)\n"));
+}
+
+TEST(Params, FileErrorsNameTheFile) {
+  try {
+    ParamNode::from_file("/nonexistent/robot.yaml");
+    FAIL();
+  } catch (const ParamError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("/nonexistent/robot.yaml: cannot open"));
+  }
+  const std::string path = ::testing::TempDir() + "bad.yaml";
+  std::ofstream(path) << "a: [1, 2\n";
+  try {
+    ParamNode::from_file(path);
+    FAIL();
+  } catch (const ParamError& e) {
+    EXPECT_THAT(e.what(), HasSubstr(path + ": not valid YAML"));
+  }
+  std::remove(path.c_str());
+}
+
+}  // namespace
+}  // namespace whiskeye
