@@ -56,15 +56,14 @@ class DecodeErrors {
   Callback callback_;
 };
 
-// Encodes an LCM message. Throws std::runtime_error if the message cannot be encoded (e.g. an
-// array shorter than its length field).
+// Encodes an LCM message. The caller keeps every array as long as its length field says: LCM's
+// generated encoders index arrays by those fields without checking.
 template <typename T>
 std::vector<uint8_t> encode_message(const T& msg) {
   const int size = msg.getEncodedSize();
   std::vector<uint8_t> buf(static_cast<std::size_t>(size));
   if (size < 0 || msg.encode(buf.data(), 0, size) != size) {
-    throw std::runtime_error(std::string("cannot encode ") + T::getTypeName() +
-                             ": array length fields disagree with the data");
+    throw std::runtime_error(std::string("cannot encode ") + T::getTypeName());
   }
   return buf;
 }
