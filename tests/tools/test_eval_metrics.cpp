@@ -158,6 +158,18 @@ TEST(Enm, KnownHeadingErrorGivesKnownEnm) {
   EXPECT_NEAR(*r.translation, 0.0, 1e-20);
 }
 
+TEST(Enm, MatchesTheHandWorkedExampleOfTheDocs) {
+  // docs/evaluation.md: x1 = (1,0,0), x2 = (0,1,pi/2); map x1 = (0,0,0), x2 = (-1,1,pi/2+0.1).
+  const GroundTruth gt({{0, {1.0, 0.0, 0.0}}, {10, {0.0, 1.0, kPi / 2}}});
+  ExperienceMap map;
+  map.experiences.push_back({1, {0.0, 0.0, 0.0}, 0, false});
+  map.experiences.push_back({2, {-1.0, 1.0, kPi / 2 + 0.1}, 10, false});
+  map.links.push_back({1, 2});
+  const EnmResult r = compute_enm(map, gt);
+  EXPECT_NEAR(*r.translation, 0.0, 1e-24);
+  EXPECT_NEAR(*r.rotation, 0.01, 1e-12);
+}
+
 TEST(Enm, KnownTranslationErrorGivesKnownEnm) {
   const GroundTruth gt(circle_gt(10.0, 10.0));
   ExperienceMap map = exact_chain_map(gt, Pose2{}, 3, kSecond);

@@ -168,14 +168,15 @@ std::optional<int64_t> base_set_end(const GroundTruth& gt, const EvalParams& par
   if (params.base_duration_s) {
     return gt.begin_utime() + seconds_to_utime(*params.base_duration_s);
   }
-  // Net polar-angle travel around the centre; samples on the centre itself have no polar angle.
+  // Net polar-angle travel around the centre (so back-and-forth does not add up). Samples within
+  // 1 cm of the centre are skipped: their polar angle is meaningless.
   std::optional<double> prev_phi;
   int64_t prev_utime = 0;
   double travelled = 0.0;
   for (const PoseSample& s : gt.samples()) {
     const double dx = s.pose.x - params.centre_x;
     const double dy = s.pose.y - params.centre_y;
-    if (std::hypot(dx, dy) < 1e-9) continue;
+    if (std::hypot(dx, dy) < 0.01) continue;
     const double phi = std::atan2(dy, dx);
     if (prev_phi) {
       const double next = travelled + angle_diff(phi, *prev_phi);
