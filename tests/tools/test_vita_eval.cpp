@@ -48,6 +48,15 @@ experience_t experience(int32_t id, int64_t utime, double heading_error = 0.0) {
   return e;
 }
 
+// pose2d_t and vita_pose_t share these fields.
+template <typename Msg>
+void set_pose(Msg& msg, int64_t utime, const Pose2& p) {
+  msg.utime = utime;
+  msg.x = p.x;
+  msg.y = p.y;
+  msg.theta = p.theta;
+}
+
 link_t link(int32_t from, int32_t to) {
   link_t l{};
   l.from_id = from;
@@ -90,20 +99,12 @@ void write_log(const std::string& path, const Script& script) {
   for (int64_t u = 0; u <= static_cast<int64_t>(2 * kPeriodS) * kSecond; u += 20'000) {  // 50 Hz
     const int64_t t = kStart + u;
     bus.set_time(t);
-    const Pose2 g = gt_at(t);
     pose2d_t gt{};
-    gt.utime = t;
-    gt.x = g.x;
-    gt.y = g.y;
-    gt.theta = g.theta;
+    set_pose(gt, t, gt_at(t));
     publish(bus, "GROUND_TRUTH", gt);
     if (u % 100'000 == 0) {  // 10 Hz pose estimate, exact in the map frame
-      const Pose2 p = map_pose(t);
       vita_pose_t vp{};
-      vp.utime = t;
-      vp.x = p.x;
-      vp.y = p.y;
-      vp.theta = p.theta;
+      set_pose(vp, t, map_pose(t));
       vp.experience_id = current;
       vp.mode = script.mode;
       publish(bus, "VITA_POSE", vp);
@@ -248,7 +249,8 @@ TEST_F(VitaEvalBinary, FailsWithAOneLineReasonOnALogWithoutGroundTruth) {
   EXPECT_NE(run_vita_eval("--input " + file("nogt.lcmlog"), file("stdout.txt")), 0);
   EXPECT_NE(read_text(file("stdout.txt")).find("no GROUND_TRUTH"), std::string::npos);
   EXPECT_NE(run_vita_eval("--input " + file("missing.lcmlog"), file("stdout2.txt")), 0);
-  EXPECT_NE(run_vita_eval("--input " + file("nogt.lcmlog") + " --centre 1;2", file("stdout3.txt")), 0);
+  EXPECT_NE(run_vita_eval("--input " + file("nogt.lcmlog") + " --centre 1:2", file("stdout3.txt")), 0);
+  EXPECT_NE(read_text(file("stdout3.txt")).find("--centre must be X,Y"), std::string::npos);
 }
 
 }  // namespace
