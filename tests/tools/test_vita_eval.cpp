@@ -195,6 +195,7 @@ TEST_F(VitaEvalBinary, ComputesTheExpectedMetricsAndWritesJsonAndPlots) {
   EXPECT_LT(run["lem"]["orientation_rad"]["rmse"].get<double>(), 1e-9);
   EXPECT_EQ(run["lem"]["samples_used"], 401);
   EXPECT_EQ(run["exm"]["base_set_size"], 20);
+  EXPECT_NEAR(run["exm"]["base_end_s"].get<double>(), 20.0, 1e-5);
   EXPECT_EQ(run["exm"]["experience_events_after_base"], 20);
   EXPECT_EQ(run["exm"]["relocalisations_after_base"], 19);
   EXPECT_NEAR(run["exm"]["arr"].get<double>(), 19.0 / 20.0, 1e-12);

@@ -210,6 +210,7 @@ ExmResult compute_exm(const std::vector<ExperienceEvent>& events_in, const Exper
   const std::optional<int64_t> end = base_set_end(gt, params);
   r.base_end_found = end.has_value();
   r.base_end_utime = end.value_or(std::numeric_limits<int64_t>::max());
+  if (end) r.base_end_s = utime_delta_seconds(gt.begin_utime(), *end);
   for (const auto& [id, t] : created) {
     if (t <= r.base_end_utime) ++r.base_set_size;
   }

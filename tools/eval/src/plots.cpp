@@ -176,6 +176,10 @@ void plot_experience_map(const std::string& path, const std::string& title, cons
   c.legend_entry(3, "sparse experience", [](cv::Mat& im, cv::Point p) {
     cv::circle(im, p, 4, kBlue, 1, cv::LINE_AA);
   });
+  c.legend_entry(4, "tick: the experience's heading", [](cv::Mat& im, cv::Point p) {
+    cv::circle(im, p, 4, kBlue, 1, cv::LINE_AA);
+    cv::line(im, p, p + cv::Point(9, 0), kBlue, 1, cv::LINE_AA);
+  });
   c.scale_bar();
   c.save(path);
 }

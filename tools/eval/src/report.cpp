@@ -89,6 +89,7 @@ nlohmann::json exm_json(const ExmResult& x) {
           {"valid_fraction", opt_json(x.valid_fraction)},
           {"base_end_found", x.base_end_found},
           {"base_end_utime", x.base_end_found ? nlohmann::json(x.base_end_utime) : nlohmann::json(nullptr)},
+          {"base_end_s", x.base_end_found ? nlohmann::json(x.base_end_s) : nlohmann::json(nullptr)},
           {"base_set_size", x.base_set_size},
           {"experience_events_after_base", x.experience_events_after_base},
           {"relocalisations_after_base", x.relocalisations_after_base},
@@ -153,7 +154,8 @@ std::string format_table(const std::vector<RunReport>& runs, const std::vector<P
     }
     const ExmResult& x = e.exm;
     out << "  ExM: base set " << x.base_set_size << " experiences ("
-        << (x.base_end_found ? "until the first revolution ends" : "revolution never completed: all are base")
+        << (x.base_end_found ? "until " + fmt("%.3f", x.base_end_s) + " s after the first ground truth"
+                             : std::string("revolution never completed: all are base"))
         << "); after it " << x.experience_events_after_base << " experience events, "
         << x.relocalisations_after_base << " re-localisations, " << x.correct_after_base << " correct\n";
     out << "       all re-localisations incl. base set: " << x.relocalisations_total << ", correct "

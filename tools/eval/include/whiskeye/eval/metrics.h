@@ -126,6 +126,7 @@ struct Relocalisation {
 struct ExmResult {
   bool base_end_found = false;     // false: the revolution was never completed (everything is base)
   int64_t base_end_utime = 0;      // events strictly after this time are "after the base set"
+  double base_end_s = 0.0;         // the same, in seconds after the first ground-truth sample
   std::size_t base_set_size = 0;   // experiences created at or before base_end_utime
   std::size_t experience_events_after_base = 0;  // new experiences + re-localisations
   std::size_t relocalisations_after_base = 0;
