@@ -48,3 +48,24 @@ TEST(ControllerAllocation, StepAllocatesOnlyWhenACycleCompletes) {
   EXPECT_EQ(inside_cycle, 0);
   EXPECT_LE(at_boundary, 4 * 2);  // the next cycle's reserved storage (+ the moved-out copy)
 }
+
+TEST(ControllerAllocation, RecyclingCompletedCyclesRemovesAllAllocations) {
+  Controller c{ControllerParams{}};
+  c.enable();
+  for (int64_t seq = 0; seq < 1500; ++seq) {
+    ControlOutput out = c.step(make_sample(seq, 0.003, 0.0));
+    if (out.completed_cycle) c.recycle(std::move(*out.completed_cycle));
+  }
+  const long before = g_allocations.load();
+  int completed = 0;
+  for (int64_t seq = 1500; seq < 3500; ++seq) {
+    ControlOutput out = c.step(make_sample(seq, 0.003, 0.0));
+    if (out.completed_cycle) {
+      ++completed;
+      EXPECT_EQ(out.completed_cycle->samples.size(), 500u);
+      c.recycle(std::move(*out.completed_cycle));
+    }
+  }
+  EXPECT_EQ(completed, 4);
+  EXPECT_EQ(g_allocations.load() - before, 0);
+}
