@@ -21,8 +21,8 @@ FakePose FakeRobotino::expected_pose(int64_t seq) {
   return FakePose{p.x, p.y, 3.0 + omega * t, vx, vy, omega};
 }
 
-FakeRobotino::FakeRobotino(int port) : server_(std::make_unique<httplib::Server>()) {
-  server_->set_keep_alive_max_count(1000000);  // one connection for the whole test
+FakeRobotino::FakeRobotino(int port, int keep_alive_max) : server_(std::make_unique<httplib::Server>()) {
+  server_->set_keep_alive_max_count(static_cast<size_t>(keep_alive_max));
   server_->set_tcp_nodelay(true);  // headers and body go out in separate writes: no Nagle wait
   server_->Get("/data/odometry", [this](const httplib::Request&, httplib::Response& res) {
     Fault fault{};

@@ -45,8 +45,9 @@ struct FakePose {
 
 class FakeRobotino {
  public:
-  // port 0: any free port.
-  explicit FakeRobotino(int port = 0);
+  // port 0: any free port. keep_alive_max: requests the server serves on one connection before
+  // closing it (servers do this; the client must reconnect without counting a fault).
+  explicit FakeRobotino(int port = 0, int keep_alive_max = 1000000);
   ~FakeRobotino();
   FakeRobotino(const FakeRobotino&) = delete;
   FakeRobotino& operator=(const FakeRobotino&) = delete;
