@@ -16,6 +16,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <mutex>
 #include <thread>
 
@@ -112,14 +113,33 @@ void expect_matches_base(const odometry_t& m) {
   EXPECT_EQ(m.omega, p.omega);
 }
 
-TEST(BasedNode, PublishesOdometryOverOneKeptAliveConnection) {
+// A fake base, a bus and what the node publishes; the node is destroyed first (members in reverse).
+struct BasedNodeTest : public ::testing::Test {
+  BasedNode& make(const BasedParams& p) {
+    node = std::make_unique<BasedNode>(bus, p);
+    return *node;
+  }
+  BasedNode& start(const BasedParams& p) {
+    make(p).start();
+    return *node;
+  }
+  BasedNode& start() { return start(test_params(base.url())); }
+  // A reset must be counted once and ODOMETRY must not jump with the base's origin.
+  void expect_reset_handled(Fault fault, const char* counter);
+  bool samples(std::size_t n) {
+    return wait_for([&] { return got.odom_count() >= n; });
+  }
+
   FakeRobotino base;
   MemoryBus bus;
-  Collector got(bus);
-  BasedNode node(bus, test_params(base.url()));
-  node.start();
+  Collector got{bus};
+  std::unique_ptr<BasedNode> node;
+};
+
+TEST_F(BasedNodeTest, PublishesOdometryOverOneKeptAliveConnection) {
+  BasedNode& node = start();
   // 0.01 s per seq at omega 0.5 from theta 3.0: theta passes pi after ~28 samples.
-  ASSERT_TRUE(wait_for([&] { return got.odom_count() >= 40; }));
+  ASSERT_TRUE(samples(40));
   node.stop();
   const std::vector<odometry_t> odom = got.odom();
   int64_t prev_seq = -1;
@@ -140,13 +160,10 @@ TEST(BasedNode, PublishesOdometryOverOneKeptAliveConnection) {
   }
 }
 
-TEST(BasedNode, ServerClosingTheKeptAliveConnectionIsNotAFault) {
-  FakeRobotino base(0, 5);  // cpp-httplib's default: 5 requests per connection
-  MemoryBus bus;
-  Collector got(bus);
-  BasedNode node(bus, test_params(base.url()));
-  node.start();
-  ASSERT_TRUE(wait_for([&] { return got.odom_count() >= 30; }));
+TEST_F(BasedNodeTest, ServerClosingTheKeptAliveConnectionIsNotAFault) {
+  FakeRobotino closing(0, 5);  // cpp-httplib's default: 5 requests per connection
+  BasedNode& node = start(test_params(closing.url()));
+  ASSERT_TRUE(samples(30));
   node.stop();
   EXPECT_GE(node.counter("connections_opened"), 5);
   EXPECT_EQ(node.counter("replies_dropped"), 0);
@@ -155,14 +172,10 @@ TEST(BasedNode, ServerClosingTheKeptAliveConnectionIsNotAFault) {
   for (const odometry_t& m : got.odom()) expect_matches_base(m);
 }
 
-TEST(BasedNode, StampsOdometryAtTheMiddleOfTheRoundTrip) {
-  FakeRobotino base;
+TEST_F(BasedNodeTest, StampsOdometryAtTheMiddleOfTheRoundTrip) {
   base.set_reply_delay_ms(15);  // the base samples 15 ms after the request and replies 15 ms later
-  MemoryBus bus;
-  Collector got(bus);
-  BasedNode node(bus, test_params(base.url()));
-  node.start();
-  ASSERT_TRUE(wait_for([&] { return got.odom_count() >= 10; }));
+  BasedNode& node = start();
+  ASSERT_TRUE(samples(10));
   node.stop();
   std::vector<double> errors_us;
   for (const odometry_t& m : got.odom()) {
@@ -176,14 +189,10 @@ TEST(BasedNode, StampsOdometryAtTheMiddleOfTheRoundTrip) {
   EXPECT_NEAR(errors_us[errors_us.size() / 2], 0.0, 5000.0);
 }
 
-TEST(BasedNode, CountsMalformedRepliesAndCarriesOn) {
-  FakeRobotino base;
+TEST_F(BasedNodeTest, CountsMalformedRepliesAndCarriesOn) {
   base.script({Fault::kMalformed, Fault::kWrongLength, Fault::kNaN, Fault::kNull, Fault::kHttp500});
-  MemoryBus bus;
-  Collector got(bus);
-  BasedNode node(bus, test_params(base.url()));
-  node.start();
-  ASSERT_TRUE(wait_for([&] { return got.odom_count() >= 10; }));
+  BasedNode& node = start();
+  ASSERT_TRUE(samples(10));
   node.stop();
   EXPECT_EQ(node.counter("replies_malformed"), 4);
   EXPECT_EQ(node.counter("http_errors"), 1);
@@ -191,15 +200,11 @@ TEST(BasedNode, CountsMalformedRepliesAndCarriesOn) {
   EXPECT_EQ(node.counter("connections_opened"), 1);
 }
 
-TEST(BasedNode, SlowReplyIsATimeoutAndThePollerCarriesOn) {
-  FakeRobotino base;
+TEST_F(BasedNodeTest, SlowReplyIsATimeoutAndThePollerCarriesOn) {
   base.set_slow_reply_ms(120);  // > reply_timeout_s 0.05
   base.script({Fault::kSlow});
-  MemoryBus bus;
-  Collector got(bus);
-  BasedNode node(bus, test_params(base.url()));
-  node.start();
-  ASSERT_TRUE(wait_for([&] { return got.odom_count() >= 10; }));
+  BasedNode& node = start();
+  ASSERT_TRUE(samples(10));
   node.stop();
   EXPECT_EQ(node.counter("reply_timeouts"), 1);
   EXPECT_EQ(node.counter("replies_dropped"), 0);
@@ -207,14 +212,10 @@ TEST(BasedNode, SlowReplyIsATimeoutAndThePollerCarriesOn) {
   for (const odometry_t& m : got.odom()) expect_matches_base(m);
 }
 
-TEST(BasedNode, DroppedConnectionIsCountedAndReconnected) {
-  FakeRobotino base;
+TEST_F(BasedNodeTest, DroppedConnectionIsCountedAndReconnected) {
   base.script({Fault::kDrop, Fault::kDrop});
-  MemoryBus bus;
-  Collector got(bus);
-  BasedNode node(bus, test_params(base.url()));
-  node.start();
-  ASSERT_TRUE(wait_for([&] { return got.odom_count() >= 10; }));
+  BasedNode& node = start();
+  ASSERT_TRUE(samples(10));
   node.stop();
   EXPECT_EQ(node.counter("replies_dropped"), 2);
   EXPECT_EQ(node.counter("reply_timeouts"), 0);
@@ -222,15 +223,11 @@ TEST(BasedNode, DroppedConnectionIsCountedAndReconnected) {
   for (const odometry_t& m : got.odom()) expect_matches_base(m);
 }
 
-TEST(BasedNode, RepeatedSeqIsCountedAndNotPublished) {
-  FakeRobotino base;
-  MemoryBus bus;
-  Collector got(bus);
-  BasedNode node(bus, test_params(base.url()));
-  node.start();
-  ASSERT_TRUE(wait_for([&] { return got.odom_count() >= 3; }));
+TEST_F(BasedNodeTest, RepeatedSeqIsCountedAndNotPublished) {
+  BasedNode& node = start();
+  ASSERT_TRUE(samples(3));
   base.script({Fault::kRepeatSeq, Fault::kRepeatSeq, Fault::kRepeatSeq});
-  ASSERT_TRUE(wait_for([&] { return got.odom_count() >= 10; }));
+  ASSERT_TRUE(samples(10));
   node.stop();
   EXPECT_EQ(node.counter("repeated_seq"), 3);
   int64_t prev = -1;
@@ -240,17 +237,12 @@ TEST(BasedNode, RepeatedSeqIsCountedAndNotPublished) {
   }
 }
 
-// A reset must be counted once and ODOMETRY must not jump with the base's origin.
-void expect_reset_handled(Fault fault, const char* counter) {
-  FakeRobotino base;
-  MemoryBus bus;
-  Collector got(bus);
-  BasedNode node(bus, test_params(base.url()));
-  node.start();
-  ASSERT_TRUE(wait_for([&] { return got.odom_count() >= 5; }));
+void BasedNodeTest::expect_reset_handled(Fault fault, const char* counter) {
+  BasedNode& node = start();
+  ASSERT_TRUE(samples(5));
   base.script({fault});
   const std::size_t before = got.odom_count();
-  ASSERT_TRUE(wait_for([&] { return got.odom_count() >= before + 10; }));
+  ASSERT_TRUE(samples(before + 10));
   node.stop();
   EXPECT_EQ(node.counter(counter), 1);
   EXPECT_EQ(node.counter("odometry_resets"), 1);
@@ -261,22 +253,19 @@ void expect_reset_handled(Fault fault, const char* counter) {
   }
 }
 
-TEST(BasedNode, OdometryJumpIsAResetAndOdometryStaysContinuous) {
+TEST_F(BasedNodeTest, OdometryJumpIsAResetAndOdometryStaysContinuous) {
   expect_reset_handled(Fault::kJump, "odometry_jumps");
 }
 
-TEST(BasedNode, SeqGoingBackwardsIsAReset) { expect_reset_handled(Fault::kSeqRestart, "seq_backwards"); }
+TEST_F(BasedNodeTest, SeqGoingBackwardsIsAReset) { expect_reset_handled(Fault::kSeqRestart, "seq_backwards"); }
 
-TEST(BasedNode, UnreachableBaseIsAFaultWithAMessageAndRecovers) {
+TEST_F(BasedNodeTest, UnreachableBaseIsAFaultWithAMessageAndRecovers) {
   int port = 0;
   {
     FakeRobotino probe;  // find a free port, then close it
     port = probe.port();
   }
-  MemoryBus bus;
-  Collector got(bus);
-  BasedNode node(bus, test_params("http://127.0.0.1:" + std::to_string(port)));
-  node.start();
+  BasedNode& node = start(test_params("http://127.0.0.1:" + std::to_string(port)));
   ASSERT_TRUE(wait_for([&] { return node.health().state == HealthState::kFault; }));
   const Health::Report down = node.health();
   EXPECT_NE(down.message.find("cannot connect"), std::string::npos) << down.message;
@@ -290,20 +279,16 @@ TEST(BasedNode, UnreachableBaseIsAFaultWithAMessageAndRecovers) {
   EXPECT_LE(failures, 12);
   EXPECT_EQ(got.odom_count(), 0u);
 
-  FakeRobotino base(port);
-  ASSERT_TRUE(wait_for([&] { return got.odom_count() >= 5; }));
+  FakeRobotino revived(port);
+  ASSERT_TRUE(samples(5));
   ASSERT_TRUE(wait_for([&] { return node.health().state == HealthState::kOk; }, 2.0)) << node.health().message;
   node.stop();
 }
 
-TEST(BasedNode, PublishesDriverStatusOncePerSecond) {
-  FakeRobotino base;
-  MemoryBus bus;
-  Collector got(bus);
+TEST_F(BasedNodeTest, PublishesDriverStatusOncePerSecond) {
   BasedParams p = test_params(base.url());
   p.connection.degraded_hold_s = 1.5;  // longer than the status period: every fault shows in one status
-  BasedNode node(bus, p);
-  node.start();
+  BasedNode& node = start(p);
   ASSERT_TRUE(wait_for([&] { return got.statuses().size() >= 1; }, 1.5));
   base.script({Fault::kMalformed});
   ASSERT_TRUE(wait_for([&] { return got.statuses().size() >= 2; }, 1.5));
@@ -323,12 +308,9 @@ TEST(BasedNode, PublishesDriverStatusOncePerSecond) {
 
 // ---- commands ----
 
-TEST(BasedNode, DeadmanStopsTheBaseWhenCommandsStop) {
-  FakeRobotino base;
-  MemoryBus bus;
+TEST_F(BasedNodeTest, DeadmanStopsTheBaseWhenCommandsStop) {
   const BasedParams p = test_params(base.url());
-  BasedNode node(bus, p);
-  node.start();
+  BasedNode& node = start(p);
   for (int i = 0; i < 15; ++i) {  // 0.3 s of commands at 50 Hz
     send_cmd(bus, 0.3, 0.0, 0.0);
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
@@ -351,13 +333,10 @@ TEST(BasedNode, DeadmanStopsTheBaseWhenCommandsStop) {
   EXPECT_EQ(node.counter("deadman_stops"), 1);
 }
 
-TEST(BasedNode, LimitsSpeedAndAcceleration) {
-  FakeRobotino base;
-  MemoryBus bus;
+TEST_F(BasedNodeTest, LimitsSpeedAndAcceleration) {
   BasedParams p = test_params(base.url());
   p.command.max_linear_accel = 1.0;
-  BasedNode node(bus, p);
-  node.start();
+  BasedNode& node = start(p);
   const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(800);
   while (std::chrono::steady_clock::now() < end) {
     send_cmd(bus, 3.0, 4.0, -9.0);  // 5 m/s and 9 rad/s asked, limits are 0.5 and 1.5
@@ -389,11 +368,8 @@ TEST(BasedNode, LimitsSpeedAndAcceleration) {
   EXPECT_EQ(cmds.back().omega, 0.0);
 }
 
-TEST(BasedNode, NonFiniteCommandIsRejectedAndNeverSent) {
-  FakeRobotino base;
-  MemoryBus bus;
-  BasedNode node(bus, test_params(base.url()));
-  node.start();
+TEST_F(BasedNodeTest, NonFiniteCommandIsRejectedAndNeverSent) {
+  BasedNode& node = start();
   send_cmd(bus, 0.1, 0.0, 0.0);
   send_cmd(bus, std::numeric_limits<double>::quiet_NaN(), 0.0, 0.0);
   ASSERT_TRUE(wait_for([&] { return base.commands().size() >= 5; }));
@@ -403,11 +379,8 @@ TEST(BasedNode, NonFiniteCommandIsRejectedAndNeverSent) {
   EXPECT_EQ(node.counter("command_failures"), 0) << "the base got a body it could not parse";
 }
 
-TEST(BasedNode, StopSendsAZeroVelocity) {
-  FakeRobotino base;
-  MemoryBus bus;
-  BasedNode node(bus, test_params(base.url()));
-  node.start();
+TEST_F(BasedNodeTest, StopSendsAZeroVelocity) {
+  BasedNode& node = start();
   for (int i = 0; i < 10; ++i) {
     send_cmd(bus, 0.0, 0.2, 0.3);
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
@@ -420,11 +393,9 @@ TEST(BasedNode, StopSendsAZeroVelocity) {
   EXPECT_EQ(c.omega, 0.0);
 }
 
-TEST(BasedNode, CircleCommandsSidewaysMotionAndStopsAfterTheLaps) {
-  FakeRobotino base;
-  MemoryBus bus;
+TEST_F(BasedNodeTest, CircleCommandsSidewaysMotionAndStopsAfterTheLaps) {
   const BasedParams p = test_params(base.url());
-  BasedNode node(bus, p);
+  BasedNode& node = make(p);
   const double radius = 0.4, speed = -0.5;  // clockwise; 1.25 rad/s
   node.drive_circle(CircleSpec{radius, speed, 1});
   send_cmd(bus, 0.3, 0.0, 0.0);  // ignored while driving the circle
@@ -452,13 +423,11 @@ TEST(BasedNode, CircleCommandsSidewaysMotionAndStopsAfterTheLaps) {
   EXPECT_EQ(node.counter("commands_received"), 0);
 }
 
-TEST(BasedNode, CircleWithLapsFinishesAndLeavesTheBaseStopped) {
-  FakeRobotino base;
-  MemoryBus bus;
+TEST_F(BasedNodeTest, CircleWithLapsFinishesAndLeavesTheBaseStopped) {
   BasedParams p = test_params(base.url());
   p.command.max_angular_speed = 6.0;
   p.command.max_angular_accel = 20.0;
-  BasedNode node(bus, p);
+  BasedNode& node = make(p);
   const double radius = 0.1, speed = 0.5;  // 0.63 m: 0.25 s ramps and 1 s of cruise
   node.drive_circle(CircleSpec{radius, speed, 1});
   node.start();

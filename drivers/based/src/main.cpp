@@ -58,6 +58,7 @@ int main(int argc, char** argv) {
     based::BasedNode node(bus, params);
     if (*circle_opt) {
       node.drive_circle(based::CircleSpec{radius, speed, laps});
+      std::fprintf(stderr, "based: %s\n", based::CircleTrajectory(based::CircleSpec{radius, speed, laps}, params.command).describe().c_str());
     }
     // Worker threads inherit a mask with the signals blocked, so only this thread handles them.
     sigset_t set;
@@ -65,6 +66,9 @@ int main(int argc, char** argv) {
     sigaddset(&set, SIGINT);
     sigaddset(&set, SIGTERM);
     pthread_sigmask(SIG_BLOCK, &set, nullptr);
+    std::fprintf(stderr, "based: base %s, odometry %.0f Hz, commands %.0f Hz, deadman %.2f s%s\n",
+                 params.url.c_str(), params.odometry.poll_rate_hz, params.command.rate_hz,
+                 params.command.deadman_s, *circle_opt ? ", driving a circle" : ", following BASE_CMD");
     node.start();
     struct sigaction sa {};
     sa.sa_handler = on_signal;
@@ -73,9 +77,6 @@ int main(int argc, char** argv) {
     sigaction(SIGTERM, &sa, nullptr);
     pthread_sigmask(SIG_UNBLOCK, &set, nullptr);
 
-    std::fprintf(stderr, "based: base %s, odometry %.0f Hz, commands %.0f Hz, deadman %.2f s%s\n",
-                 params.url.c_str(), params.odometry.poll_rate_hz, params.command.rate_hz,
-                 params.command.deadman_s, *circle_opt ? ", driving a circle" : ", following BASE_CMD");
     while (g_signal == 0 && !node.finished()) {
       bus.handle_timeout(100);
     }
