@@ -230,11 +230,26 @@ TEST_F(BasedNodeTest, RepeatedSeqIsCountedAndNotPublished) {
   ASSERT_TRUE(samples(10));
   node.stop();
   EXPECT_EQ(node.counter("repeated_seq"), 3);
+  EXPECT_EQ(node.health().state, HealthState::kOk) << "a few repeats are routine, not a fault";
   int64_t prev = -1;
   for (const odometry_t& m : got.odom()) {
     EXPECT_GT(m.seq, prev);
     prev = m.seq;
   }
+}
+
+TEST_F(BasedNodeTest, FrozenOdometryIsStaleOnceAndDegraded) {
+  BasedParams p = test_params(base.url());
+  p.odometry.stale_after_s = 0.1;
+  BasedNode& node = start(p);
+  ASSERT_TRUE(samples(3));
+  base.script(std::vector<Fault>(40, Fault::kRepeatSeq));  // 0.4 s of the same seq at 100 Hz
+  ASSERT_TRUE(wait_for([&] { return node.health().state == HealthState::kDegraded; }));
+  EXPECT_NE(node.health().message.find("stale"), std::string::npos) << node.health().message;
+  ASSERT_TRUE(wait_for([&] { return node.counter("repeated_seq") == 40; }));
+  ASSERT_TRUE(samples(got.odom_count() + 3));
+  node.stop();
+  EXPECT_EQ(node.counter("stale_events"), 1);
 }
 
 void BasedNodeTest::expect_reset_handled(Fault fault, const char* counter) {

@@ -92,13 +92,13 @@ void BasedNode::count(const std::string& name, int64_t n) {
   counters_[name] += n;
 }
 
-void BasedNode::count_fault(const std::string& counter, const std::string& detail) {
+void BasedNode::count_fault(const std::string& counter, const std::string& detail, bool degrades) {
   const int64_t now = monotonic_us();
   std::string line;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     ++counters_[counter];
-    health_.fault(counter + ": " + detail, now);
+    if (degrades) health_.fault(counter + ": " + detail, now);
     line = burst_.fault(counter, detail, now);
   }
   if (!line.empty()) log_line(line);
@@ -173,7 +173,8 @@ void BasedNode::poll_loop() {
         raw.utime = sample_utime(reply.recv_utime, reply.round_trip_us);
         const TrackResult r = tracker.track(raw);
         switch (r.kind) {
-          case SampleKind::kRepeated: count_fault("repeated_seq", r.detail); break;
+          // Routine when polling faster than the base samples; only a long run (stale) degrades.
+          case SampleKind::kRepeated: count_fault("repeated_seq", r.detail, false); break;
           case SampleKind::kSeqBackwards:
           case SampleKind::kJump:
             count("odometry_resets");
@@ -254,7 +255,9 @@ void BasedNode::command_loop() {
       if (gate_.deadman_trips() != trips_seen) {
         counters_["deadman_stops"] += gate_.deadman_trips() - trips_seen;
         trips_seen = gate_.deadman_trips();
-        log_line("deadman: no BASE_CMD for " + std::to_string(params_.command.deadman_s).substr(0, 5) + " s, stopping the base");
+        const std::string line = burst_.fault(
+            "deadman_stops", "no BASE_CMD for " + std::to_string(params_.command.deadman_s).substr(0, 5) + " s, base stopped", now);
+        if (!line.empty()) log_line(line);
       }
     }
     if (std::chrono::steady_clock::now() >= retry_after) {

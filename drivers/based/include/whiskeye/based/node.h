@@ -64,7 +64,8 @@ class BasedNode {
   void status_loop();
   void handle_odometry_reply(const Reply& reply);
   void handle_command(const Velocity& v);
-  void count_fault(const std::string& counter, const std::string& detail);
+  // Counts, logs once per burst and (if `degrades`) shows in the state for degraded_hold_s.
+  void count_fault(const std::string& counter, const std::string& detail, bool degrades = true);
   void count(const std::string& name, int64_t n = 1);
   void log_lines();
   bool wait_until(std::chrono::steady_clock::time_point t);  // false when stopping
