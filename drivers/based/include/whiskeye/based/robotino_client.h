@@ -41,7 +41,7 @@ class RobotinoClient {
   Reply get(const std::string& path);
   Reply post(const std::string& path, const std::string& json_body);
 
-  // TCP connections opened so far (1 while the kept-alive connection holds).
+  // Sockets opened so far, failed connects included (stays 1 while the kept-alive connection holds).
   int64_t connections_opened() const { return connections_->load(); }
 
  private:
