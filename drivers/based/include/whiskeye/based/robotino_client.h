@@ -1,0 +1,54 @@
+// One kept-alive HTTP connection to the Robotino's REST server (cpp-httplib underneath). Each call
+// is one request with bounded connect and reply times; failures come back classified, never thrown.
+// Not thread-safe: each thread that talks to the base owns its own client (its own connection).
+#pragma once
+
+#include "whiskeye/based/protocol.h"
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+namespace whiskeye::based {
+
+enum class ReplyStatus {
+  kOk,             // a complete reply with status 200
+  kTimeout,        // no complete reply within the reply timeout
+  kDropped,        // the connection broke before a complete reply
+  kConnectFailed,  // could not connect (refused, unreachable, connect timeout)
+  kHttpError,      // a complete reply with a status other than 200
+};
+
+const char* to_string(ReplyStatus status);
+
+struct Reply {
+  ReplyStatus status = ReplyStatus::kOk;
+  int http_status = 0;
+  std::string body;
+  std::string error;        // what went wrong, for logs
+  int64_t recv_utime = 0;   // wall clock when the reply (or the failure) came
+  int64_t round_trip_us = 0;
+};
+
+class RobotinoClient {
+ public:
+  RobotinoClient(const BaseUrl& url, double connect_timeout_s, double reply_timeout_s);
+  ~RobotinoClient();
+  RobotinoClient(const RobotinoClient&) = delete;
+  RobotinoClient& operator=(const RobotinoClient&) = delete;
+
+  Reply get(const std::string& path);
+  Reply post(const std::string& path, const std::string& json_body);
+
+  // Sockets opened so far, failed connects included (stays 1 while the kept-alive connection holds).
+  int64_t connections_opened() const { return connections_->load(); }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  std::shared_ptr<std::atomic<int64_t>> connections_;
+  double reply_timeout_s_;
+};
+
+}  // namespace whiskeye::based
