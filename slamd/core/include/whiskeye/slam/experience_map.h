@@ -4,10 +4,11 @@
 // re-localising onto an existing one (a loop closure), and the graph is relaxed.
 //
 // Relaxation: each loop computes, for every link a→b, the error between b and a ∘ δ, and moves
-// both ends towards agreement — positions by `correction`·error, headings by the same fraction of
-// the angular error — averaging over a node's links (damped Jacobi). Headings are kept as unit
-// complex numbers (cos, sin) and rotated by multiplication, so the loop needs no trigonometry;
-// arrays are contiguous (no pointer chasing). See docs/slam-core.md.
+// both ends towards agreement — positions by `correction`·error, headings by `correction`·sin of
+// the heading error (equal to the error to first order, the right sign for any error below π) —
+// averaging over a node's links (damped Jacobi). Headings are kept as unit complex numbers
+// (cos, sin) and turned by multiplication with a Taylor-series rotation, so the loop needs no
+// trigonometry, square root or division; arrays are contiguous (no pointer chasing).
 #pragma once
 
 #include "whiskeye/common/params.h"
@@ -91,7 +92,7 @@ class ExperienceMap {
   std::vector<double> ldx_, ldy_, ldc_, lds_;
   std::vector<double> inv_degree_;
   std::vector<int32_t> degree_;
-  std::vector<double> ax_, ay_, ac_, as_;  // scratch
+  std::vector<double> ax_, ay_, as_;  // scratch: per-loop sums of position errors and sin(heading error)
   int current_ = -1;
   Pose2 offset_;
 };

@@ -81,6 +81,7 @@ class TemplateStore {
   bool has_visual(int id) const { return has_visual_[static_cast<size_t>(id)] != 0; }
   bool has_tactile(int id) const { return has_tactile_[static_cast<size_t>(id)] != 0; }
   int num_contacts(int id) const { return num_contacts_[static_cast<size_t>(id)]; }
+  // Column-major (x·height + y): see visual_distance().
   const uint8_t* visual(int id) const { return &visual_[static_cast<size_t>(id) * pixels()]; }
   const uint16_t* pfh(int id) const { return &pfh_[static_cast<size_t>(id) * kPfhBins]; }
   const float* sda(int id) const { return &sda_[static_cast<size_t>(id) * kSdaSize]; }
@@ -98,7 +99,9 @@ class TemplateStore {
   // Standard deviation of each raw term (not divided by σ) over pairs of stored templates.
   SigmaEstimate estimate_sigmas(const MatchParams& p, int max_pairs = 20000) const;
 
-  // Raw (un-normalised) visual term between two stored-layout images; exposed for tests/bench.
+  // Raw (un-normalised) visual term between two COLUMN-MAJOR images (the stored layout): the
+  // minimum over shifts s = 0, ±step, ... ±shift_max of the mean |cur(c) − stored(c − s)| over the
+  // overlapping columns, in [0, 1]; exposed for tests and the benchmark.
   static double visual_distance(const uint8_t* cur, const uint8_t* stored, int w, int h, int shift_max, int shift_step,
                                 int* best_shift);
 
