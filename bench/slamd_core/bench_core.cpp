@@ -79,6 +79,26 @@ ReferenceStore reference_store(const Data& d) {
   return r;
 }
 
+// The last template of `d` as the query, everything before it as the reference's memory.
+struct ReferenceSetup {
+  ReferenceStore store;
+  std::vector<double> v, pfh, sda;
+  double mean = 0.0;
+};
+
+ReferenceSetup reference_setup(const Data& d) {
+  ReferenceSetup s;
+  s.store = reference_store(Data{{d.visual.begin(), d.visual.end() - 1}, {d.tactile.begin(), d.tactile.end() - 1}});
+  s.v.assign(d.visual.back().pixels.begin(), d.visual.back().pixels.end());
+  for (double& x : s.v) x /= 255.0;
+  s.pfh.resize(kPfhBins);
+  s.sda.resize(kSdaSize);
+  for (int k = 0; k < kPfhBins; ++k) s.pfh[static_cast<size_t>(k)] = d.tactile.back().pfh[static_cast<size_t>(k)] / 65535.0;
+  for (int k = 0; k < kSdaSize; ++k) s.sda[static_cast<size_t>(k)] = d.tactile.back().sda[static_cast<size_t>(k)];
+  s.mean = d.visual.back().mean;
+  return s;
+}
+
 int reference_match(const ReferenceStore& r, const std::vector<double>& v, double vmean, const std::vector<double>& pfh,
                     const std::vector<double>& sda, const MatchParams& p, double* best_error) {
   int best = -1;
@@ -127,14 +147,12 @@ void BM_TemplateMatch(benchmark::State& state) {
   const MatchParams p = bench_match_params();
   // The fast matcher must agree with the reference before its speed means anything.
   {
-    const ReferenceStore r = reference_store(Data{{d.visual.begin(), d.visual.end() - 1}, {d.tactile.begin(), d.tactile.end() - 1}});
-    std::vector<double> v(d.visual.back().pixels.begin(), d.visual.back().pixels.end());
-    for (double& x : v) x /= 255.0;
-    std::vector<double> pf(kPfhBins), sd(kSdaSize);
-    for (int k = 0; k < kPfhBins; ++k) pf[static_cast<size_t>(k)] = d.tactile.back().pfh[static_cast<size_t>(k)] / 65535.0;
-    for (int k = 0; k < kSdaSize; ++k) sd[static_cast<size_t>(k)] = d.tactile.back().sda[static_cast<size_t>(k)];
     double ref_e = 0.0;
-    const int ref = n <= 1000 ? reference_match(r, v, d.visual.back().mean, pf, sd, p, &ref_e) : -2;
+    int ref = -2;  // the reference is too slow to check every size; 1000 templates suffice
+    if (n <= 1000) {
+      const ReferenceSetup r = reference_setup(d);
+      ref = reference_match(r.store, r.v, r.mean, r.pfh, r.sda, p, &ref_e);
+    }
     const BestMatch m = store.match(q, {true, true}, p);
     if (ref != -2 && (ref != m.id || std::abs(ref_e - m.error) > 1e-6 * std::max(1.0, ref_e))) {
       std::fprintf(stderr, "vita-bench: matcher disagrees with the reference (%d/%g vs %d/%g)\n", m.id, m.error, ref,
@@ -153,16 +171,11 @@ BENCHMARK(BM_TemplateMatch)->Arg(100)->Arg(1000)->Arg(10000)->Unit(benchmark::kM
 void BM_TemplateMatchReference(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
   const Data d = random_data(n + 1, 7);
-  const ReferenceStore r = reference_store(Data{{d.visual.begin(), d.visual.end() - 1}, {d.tactile.begin(), d.tactile.end() - 1}});
-  std::vector<double> v(d.visual.back().pixels.begin(), d.visual.back().pixels.end());
-  for (double& x : v) x /= 255.0;
-  std::vector<double> pf(kPfhBins), sd(kSdaSize);
-  for (int k = 0; k < kPfhBins; ++k) pf[static_cast<size_t>(k)] = d.tactile.back().pfh[static_cast<size_t>(k)] / 65535.0;
-  for (int k = 0; k < kSdaSize; ++k) sd[static_cast<size_t>(k)] = d.tactile.back().sda[static_cast<size_t>(k)];
+  const ReferenceSetup r = reference_setup(d);
   const MatchParams p = bench_match_params();
   for (auto _ : state) {
     double e = 0.0;
-    int m = reference_match(r, v, d.visual.back().mean, pf, sd, p, &e);
+    int m = reference_match(r.store, r.v, r.mean, r.pfh, r.sda, p, &e);
     benchmark::DoNotOptimize(m);
     benchmark::DoNotOptimize(e);
   }

@@ -38,8 +38,10 @@ struct SyntheticContact {
 
 // One 1 s whisk cycle at 500 Hz: θ sweeps −0.5 → 0.9 → −0.5 rad (cosine); whiskers in `contacts`
 // deflect by the bend law in the direction `dir` (rad), plus Gaussian noise of sd `noise`.
+// `speed_gain` adds the plant's whisking-speed term −speed_gain·θ̇ to x (0.004: the simulator's).
 inline WhiskCycleInput whisk_cycle(const RobotGeometry& g, const std::vector<SyntheticContact>& contacts,
-                                   double noise, uint32_t seed, int64_t utime0 = 0, int samples = 500) {
+                                   double noise, uint32_t seed, int64_t utime0 = 0, int samples = 500,
+                                   double speed_gain = 0.004) {
   std::mt19937 rng(seed);
   std::normal_distribution<double> n(0.0, noise);
   WhiskCycleInput c;
@@ -50,6 +52,7 @@ inline WhiskCycleInput whisk_cycle(const RobotGeometry& g, const std::vector<Syn
     s.utime = utime0 + static_cast<int64_t>(i) * 1000000 / samples;
     const double ph = static_cast<double>(i) / samples;
     const double theta = -0.5 + 1.4 * (0.5 - 0.5 * std::cos(2 * kPi * ph));
+    const double theta_dot = 1.4 * 0.5 * 2 * kPi * std::sin(2 * kPi * ph);  // per second (1 s cycle)
     for (int w = 0; w < kNumWhiskers; ++w) {
       s.theta[static_cast<size_t>(w)] = static_cast<float>(theta);
       double m = 0.0;
@@ -58,7 +61,7 @@ inline WhiskCycleInput whisk_cycle(const RobotGeometry& g, const std::vector<Syn
           m = g.whiskers[static_cast<size_t>(w)].bend_gain * (theta - k.theta_contact) / k.radius;
         }
       }
-      s.deflection_x[static_cast<size_t>(w)] = static_cast<float>(0.8 * m + n(rng));
+      s.deflection_x[static_cast<size_t>(w)] = static_cast<float>(0.8 * m - speed_gain * theta_dot + n(rng));
       s.deflection_y[static_cast<size_t>(w)] = static_cast<float>(0.6 * m + n(rng));
       s.contact[static_cast<size_t>(w)] = m > 0.04;
     }

@@ -127,6 +127,28 @@ TEST(TemplateMatch, OnlyTheTermsInUseCount) {
   EXPECT_EQ(vis.sda, 0.0);
 }
 
+// The original code compared only 23 of 24 SDA values and 26 of 27 PFH bins: here a difference in
+// any single entry, including the last ones, shows in its term.
+TEST(TemplateMatch, EveryPfhBinAndSdaEntryCounts) {
+  TemplateStore s(64, 40);
+  const TactileTemplate t{};
+  s.add({nullptr, &t}, 0, 0, 0);
+  for (int bin : {0, kPfhBins / 2, kPfhBins - 1}) {
+    TactileTemplate q{};
+    q.pfh[static_cast<size_t>(bin)] = 65535;
+    const BestMatch m = s.match({nullptr, &q}, {false, true}, MatchParams{});
+    EXPECT_NEAR(m.pfh, 1.0 / MatchParams{}.sigma_pfh, 1e-12) << bin;
+    EXPECT_EQ(m.sda, 0.0);
+  }
+  for (int w : {0, 11, kSdaSize - 1}) {
+    TactileTemplate q{};
+    q.sda[static_cast<size_t>(w)] = 2.0f;
+    const BestMatch m = s.match({nullptr, &q}, {false, true}, MatchParams{});
+    EXPECT_NEAR(m.sda, 2.0 / MatchParams{}.sigma_sda, 1e-12) << w;
+    EXPECT_EQ(m.pfh, 0.0);
+  }
+}
+
 TEST(TemplateMatch, TemplatesLackingAPartInUseAreNotCandidates) {
   TemplateStore s(64, 40);
   const VisualTemplate v = random_template(30);

@@ -313,11 +313,16 @@ void PoseCells::inject(double x, double y, double theta, double energy) {
   t_mask_valid_ = false;
 }
 
-void PoseCells::best(double& bx, double& by, double& bt) const {
+void PoseCells::argmax(int& x, int& y, int& t) const {
   const size_t m = static_cast<size_t>(std::max_element(p_.begin(), p_.end()) - p_.begin());
-  const int x0 = static_cast<int>(m % static_cast<size_t>(n_));
-  const int y0 = static_cast<int>((m / static_cast<size_t>(n_)) % static_cast<size_t>(n_));
-  const int t0 = static_cast<int>(m / (static_cast<size_t>(n_) * static_cast<size_t>(n_)));
+  x = static_cast<int>(m % static_cast<size_t>(n_));
+  y = static_cast<int>((m / static_cast<size_t>(n_)) % static_cast<size_t>(n_));
+  t = static_cast<int>(m / (static_cast<size_t>(n_) * static_cast<size_t>(n_)));
+}
+
+void PoseCells::best(double& bx, double& by, double& bt) const {
+  int x0 = 0, y0 = 0, t0 = 0;
+  argmax(x0, y0, t0);
   const int r = params_.best_radius;
   double cx = 0, sx = 0, cy = 0, sy = 0, ct = 0, st = 0, mass = 0, rx = 0, ry = 0;
   for (int dt = -r; dt <= r; ++dt) {
@@ -365,10 +370,8 @@ double PoseCells::distance(double x1, double y1, double t1, double x2, double y2
 }
 
 double PoseCells::packet_fraction() const {
-  const size_t m = static_cast<size_t>(std::max_element(p_.begin(), p_.end()) - p_.begin());
-  const int x0 = static_cast<int>(m % static_cast<size_t>(n_));
-  const int y0 = static_cast<int>((m / static_cast<size_t>(n_)) % static_cast<size_t>(n_));
-  const int t0 = static_cast<int>(m / (static_cast<size_t>(n_) * static_cast<size_t>(n_)));
+  int x0 = 0, y0 = 0, t0 = 0;
+  argmax(x0, y0, t0);
   const int r = params_.best_radius;
   double in = 0.0, total = 0.0;
   for (float v : p_) total += v;

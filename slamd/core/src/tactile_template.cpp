@@ -14,6 +14,7 @@ void load(const ParamNode& n, TactileParams& p) {
   n.get("contact_threshold", p.contact_threshold, 0.0, 1e6);
   n.get("min_contact_samples", p.min_contact_samples, 1, 100000);
   n.get("use_contact_flags", p.use_contact_flags);
+  n.get("speed_gain", p.speed_gain, -1.0, 1.0);
   n.get("min_theta_span", p.min_theta_span, 0.0, 1.0);
   n.get("fallback_radius_fraction", p.fallback_radius_fraction, 0.01, 1.0);
   std::string kind = p.pfh == PfhKind::Rusu ? "rusu" : "histogram";
@@ -50,14 +51,30 @@ struct WhiskerTrace {
   std::vector<int64_t> utime;
 };
 
-// The samples of whisker w that count as contact; empty when below min_contact_samples.
+// The samples of whisker w that count as contact; empty when below min_contact_samples. The x
+// deflection is first corrected for the whisking-speed term (drag/inertia bends a moving whisker
+// against its motion: x −= −speed_gain·θ̇), with θ̇ from central differences of the valid samples.
 WhiskerTrace contact_samples(const WhiskCycleInput& cycle, int w, const TactileParams& p) {
   WhiskerTrace t;
   const auto i = static_cast<size_t>(w);
+  std::vector<const WhiskSample*> valid;
+  valid.reserve(cycle.samples.size());
   for (const WhiskSample& s : cycle.samples) {
-    if (!s.valid) continue;
-    const double m = std::hypot(static_cast<double>(s.deflection_x[i]), static_cast<double>(s.deflection_y[i]));
-    if (!std::isfinite(m) || !std::isfinite(s.theta[i])) continue;
+    if (s.valid && std::isfinite(s.theta[i]) && std::isfinite(s.deflection_x[i]) && std::isfinite(s.deflection_y[i])) {
+      valid.push_back(&s);
+    }
+  }
+  for (size_t k = 0; k < valid.size(); ++k) {
+    const WhiskSample& s = *valid[k];
+    double theta_dot = 0.0;
+    if (p.speed_gain != 0.0 && valid.size() > 1) {
+      const WhiskSample& a = *valid[k == 0 ? 0 : k - 1];
+      const WhiskSample& b = *valid[k + 1 < valid.size() ? k + 1 : k];
+      const double dt = static_cast<double>(b.utime - a.utime) * 1e-6;
+      if (dt > 0.0) theta_dot = (static_cast<double>(b.theta[i]) - a.theta[i]) / dt;
+    }
+    const double dx = s.deflection_x[i] + p.speed_gain * theta_dot;
+    const double m = std::hypot(dx, static_cast<double>(s.deflection_y[i]));
     if (m <= p.contact_threshold) continue;
     if (p.use_contact_flags && !s.contact[i]) continue;
     t.theta.push_back(s.theta[i]);

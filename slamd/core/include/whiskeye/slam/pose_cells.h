@@ -70,6 +70,7 @@ class PoseCells {
     std::vector<uint8_t> x, y, t;  // 1 where some cell with that index may be non-zero
   };
   void dynamics();
+  void argmax(int& x, int& y, int& t) const;
   Support support_of(const std::vector<float>& g) const;
   Support dilate(const Support& s, int r) const;
   // dst = separable kernel * src over the rows of `region` (⊇ the result's support); src is zero

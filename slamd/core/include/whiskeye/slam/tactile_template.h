@@ -1,5 +1,6 @@
 // Tactile template from one whisk cycle (paper Algorithm 1 "tactile process"):
-//   1. contact detection per whisker: |deflection| above a noise floor for enough samples;
+//   1. contact detection per whisker: |deflection| (after removing the calibrated whisking-speed
+//      term) above a noise floor for enough samples;
 //   2. contact point per whisker in the head frame, estimated from θ and deflection with the whisker
 //      geometry (never from simulator ground truth). Model: a point contact at radial distance r
 //      bends the whisker so that |deflection| ≈ bend_gain·(θ − θ_c)/r once θ passes the contact
@@ -33,6 +34,9 @@ struct TactileParams {
   double contact_threshold = 0.04;    // |deflection| noise floor (sensor units)
   int min_contact_samples = 3;        // fewer samples above the floor: no contact (debounce)
   bool use_contact_flags = false;     // also require the head's own contact flag
+  // Whisking-speed term of the x deflection, per rad/s (a moving whisker bends against its motion;
+  // the simulator's plant uses 0.004). Removed before detection and fitting; 0 = none.
+  double speed_gain = 0.004;
   double min_theta_span = 0.01;       // rad; a smaller θ range cannot give a slope: fallback radius
   double fallback_radius_fraction = 0.8;  // r = fraction·length when the slope fit is degenerate
   PfhKind pfh = PfhKind::Rusu;
