@@ -101,14 +101,20 @@ std::vector<ContactEstimate> estimate_contacts(const WhiskCycleInput& cycle, con
     const WhiskerGeometry& g = geometry.whiskers[static_cast<size_t>(w)];
     ContactEstimate c;
     c.whisker = w;
-    // Least squares |d| = a + k·θ over all contact samples (protraction and retraction lie on the
-    // same line for a contact fixed in the head frame); θ_c is where the line crosses zero.
-    const double n = static_cast<double>(t.theta.size());
-    const double tm = std::accumulate(t.theta.begin(), t.theta.end(), 0.0) / n;
-    const double mm = std::accumulate(t.magnitude.begin(), t.magnitude.end(), 0.0) / n;
+    // Least squares |d| = a + k·θ over the rising part of the contact — from the first contact
+    // sample to the sample of maximum deflection — where the whisker is being pushed into a contact
+    // point that is still where it was touched; θ_c is where the line crosses zero. (Later samples
+    // mix in the RCP hold, the retraction and the robot's own motion, which moves the contact.)
+    const size_t imax = static_cast<size_t>(std::max_element(t.magnitude.begin(), t.magnitude.end()) -
+                                            t.magnitude.begin());
+    const size_t end = imax + 1 >= static_cast<size_t>(p.min_contact_samples) ? imax + 1 : t.theta.size();
+    const double n = static_cast<double>(end);
+    const double tm = std::accumulate(t.theta.begin(), t.theta.begin() + static_cast<std::ptrdiff_t>(end), 0.0) / n;
+    const double mm =
+        std::accumulate(t.magnitude.begin(), t.magnitude.begin() + static_cast<std::ptrdiff_t>(end), 0.0) / n;
     double sxx = 0.0, sxy = 0.0;
     double tmin = t.theta.front(), tmax = t.theta.front();
-    for (size_t i = 0; i < t.theta.size(); ++i) {
+    for (size_t i = 0; i < end; ++i) {
       sxx += (t.theta[i] - tm) * (t.theta[i] - tm);
       sxy += (t.theta[i] - tm) * (t.magnitude[i] - mm);
       tmin = std::min(tmin, t.theta[i]);
@@ -116,7 +122,12 @@ std::vector<ContactEstimate> estimate_contacts(const WhiskCycleInput& cycle, con
     }
     const double k = sxx > 0.0 ? sxy / sxx : 0.0;
     if (tmax - tmin >= p.min_theta_span && k > 0.0) {
-      c.theta_contact = tm - mm / k;
+      // The contact began at most Δθ = threshold·length/bend_gain before the first sample above
+      // the floor (|d| reaches the floor soonest for a contact at the tip), and not after it: a
+      // flat, noisy fit must not extrapolate beyond that.
+      const double first = t.theta.front();
+      const double earliest = first - p.contact_threshold * g.length / g.bend_gain;
+      c.theta_contact = std::clamp(tm - mm / k, earliest, first);
       c.radius = std::clamp(g.bend_gain / k, 1e-3 * g.length, g.length);
     } else {
       c.fitted = false;
