@@ -4,8 +4,9 @@
 //   2. contact point per whisker in the head frame, estimated from θ and deflection with the whisker
 //      geometry (never from simulator ground truth). Model: a point contact at radial distance r
 //      bends the whisker so that |deflection| ≈ bend_gain·(θ − θ_c)/r once θ passes the contact
-//      angle θ_c. A least-squares line |d| = k·(θ − θ_c) over the cycle's contact samples gives
-//      k and θ_c; r = bend_gain/k clamped to (0, length]; p = whisker_point(w, θ_c, r);
+//      angle θ_c. A least-squares line |d| = k·(θ − θ_c) over the rising part of the contact
+//      (first contact sample to maximum deflection) gives k and θ_c (θ_c clamped to what the noise
+//      floor allows); r = bend_gain/k clamped to (0, length]; p = whisker_point(w, θ_c, r);
 //   3. PFH: Rusu's point-pair features (α, φ, θ; 5 bins each → 125) over the contact points, with
 //      normals from PCA of each point's k nearest neighbours oriented towards the head origin;
 //      invariant to a rigid motion of the cloud (and its viewpoint). Alternative: a plain 3-D
