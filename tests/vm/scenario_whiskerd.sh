@@ -1,0 +1,37 @@
+#!/bin/bash
+# VM scenario: whiskerd on vcan0 (FD MTU) against the board emulator; LCM over loopback multicast.
+#   scenario_whiskerd.sh RESULTS_DIR WHISKERD WHISKER_VM_CHECK CONFIG
+set -u
+RESULTS_DIR=$1
+WHISKERD=$2
+CHECK=$3
+CONFIG=$4
+source "$(dirname "$0")/lib.sh"
+
+setup_lcm_loopback
+setup_vcan vcan0
+sysctl -qw net.core.rmem_max=16777216
+
+# candump sees the motor commands on the wire (independently of the checker's own decoding).
+candump -L vcan0,200:7FF > /tmp/motor.log 2>&1 &
+dump_pid=$!
+"$WHISKERD" -c "$CONFIG" --no-gpio > "$RESULTS_DIR/whiskerd.log" 2>&1 &
+wd_pid=$!
+
+"$CHECK" --interface vcan0 --results "$RESULTS_DIR/results.txt" > "$RESULTS_DIR/check.log" 2>&1 \
+  || echo "checker reported failures"
+cat "$RESULTS_DIR/check.log"
+
+kill -TERM $wd_pid
+wait $wd_pid
+rc=$?
+kill $dump_pid 2>/dev/null
+check whiskerd_exits_cleanly_on_sigterm test "$rc" = 0
+check whiskerd_reports_motors_disabled_at_exit grep -q 'stopped, motors disabled' "$RESULTS_DIR/whiskerd.log"
+# FD frames of 64 bytes on 0x200 (candump prints 128 hex digits after ##<flags>).
+check candump_sees_64_byte_fd_motor_frames grep -Eq 'vcan0 200##[0-9A-F][0-9A-F]{128}$' /tmp/motor.log
+# The last command on the wire has the enable mask (bytes 2..4) cleared.
+check last_motor_frame_on_the_wire_is_disabled \
+  bash -c "tail -n 1 /tmp/motor.log | grep -Eq 'vcan0 200##[0-9A-F][0-9A-F]{4}000000'"
+cp /tmp/motor.log "$RESULTS_DIR/motor.log" 2>/dev/null
+exit 0

@@ -1,0 +1,314 @@
+// VM test program for whiskerd: emulates the six whisker boards on a (v)can interface at 500 Hz with
+// scripted content — per-whisker values, sequence gaps on board 2, one frame of each bad kind, and a
+// contact on whisker 5 — while listening to whiskerd's LCM output and its motor command frames, then
+// reports one PASS/FAIL line per checked behaviour into the results file.
+//   whisker_vm_check --interface vcan0 --results FILE
+#include <CLI/CLI.hpp>
+#include <atomic>
+#include <cmath>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <mutex>
+#include <thread>
+#include <time.h>
+
+#include <whiskeye/common/bus.h>
+#include <whiskeye/common/clock.h>
+#include <whiskeye/driver_status_t.hpp>
+#include <whiskeye/rcp_state_t.hpp>
+#include <whiskeye/whisker_sample_t.hpp>
+
+#include "whiskeye/drivers/can_socket.h"
+#include "whiskeye/drivers/whisker_protocol.h"
+
+using namespace whiskeye;
+
+namespace {
+
+constexpr int kSamples = 1500;          // 3 s at 500 Hz
+constexpr int kContactFrom = 750;       // whisker 5 touches from here to the end
+constexpr int kContactWhisker = 5;
+constexpr int16_t kContactX = 1200;
+constexpr int kBadAt = 200;
+constexpr double kThetaMax = 45.0 * M_PI / 180.0;
+
+int16_t value_x(int w) { return static_cast<int16_t>(10 * (w / 4) + w % 4); }
+int16_t value_theta(int w) { return static_cast<int16_t>(100 + 5 * w); }
+bool board2_skips(int seq) { return (seq >= 100 && seq <= 104) || seq == 300; }  // 6 lost samples
+
+struct Results {
+  std::ofstream out;
+  int failures = 0;
+  void report(const std::string& name, bool ok, const std::string& why = "") {
+    out << (ok ? "PASS " : "FAIL ") << name << (ok ? "" : ": " + why) << "\n";
+    std::cout << (ok ? "PASS " : "FAIL ") << name << (ok ? "" : ": " + why) << std::endl;
+    if (!ok) ++failures;
+  }
+};
+
+struct Received {
+  std::mutex m;
+  std::map<int64_t, whisker_sample_t> samples;  // by utime
+  std::map<int64_t, rcp_state_t> states;        // by utime
+  std::vector<driver_status_t> status;
+};
+
+void sleep_until(timespec& t, long add_ns) {
+  t.tv_nsec += add_ns;
+  while (t.tv_nsec >= 1000000000) {
+    t.tv_nsec -= 1000000000;
+    ++t.tv_sec;
+  }
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &t, nullptr) == EINTR) {
+  }
+}
+
+can::Frame fd_frame(uint32_t id, std::size_t len) {
+  can::Frame f;
+  f.id = id;
+  f.fd = true;
+  f.brs = true;
+  f.len = static_cast<uint8_t>(len);
+  return f;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"whiskerd VM test: board emulator and output checker"};
+  std::string interface = "vcan0", results_path;
+  app.add_option("--interface", interface);
+  app.add_option("--results", results_path)->required();
+  CLI11_PARSE(app, argc, argv);
+
+  Results results;
+  results.out.open(results_path, std::ios::app);
+  Received rx;
+  LcmBus bus;
+  DecodeErrors errors;
+  subscribe<whisker_sample_t>(bus, "WHISKER_SAMPLE", [&](const whisker_sample_t& m) {
+    std::lock_guard lock(rx.m);
+    rx.samples[m.utime] = m;
+  }, errors);
+  subscribe<rcp_state_t>(bus, "RCP_STATE", [&](const rcp_state_t& m) {
+    std::lock_guard lock(rx.m);
+    rx.states[m.utime] = m;
+  }, errors);
+  subscribe<driver_status_t>(bus, "DRIVER_STATUS", [&](const driver_status_t& m) {
+    std::lock_guard lock(rx.m);
+    rx.status.push_back(m);
+  }, errors);
+  std::atomic<bool> done{false};
+  std::thread lcm_thread([&] {
+    while (!done) bus.handle_timeout(50);
+  });
+
+  can::Socket tx(interface, true);
+  can::Socket motor(interface, true);
+  motor.set_filters({{0x200, 0x7ff}});
+  std::map<uint16_t, wp::MotorCommand> commands;  // by command seq
+  std::vector<uint16_t> command_order;
+  int bad_commands = 0;
+  std::thread motor_thread([&] {
+    can::Frame f;
+    while (!done) {
+      if (motor.receive(f, 50000) != can::Socket::Rx::kFrame) continue;
+      const wp::Decoded d = wp::decode_frame(f.id, f.fd, f.payload(), wp::BusMode::kFd);
+      std::lock_guard lock(rx.m);
+      if (d.kind != wp::FrameKind::kCommand) {
+        ++bad_commands;
+        continue;
+      }
+      commands[d.command.seq] = d.command;
+      command_order.push_back(d.command.seq);
+    }
+  });
+
+  // Wait for whiskerd to be up (it publishes every period even before the boards stream).
+  for (int i = 0; i < 200; ++i) {
+    {
+      std::lock_guard lock(rx.m);
+      if (!rx.states.empty()) break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+
+  // --- board emulation ---
+  timespec t;
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  int64_t contact_onset_mono = 0;
+  for (int seq = 0; seq < kSamples; ++seq) {
+    for (int b = 0; b < wp::kNumBoards; ++b) {
+      if (b == 2 && board2_skips(seq)) continue;
+      wp::BoardSample s;
+      s.board = b;
+      s.seq = static_cast<uint16_t>(seq);
+      for (int k = 0; k < 4; ++k) {
+        const int w = 4 * b + k;
+        s.whiskers[k].x = (w == kContactWhisker && seq >= kContactFrom) ? kContactX : value_x(w);
+        s.whiskers[k].y = static_cast<int16_t>(-value_x(w));
+        s.whiskers[k].theta = value_theta(w);
+      }
+      can::Frame f = fd_frame(wp::sample_id({}, b), wp::kFdSampleBytes);
+      wp::encode_sample_fd(s, f.data);
+      tx.send(f);
+    }
+    if (seq == kContactFrom) contact_onset_mono = monotonic_us();
+    if (seq % 50 == 0) {
+      for (int b = 0; b < wp::kNumBoards; ++b) {
+        can::Frame h;
+        h.id = wp::heartbeat_id({}, b);
+        h.len = static_cast<uint8_t>(wp::encode_heartbeat({b, 0x05, 0}, h.data));
+        tx.send(h);
+      }
+    }
+    if (seq == kBadAt) {
+      can::Frame f = fd_frame(0x181, 20);  // wrong length
+      tx.send(f);
+      f = fd_frame(0x187, 32);  // node 7 does not exist
+      tx.send(f);
+      wp::BoardSample s;
+      s.board = 3;
+      s.seq = 9999;
+      s.whiskers[0].x = 3000;  // beyond the 12-bit ADC
+      f = fd_frame(0x184, 32);
+      wp::encode_sample_fd(s, f.data);
+      tx.send(f);
+    }
+    sleep_until(t, 2000000);
+  }
+  (void)contact_onset_mono;
+  // Silence: whiskerd must see a stale bus, retract and drop enable.
+  std::this_thread::sleep_for(std::chrono::milliseconds(2500));
+  done = true;
+  lcm_thread.join();
+  motor_thread.join();
+
+  std::lock_guard lock(rx.m);
+  results.report("whiskerd_publishes_samples_and_states", rx.samples.size() > 500 && rx.states.size() > 500,
+                 std::to_string(rx.samples.size()) + " samples, " + std::to_string(rx.states.size()) + " states");
+
+  // Decoded and calibrated values in a sample where every board was fresh and before the contact.
+  bool found = false, values_ok = true;
+  std::string why;
+  for (const auto& [utime, m] : rx.samples) {
+    bool fresh = m.num_whiskers == 24;
+    for (int w = 0; fresh && w < 24; ++w) fresh = m.status[w] == 0;
+    if (!fresh || m.raw_x[kContactWhisker] == kContactX) continue;
+    found = true;
+    for (int w = 0; w < 24; ++w) {
+      if (m.raw_x[w] != value_x(w) || m.raw_y[w] != -value_x(w) || m.raw_theta[w] != value_theta(w)) {
+        values_ok = false;
+        why = "raw values of whisker " + std::to_string(w);
+      }
+      const double theta = value_theta(w) * 2 * M_PI / 4096;
+      if (std::abs(m.theta[w] - theta) > 1e-5) {
+        values_ok = false;
+        why = "theta of whisker " + std::to_string(w);
+      }
+    }
+    // config: whisker 23 offset_x 50, gain_x 0.002; whisker 22 rotated by 90 deg.
+    if (std::abs(m.deflection_x[23] - 0.002 * (value_x(23) - 50)) > 1e-6 ||
+        std::abs(m.deflection_y[23] + value_x(23) / 2047.0) > 1e-6) {
+      values_ok = false;
+      why = "calibration offset/gain of whisker 23";
+    }
+    if (std::abs(m.deflection_x[22] - value_x(22) / 2047.0) > 1e-6 ||
+        std::abs(m.deflection_y[22] - value_x(22) / 2047.0) > 1e-6) {
+      values_ok = false;
+      why = "calibration rotation of whisker 22: " + std::to_string(m.deflection_x[22]) + "," +
+            std::to_string(m.deflection_y[22]);
+    }
+    if (std::abs(m.deflection_x[0] - value_x(0) / 2047.0) > 1e-6) {
+      values_ok = false;
+      why = "default calibration of whisker 0";
+    }
+    break;
+  }
+  results.report("whiskerd_decodes_and_calibrates_whisker_values", found && values_ok,
+                 found ? why : "no sample with every board fresh");
+
+  // Counters in the last DRIVER_STATUS.
+  std::map<std::string, int64_t> counters;
+  int8_t last_state = -1;
+  std::string last_message;
+  if (!rx.status.empty()) {
+    const auto& s = rx.status.back();
+    for (int i = 0; i < s.num_counters; ++i) counters[s.counter_names[i]] = s.counter_values[i];
+    last_state = s.state;
+    last_message = s.message;
+    std::cout << "DRIVER_STATUS stats:";
+    for (const auto& st : rx.status) {
+      for (int i = 0; i < st.num_stats; ++i) {
+        if (st.stat_names[i].find("p99") != std::string::npos || st.stat_names[i].find("max") != std::string::npos) {
+          std::cout << " " << st.stat_names[i] << "=" << st.stat_values[i];
+        }
+      }
+      std::cout << " |";
+    }
+    std::cout << std::endl;
+  }
+  results.report("driver_status_published", rx.status.size() >= 3, std::to_string(rx.status.size()) + " messages");
+  auto counter_is = [&](const std::string& name, int64_t want) {
+    const auto it = counters.find(name);
+    const int64_t got = it == counters.end() ? -1 : it->second;
+    results.report("counter_" + name + "_is_" + std::to_string(want), got == want, "got " + std::to_string(got));
+  };
+  counter_is("gaps_board2", 6);
+  counter_is("gaps_board0", 0);
+  counter_is("gaps", 6);
+  counter_is("rejected_wrong_length", 1);
+  counter_is("rejected_unknown_id", 1);
+  counter_is("rejected_out_of_range", 1);
+
+  // Motor command frames.
+  results.report("motor_command_frames_are_valid_fd_commands", commands.size() > 500 && bad_commands == 0,
+                 std::to_string(commands.size()) + " commands, " + std::to_string(bad_commands) + " invalid");
+  int enabled_frames = 0;
+  for (const auto& [seq, c] : commands) enabled_frames += c.enable_mask == 0xFFFFFF;
+  results.report("motor_commands_enable_all_whiskers_while_running", enabled_frames > 300,
+                 std::to_string(enabled_frames) + " fully enabled frames");
+  const bool last_disabled = !command_order.empty() && commands[command_order.back()].enable_mask == 0;
+  results.report("stale_bus_drops_enable", last_disabled && last_state != driver_status_t::STATE_OK &&
+                                              last_message.find("stale") != std::string::npos,
+                 "last mask " + (command_order.empty() ? std::string("none") : std::to_string(commands[command_order.back()].enable_mask)) +
+                     ", status '" + last_message + "'");
+
+  // Contact: the first period that sees the contact while protracting stops whisker 5's protraction
+  // in that very motor frame, and RCP_STATE shows the lowered ceiling.
+  bool contact_seen = false, rcp_ok = false;
+  std::string rcp_why = "no protracting period with the contact";
+  float prev_command = NAN;
+  for (const auto& [utime, m] : rx.samples) {
+    const auto st = rx.states.find(utime);
+    if (st == rx.states.end()) {
+      prev_command = NAN;
+      continue;
+    }
+    const rcp_state_t& r = st->second;
+    const bool touching = m.raw_x[kContactWhisker] == kContactX && m.status[kContactWhisker] == 0;
+    if (touching && r.phase == rcp_state_t::PHASE_PROTRACT && r.enabled && !std::isnan(prev_command)) {
+      contact_seen = true;
+      const auto cmd = commands.find(static_cast<uint16_t>(m.seq & 0xffff));
+      const auto prev = commands.find(static_cast<uint16_t>((m.seq - 1) & 0xffff));
+      if (cmd == commands.end() || prev == commands.end()) {
+        rcp_why = "motor frames of the contact period missing";
+        break;
+      }
+      const int16_t target = cmd->second.theta_target[kContactWhisker];
+      const int16_t expected = static_cast<int16_t>(std::lround(r.theta_command[kContactWhisker] * 4096 / (2 * M_PI)));
+      rcp_ok = r.theta_ceiling[kContactWhisker] < kThetaMax - 0.1 && r.theta_command[kContactWhisker] < prev_command &&
+               target == expected && target < prev->second.theta_target[kContactWhisker];
+      rcp_why = "ceiling " + std::to_string(r.theta_ceiling[kContactWhisker]) + " command " +
+                std::to_string(r.theta_command[kContactWhisker]) + " (previous " + std::to_string(prev_command) +
+                ") frame target " + std::to_string(target) + " expected " + std::to_string(expected) +
+                " previous frame " + std::to_string(prev->second.theta_target[kContactWhisker]);
+      break;
+    }
+    prev_command = r.theta_command[kContactWhisker];
+  }
+  results.report("contact_lowers_rcp_ceiling_in_the_next_motor_frame", contact_seen && rcp_ok, rcp_why);
+  std::cout << "contact check: " << rcp_why << std::endl;
+  return results.failures == 0 ? 0 : 1;
+}
