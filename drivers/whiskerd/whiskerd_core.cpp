@@ -354,7 +354,8 @@ void to_lcm(const StatusSnapshot& in, driver_status_t& out) {
                                                  {"can_error_frames", in.can_error_frames},
                                                  {"can_bus_off", in.can_bus_off},
                                                  {"can_error_passive", in.can_error_passive},
-                                                 {"can_reopens", in.can_reopens}};
+                                                 {"can_reopens", in.can_reopens},
+                                                 {"can_rx_overflow", in.can_rx_overflow}};
   for (const auto& [name, value] : can) {
     out.counter_names.push_back(name);
     out.counter_values.push_back(value);

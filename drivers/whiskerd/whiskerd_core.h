@@ -148,7 +148,8 @@ struct StatusSnapshot {
   const char* reason = "";
   const char* bus_state = "";
   std::array<int64_t, Counters::kCount> counters{};
-  int64_t can_rx = 0, can_error_frames = 0, can_bus_off = 0, can_error_passive = 0, can_reopens = 0;
+  int64_t can_rx = 0, can_error_frames = 0, can_bus_off = 0, can_error_passive = 0, can_reopens = 0,
+          can_rx_overflow = 0;
   LatencySummary wake_latency;  // clock_nanosleep deadline -> running
   LatencySummary loop_time;     // work per period
   LatencySummary period_jitter; // |actual period - nominal|

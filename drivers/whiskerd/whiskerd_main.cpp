@@ -118,6 +118,8 @@ void control_thread(const Params& p, can::Socket& sock, gpio::MotorLines& lines,
   const int64_t period_ns = static_cast<int64_t>(1e9 / p.rate_hz);
   const int64_t period_us = period_ns / 1000;
   const int per_status = std::max(1, static_cast<int>(p.status_period_s * p.rate_hz));
+  const int64_t status_period_us = static_cast<int64_t>(p.status_period_s * 1e6);
+  int64_t next_status_mono = mono_now_us() + status_period_us;
   LatencyStats wake(static_cast<std::size_t>(per_status) + 16), loop(static_cast<std::size_t>(per_status) + 16),
       jitter(static_cast<std::size_t>(per_status) + 16);
   Item item;
@@ -126,7 +128,6 @@ void control_thread(const Params& p, can::Socket& sock, gpio::MotorLines& lines,
   int64_t next_reopen_mono = 0;
   int64_t reopen_backoff_us = 100000;
   int64_t last_wake = 0;
-  int periods_in_interval = 0;
   can::Frame frame;
 
   timespec next;
@@ -193,8 +194,9 @@ void control_thread(const Params& p, can::Socket& sock, gpio::MotorLines& lines,
       if (done > deadline + period_us) ++core.counters()[Counters::kDeadlineMisses];
       shared.rt_periods.fetch_add(1, std::memory_order_relaxed);
 
-      if (++periods_in_interval >= per_status) {
-        periods_in_interval = 0;
+      if (done >= next_status_mono) {
+        next_status_mono += status_period_us;
+        if (next_status_mono < done) next_status_mono = done + status_period_us;
         Item st;
         st.kind = Item::Kind::kStatus;
         StatusSnapshot& s = st.status;
@@ -209,6 +211,7 @@ void control_thread(const Params& p, can::Socket& sock, gpio::MotorLines& lines,
         s.can_bus_off = cc.bus_off;
         s.can_error_passive = cc.error_passive;
         s.can_reopens = cc.reopens;
+        s.can_rx_overflow = cc.rx_overflow;
         s.wake_latency = wake.take();
         s.loop_time = loop.take();
         s.period_jitter = jitter.take();
@@ -321,6 +324,8 @@ int main(int argc, char** argv) {
     std::vector<can::Filter> filters;
     for (uint32_t base : {params.ids.sample_base, params.ids.heartbeat_base}) filters.push_back({base, 0x7f8});
     sock->set_filters(filters);
+    // ~1 s of bus traffic: a stalled control thread loses no frames (they show as stale periods).
+    sock->set_receive_buffer(4 << 20);
     if (params.gpio) {
       lines = gpio::open_gpiod_lines(params.lines, "whiskerd");
     } else {

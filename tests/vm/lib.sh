@@ -14,6 +14,9 @@ check() {
 setup_lcm_loopback() {
   ip link set lo up
   ip route add 224.0.0.0/4 dev lo
+  # Large receive buffers: the checkers take 500 Hz whisker traffic and 600 kB camera frames.
+  sysctl -qw net.core.rmem_max=16777216
+  export LCM_DEFAULT_URL="udpm://239.255.76.67:7667?ttl=0&recv_buf_size=8388608"
 }
 setup_vcan() {
   # Module autoloading would run the initramfs's modprobe, not the host's: load explicitly.

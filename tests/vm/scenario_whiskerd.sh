@@ -10,7 +10,6 @@ source "$(dirname "$0")/lib.sh"
 
 setup_lcm_loopback
 setup_vcan vcan0
-sysctl -qw net.core.rmem_max=16777216
 
 # candump sees the motor commands on the wire (independently of the checker's own decoding).
 candump -L vcan0,200:7FF > /tmp/motor.log 2>&1 &

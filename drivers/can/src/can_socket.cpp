@@ -90,7 +90,10 @@ void Socket::open_socket() {
   }
   int on = 1;
   if (::setsockopt(fd_, SOL_SOCKET, SO_TIMESTAMP, &on, sizeof(on)) < 0) fail("enable timestamps");
+  if (::setsockopt(fd_, SOL_SOCKET, SO_RXQ_OVFL, &on, sizeof(on)) < 0) fail("enable drop counting");
+  last_drop_count_ = 0;
   apply_filters();
+  if (rcvbuf_ > 0) set_receive_buffer(rcvbuf_);
   sockaddr_can addr{};
   addr.can_family = AF_CAN;
   addr.can_ifindex = ifr.ifr_ifindex;
@@ -106,6 +109,18 @@ void Socket::apply_filters() {
                    static_cast<socklen_t>(f.size() * sizeof(can_filter))) < 0) {
     throw std::runtime_error("CAN " + interface_ + ": set filters: " + std::strerror(errno));
   }
+}
+
+int Socket::set_receive_buffer(int bytes) {
+  rcvbuf_ = bytes;
+  if (fd_ < 0) return 0;
+  if (::setsockopt(fd_, SOL_SOCKET, SO_RCVBUFFORCE, &bytes, sizeof(bytes)) < 0) {
+    ::setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &bytes, sizeof(bytes));  // capped at rmem_max
+  }
+  int granted = 0;
+  socklen_t len = sizeof(granted);
+  ::getsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &granted, &len);
+  return granted;
 }
 
 void Socket::set_filters(const std::vector<Filter>& filters) {
@@ -143,7 +158,7 @@ Socket::Rx Socket::receive(Frame& frame, int64_t timeout_us) {
   }
   canfd_frame raw{};
   iovec iov{&raw, sizeof(raw)};
-  alignas(cmsghdr) char control[CMSG_SPACE(sizeof(timeval))];
+  alignas(cmsghdr) char control[CMSG_SPACE(sizeof(timeval)) + CMSG_SPACE(sizeof(uint32_t))];
   msghdr msg{};
   msg.msg_iov = &iov;
   msg.msg_iovlen = 1;
@@ -168,6 +183,12 @@ Socket::Rx Socket::receive(Frame& frame, int64_t timeout_us) {
       timeval tv;
       std::memcpy(&tv, CMSG_DATA(c), sizeof(tv));
       frame.rx_utime = static_cast<int64_t>(tv.tv_sec) * 1000000 + tv.tv_usec;
+    } else if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SO_RXQ_OVFL) {
+      // The socket's cumulative drop counter: count what was added since the last frame.
+      uint32_t drops;
+      std::memcpy(&drops, CMSG_DATA(c), sizeof(drops));
+      counters_.rx_overflow += static_cast<uint32_t>(drops - last_drop_count_);
+      last_drop_count_ = drops;
     }
   }
   if (raw.can_id & CAN_ERR_FLAG) {

@@ -57,6 +57,7 @@ struct Counters {
   int64_t bus_off = 0;       // transitions to bus-off
   int64_t error_passive = 0; // transitions to error-passive
   int64_t reopens = 0;
+  int64_t rx_overflow = 0;   // frames the kernel dropped because the receive queue was full
 };
 
 class Socket {
@@ -70,6 +71,9 @@ class Socket {
 
   // Only frames matching one of the filters are received (error frames always are). Empty = all.
   void set_filters(const std::vector<Filter>& filters);
+  // Kernel receive queue size, so a stalled reader loses no frames for a while (privileged processes
+  // may exceed net.core.rmem_max). Kept across reopen(). Returns the size granted.
+  int set_receive_buffer(int bytes);
 
   enum class Rx { kFrame, kTimeout, kErrorFrame, kDown };
   // Waits up to timeout_us for a frame. kErrorFrame updates state(); kDown: the interface went away
@@ -96,6 +100,8 @@ class Socket {
   bool fd_frames_;
   int fd_ = -1;
   std::vector<Filter> filters_;
+  int rcvbuf_ = 0;
+  uint32_t last_drop_count_ = 0;
   BusState state_ = BusState::kErrorActive;
   Counters counters_;
   std::string last_error_;
