@@ -129,6 +129,7 @@ void control_thread(const Params& p, can::Socket& sock, gpio::MotorLines& lines,
   int64_t reopen_backoff_us = 100000;
   int64_t last_wake = 0;
   can::Frame frame;
+  can::BusState bus_state = sock.state();
 
   timespec next;
   clock_gettime(CLOCK_MONOTONIC, &next);
@@ -167,6 +168,11 @@ void control_thread(const Params& p, can::Socket& sock, gpio::MotorLines& lines,
         next_reopen_mono = woke + reopen_backoff_us;
       }
 
+      if (sock.state() != bus_state) {
+        std::cerr << "whiskerd: CAN " << sock.interface() << " " << can::bus_state_name(bus_state) << " -> "
+                  << can::bus_state_name(sock.state()) << "\n";
+        bus_state = sock.state();
+      }
       if (lines.fault_active() && core.safety() != Safety::kFault) {
         lines.set_enable(false);  // at once, before anything else this period
         lines_on = false;

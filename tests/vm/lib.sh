@@ -22,6 +22,9 @@ setup_vcan() {
   # Module autoloading would run the initramfs's modprobe, not the host's: load explicitly.
   modprobe vcan
   modprobe can_raw
+  # vcan hands every frame to the per-CPU input backlog (netdev_max_backlog, 1000 by default) and
+  # drops silently beyond it; a stalled emulated CPU followed by a burst must not lose frames.
+  sysctl -qw net.core.netdev_max_backlog=100000
   ip link add dev "$1" type vcan
   ip link set "$1" mtu 72
   ip link set "$1" up

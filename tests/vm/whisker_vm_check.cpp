@@ -3,7 +3,16 @@
 // contact on whisker 5 — while listening to whiskerd's LCM output and its motor command frames, then
 // reports one PASS/FAIL line per checked behaviour into the results file.
 //   whisker_vm_check --interface vcan0 --results FILE
+#include <linux/can.h>
+#include <linux/can/error.h>
+#include <linux/can/raw.h>
+#include <net/if.h>
+#include <sys/ioctl.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
+#include <cstring>
 #include <atomic>
 #include <cmath>
 #include <fstream>
@@ -32,6 +41,8 @@ constexpr int kContactWhisker = 5;
 constexpr int16_t kContactX = 1200;
 constexpr int kBadAt = 200;
 constexpr double kThetaMax = 45.0 * M_PI / 180.0;
+constexpr int kBusOffAt = 400;     // an error frame says bus-off here ...
+constexpr int kRestartAt = 1100;   // ... and the controller restarted here
 
 int16_t value_x(int w) { return static_cast<int16_t>(10 * (w / 4) + w % 4); }
 int16_t value_theta(int w) { return static_cast<int16_t>(100 + 5 * w); }
@@ -54,11 +65,20 @@ struct Received {
   std::vector<driver_status_t> status;
 };
 
+// Next sample time. Real boards never burst: after a stall of the emulated CPU the schedule restarts
+// from now instead of sending the missed samples back to back.
 void sleep_until(timespec& t, long add_ns) {
   t.tv_nsec += add_ns;
   while (t.tv_nsec >= 1000000000) {
     t.tv_nsec -= 1000000000;
     ++t.tv_sec;
+  }
+  timespec now;
+  clock_gettime(CLOCK_MONOTONIC, &now);
+  const int64_t behind_ns = (now.tv_sec - t.tv_sec) * 1000000000LL + (now.tv_nsec - t.tv_nsec);
+  if (behind_ns > 10000000) {
+    t = now;
+    return;
   }
   while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &t, nullptr) == EINTR) {
   }
@@ -79,6 +99,26 @@ can::Frame fd_frame(uint32_t id, std::size_t len) {
   f.brs = true;
   f.len = static_cast<uint8_t>(len);
   return f;
+}
+
+// Writes a controller error frame onto the virtual bus, as a CAN driver would report it (vcan has
+// no controller; raw sockets with an error mask receive it as an error frame).
+bool inject_error_frame(const std::string& interface, uint32_t error_class) {
+  const int fd = ::socket(PF_CAN, SOCK_RAW, CAN_RAW);
+  if (fd < 0) return false;
+  ifreq ifr{};
+  std::strncpy(ifr.ifr_name, interface.c_str(), IFNAMSIZ - 1);
+  sockaddr_can addr{};
+  addr.can_family = AF_CAN;
+  bool ok = ::ioctl(fd, SIOCGIFINDEX, &ifr) == 0;
+  addr.can_ifindex = ifr.ifr_ifindex;
+  ok = ok && ::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof(addr)) == 0;
+  can_frame f{};
+  f.can_id = CAN_ERR_FLAG | error_class;
+  f.can_dlc = CAN_ERR_DLC;
+  ok = ok && ::write(fd, &f, sizeof(f)) == static_cast<ssize_t>(sizeof(f));
+  ::close(fd);
+  return ok;
 }
 
 }  // namespace
@@ -171,6 +211,8 @@ int main(int argc, char** argv) {
         send_reliably(tx, h);
       }
     }
+    if (seq == kBusOffAt && !inject_error_frame(interface, CAN_ERR_BUSOFF)) std::cout << "cannot inject bus-off" << std::endl;
+    if (seq == kRestartAt && !inject_error_frame(interface, CAN_ERR_RESTARTED)) std::cout << "cannot inject restart" << std::endl;
     if (seq == kBadAt) {
       can::Frame f = fd_frame(0x181, 20);  // wrong length
       send_reliably(tx, f);
@@ -273,6 +315,26 @@ int main(int argc, char** argv) {
   counter_is("rejected_wrong_length", 1);
   counter_is("rejected_unknown_id", 1);
   counter_is("rejected_out_of_range", 1);
+
+  // Bus-off reported (DEGRADED, "bus-off") and recovered from (later: running, error-active) while
+  // whiskerd keeps running.
+  std::size_t busoff_at = rx.status.size();
+  for (std::size_t i = 0; i < rx.status.size(); ++i) {
+    if (rx.status[i].message.find("bus-off") != std::string::npos &&
+        rx.status[i].state == driver_status_t::STATE_DEGRADED) {
+      busoff_at = i;
+      break;
+    }
+  }
+  bool recovered = false;
+  for (std::size_t i = busoff_at + 1; i < rx.status.size(); ++i) {
+    if (rx.status[i].message.find("running; bus error-active") != std::string::npos) recovered = true;
+  }
+  results.report("bus_off_is_reported_in_driver_status", busoff_at < rx.status.size(),
+                 "no DEGRADED status mentioning bus-off");
+  results.report("bus_off_recovers_without_restart", recovered, "no running/error-active status after bus-off");
+  counter_is("can_bus_off", 1);
+  counter_is("can_error_frames", 2);
 
   // Motor command frames.
   results.report("motor_command_frames_are_valid_fd_commands", commands.size() > 500 && bad_commands == 0,
