@@ -276,3 +276,34 @@ TEST(LatencyStats, ReportsPercentilesAndMaxPerInterval) {
   EXPECT_NEAR(a.p99_us, 100, 1);
   EXPECT_EQ(s.take().count, 0);
 }
+
+TEST(WhiskerdCore, ClassicModeAssemblesPerWhiskerFramesAndRuns) {
+  Params p = test_params();
+  p.mode = wp::BusMode::kClassic;
+  p.rate_hz = 100;
+  WhiskerCore core(p);
+  PeriodOutput out;
+  int64_t mono = 1000000, utime = 1700000000000000;
+  for (int seq = 0; seq < 3; ++seq) {
+    for (int b = 0; b < wp::kNumBoards; ++b) {
+      for (int k = 0; k < 4; ++k) {
+        const int w = 4 * b + k;
+        wp::WhiskerFragment f{b, static_cast<uint8_t>(seq), k, 0, {static_cast<int16_t>(w), 0, static_cast<int16_t>(w), false}};
+        std::array<uint8_t, 8> buf{};
+        wp::encode_fragment(f, buf);
+        core.on_frame(wp::sample_id({}, b), false, buf, mono);
+      }
+    }
+    mono += 10000;
+    utime += 10000;
+    core.step(utime, mono, out);
+  }
+  EXPECT_EQ(core.safety(), Safety::kRunning);
+  EXPECT_EQ(out.raw_x[17], 17);
+  EXPECT_EQ(out.status[17], 0);
+  EXPECT_EQ(core.counters()[Counters::kSamples], 3 * wp::kNumBoards);
+  // An FD frame on a classic bus is rejected, not decoded.
+  std::array<uint8_t, 32> fd{};
+  core.on_frame(wp::sample_id({}, 0), true, fd, mono);
+  EXPECT_EQ(core.counters()[Counters::kRejectedWrongFrameType], 1);
+}
