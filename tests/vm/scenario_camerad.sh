@@ -20,7 +20,9 @@ cam_pid=$!
 "$CHECK" --seconds 60 --results "$RESULTS_DIR/results.txt" > "$RESULTS_DIR/check.log" 2>&1 &
 check_pid=$!
 
-sleep 5
+# Let camerad stream for a couple of seconds first (startup on an emulated CPU is slow).
+for i in $(seq 1 120); do grep -q "streaming" "$RESULTS_DIR/camerad.log" && break; sleep 0.5; done
+sleep 3
 # The device disappears under camerad (as an unplug would), then the driver is unloaded and
 # reloaded. Unbinding first releases camerad's hold on the module so rmmod cannot fail "in use".
 echo vivid.0 > /sys/bus/platform/drivers/vivid/unbind

@@ -174,7 +174,7 @@ int main(int argc, char** argv) {
   });
 
   // Wait for whiskerd to be up (it publishes every period even before the boards stream).
-  for (int i = 0; i < 200; ++i) {
+  for (int i = 0; i < 600; ++i) {
     {
       std::lock_guard lock(rx.m);
       if (!rx.states.empty()) break;
