@@ -281,6 +281,21 @@ void WhiskerCore::step(int64_t utime, int64_t mono_us, PeriodOutput& out) {
   if (c.completed_cycle) out.completed_cycle = std::make_unique<rcp::WhiskCycle>(std::move(*c.completed_cycle));
 }
 
+bool LineGuard::poll_fault(WhiskerCore& core) {
+  if (!lines_.fault_active() || core.safety() == Safety::kFault) return false;
+  lines_.set_enable(false);  // first, before anything else this period
+  on_ = false;
+  core.fault();
+  return true;
+}
+
+void LineGuard::update(const WhiskerCore& core) {
+  if (core.motors_enabled() != on_) {
+    on_ = core.motors_enabled();
+    lines_.set_enable(on_);
+  }
+}
+
 void to_lcm(const PeriodOutput& in, whisker_sample_t& s, rcp_state_t& r) {
   s.utime = in.utime;
   s.seq = in.seq;

@@ -141,6 +141,22 @@ class WhiskerCore {
   Counters counters_;
 };
 
+// Couples the motor lines to the core, once per period: poll_fault() before step() (a fault or
+// e-stop drops the enable line at once, then latches the core in Safety::kFault); update() after
+// step() makes the enable line follow motors_enabled().
+class LineGuard {
+ public:
+  explicit LineGuard(gpio::MotorLines& lines) : lines_(lines) { lines_.set_enable(false); }
+  // True if a new fault was seen this call.
+  bool poll_fault(WhiskerCore& core);
+  void update(const WhiskerCore& core);
+  bool enabled() const { return on_; }
+
+ private:
+  gpio::MotorLines& lines_;
+  bool on_ = false;
+};
+
 // Status of one reporting interval, as plain data pushed through the ring by the control thread.
 struct StatusSnapshot {
   int64_t utime = 0;

@@ -123,8 +123,7 @@ void control_thread(const Params& p, can::Socket& sock, gpio::MotorLines& lines,
   LatencyStats wake(static_cast<std::size_t>(per_status) + 16), loop(static_cast<std::size_t>(per_status) + 16),
       jitter(static_cast<std::size_t>(per_status) + 16);
   Item item;
-  bool lines_on = false;
-  lines.set_enable(false);
+  LineGuard guard(lines);
   int64_t next_reopen_mono = 0;
   int64_t reopen_backoff_us = 100000;
   int64_t last_wake = 0;
@@ -173,12 +172,7 @@ void control_thread(const Params& p, can::Socket& sock, gpio::MotorLines& lines,
                   << can::bus_state_name(sock.state()) << "\n";
         bus_state = sock.state();
       }
-      if (lines.fault_active() && core.safety() != Safety::kFault) {
-        lines.set_enable(false);  // at once, before anything else this period
-        lines_on = false;
-        core.fault();
-        std::cerr << "whiskerd: motor fault / emergency stop: motors disabled\n";
-      }
+      if (guard.poll_fault(core)) std::cerr << "whiskerd: motor fault / emergency stop: motors disabled\n";
       if (g_stop.load(std::memory_order_relaxed)) core.request_stop();
 
       const Safety before = core.safety();
@@ -188,10 +182,7 @@ void control_thread(const Params& p, can::Socket& sock, gpio::MotorLines& lines,
                   << (core.reason()[0] ? std::string(" (") + core.reason() + ")" : "") << "\n";
       }
       if (sock.is_open()) send_command(sock, p, item.period.command, core);
-      if (core.motors_enabled() != lines_on) {
-        lines_on = core.motors_enabled();
-        lines.set_enable(lines_on);
-      }
+      guard.update(core);
       item.kind = Item::Kind::kPeriod;
       if (!shared.ring.try_push(item)) ++core.counters()[Counters::kPublishDrops];
 

@@ -128,6 +128,42 @@ TEST(WhiskerdCore, FaultDisablesMotorsAtOnceAndLatches) {
   EXPECT_FALSE(rig.core.motors_enabled());
 }
 
+TEST(WhiskerdLines, EnableLineFollowsTheCoreAndAFaultEdgeDropsItBeforeTheNextStep) {
+  gpio::FakeMotorLines lines;
+  Rig rig;
+  LineGuard guard(lines);
+  EXPECT_FALSE(lines.enable);
+  for (int i = 0; i < 10; ++i) {
+    guard.poll_fault(rig.core);
+    rig.run(1);
+    guard.update(rig.core);
+  }
+  EXPECT_TRUE(lines.enable);
+  // A pulse on the fault line that is already over when polled still counts.
+  lines.fault_edge = true;
+  EXPECT_TRUE(guard.poll_fault(rig.core));
+  EXPECT_FALSE(lines.enable);  // dropped before the next step runs
+  EXPECT_EQ(rig.core.safety(), Safety::kFault);
+  const int writes = lines.enable_writes;
+  for (int i = 0; i < 50; ++i) {
+    EXPECT_FALSE(guard.poll_fault(rig.core));
+    rig.run(1);
+    guard.update(rig.core);
+  }
+  EXPECT_FALSE(lines.enable);
+  EXPECT_EQ(lines.enable_writes, writes);  // latched: never re-enabled
+}
+
+TEST(WhiskerdLines, NoGpioLinesNeverReportAFault) {
+  gpio::NoMotorLines lines;
+  Rig rig;
+  LineGuard guard(lines);
+  rig.run(5);
+  EXPECT_FALSE(guard.poll_fault(rig.core));
+  guard.update(rig.core);
+  EXPECT_TRUE(guard.enabled());
+}
+
 TEST(WhiskerdCore, StaleBusRetractsThenDropsEnableThenRecovers) {
   Rig rig;
   rig.run(300);

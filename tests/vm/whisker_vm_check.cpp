@@ -26,6 +26,7 @@
 #include <whiskeye/common/clock.h>
 #include <whiskeye/driver_status_t.hpp>
 #include <whiskeye/rcp_state_t.hpp>
+#include <whiskeye/whisk_cycle_t.hpp>
 #include <whiskeye/whisker_sample_t.hpp>
 
 #include "whiskeye/drivers/can_socket.h"
@@ -63,6 +64,7 @@ struct Received {
   std::map<int64_t, whisker_sample_t> samples;  // by utime
   std::map<int64_t, rcp_state_t> states;        // by utime
   std::vector<driver_status_t> status;
+  std::vector<whisk_cycle_t> cycles;
 };
 
 // Next sample time. Real boards never burst: after a stall of the emulated CPU the schedule restarts
@@ -147,6 +149,10 @@ int main(int argc, char** argv) {
     std::lock_guard lock(rx.m);
     rx.status.push_back(m);
   }, errors);
+  subscribe<whisk_cycle_t>(bus, "WHISK_CYCLE", [&](const whisk_cycle_t& m) {
+    std::lock_guard lock(rx.m);
+    rx.cycles.push_back(m);
+  }, errors);
   std::atomic<bool> done{false};
   std::thread lcm_thread([&] {
     while (!done) bus.handle_timeout(50);
@@ -158,12 +164,15 @@ int main(int argc, char** argv) {
   std::map<uint16_t, wp::MotorCommand> commands;  // by command seq
   std::vector<uint16_t> command_order;
   int bad_commands = 0;
+  int64_t timestamp_errors = 0, timestamped = 0;
   std::thread motor_thread([&] {
     can::Frame f;
     while (!done) {
       if (motor.receive(f, 50000) != can::Socket::Rx::kFrame) continue;
       const wp::Decoded d = wp::decode_frame(f.id, f.fd, f.payload(), wp::BusMode::kFd);
       std::lock_guard lock(rx.m);
+      ++timestamped;
+      if (std::llabs(now_utime() - f.rx_utime) > 1000000) ++timestamp_errors;
       if (d.kind != wp::FrameKind::kCommand) {
         ++bad_commands;
         continue;
@@ -335,6 +344,24 @@ int main(int argc, char** argv) {
   results.report("bus_off_recovers_without_restart", recovered, "no running/error-active status after bus-off");
   counter_is("can_bus_off", 1);
   counter_is("can_error_frames", 2);
+
+  // Kernel receive timestamps on the frames the checker's own socket received.
+  results.report("kernel_receive_timestamps_are_epoch_utime", timestamped > 0 && timestamp_errors == 0,
+                 std::to_string(timestamp_errors) + " of " + std::to_string(timestamped) + " off by > 1 s");
+
+  // WHISK_CYCLE at each cycle end (1 Hz whisking; the boards stream for 3 s).
+  bool cycle_ok = !rx.cycles.empty();
+  for (const auto& c : rx.cycles) {
+    // Sample counts depend on how many periods an emulated, shared CPU managed; the structure does not.
+    bool increasing = true;
+    for (std::size_t i = 1; i < c.sample_utime.size(); ++i) increasing = increasing && c.sample_utime[i] > c.sample_utime[i - 1];
+    cycle_ok = cycle_ok && c.num_whiskers == 24 && c.num_samples >= 10 &&
+               static_cast<int>(c.sample_utime.size()) == c.num_samples && static_cast<int>(c.theta.size()) == c.num_samples &&
+               c.utime_end > c.utime_start && increasing;
+  }
+  results.report("whisk_cycle_published_at_cycle_end", cycle_ok,
+                 std::to_string(rx.cycles.size()) + " cycles" +
+                     (rx.cycles.empty() ? "" : ", first has " + std::to_string(rx.cycles[0].num_samples) + " samples"));
 
   // Motor command frames.
   results.report("motor_command_frames_are_valid_fd_commands", commands.size() > 500 && bad_commands == 0,
