@@ -262,6 +262,7 @@ void WhiskerCore::step(int64_t utime, int64_t mono_us, PeriodOutput& out) {
     case Safety::kStopped:
       break;
   }
+  if (safety_ == Safety::kStopped) reason_ = "stopped on request";
 
   const rcp::ControlOutput c = controller_.step(in);
   out.cycle = c.cycle;

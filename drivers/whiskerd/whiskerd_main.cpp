@@ -13,6 +13,8 @@
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <cerrno>
+#include <array>
+#include <cstdarg>
 #include <cstdio>
 #include <cstring>
 #include <iostream>
@@ -39,11 +41,13 @@ using namespace whiskeye::whiskerd;
 std::atomic<bool> g_stop{false};
 void on_signal(int) { g_stop.store(true); }
 
-// One item handed from the control thread to the publisher thread.
+// One item handed from the control thread to the publisher thread. Log lines travel the same way so
+// the control thread never blocks on stderr (a full journald pipe).
 struct Item {
-  enum class Kind { kNone, kPeriod, kStatus } kind = Kind::kNone;
+  enum class Kind { kNone, kPeriod, kStatus, kLog } kind = Kind::kNone;
   PeriodOutput period;
   StatusSnapshot status;
+  std::array<char, 192> text{};
 };
 using Ring = SpscRing<Item, 256>;
 
@@ -112,6 +116,18 @@ struct Shared {
   std::atomic<int> exit_code{0};
 };
 
+// printf-style log line from the control thread: formatted into a fixed buffer, no allocation.
+void rt_log(Shared& shared, const char* fmt, ...) __attribute__((format(printf, 2, 3)));
+void rt_log(Shared& shared, const char* fmt, ...) {
+  static Item item;  // only the control thread logs; reused to avoid a 6 kB stack object per call
+  item.kind = Item::Kind::kLog;
+  va_list args;
+  va_start(args, fmt);
+  std::vsnprintf(item.text.data(), item.text.size(), fmt, args);
+  va_end(args);
+  shared.ring.try_push(item);  // a full ring loses the line, never blocks
+}
+
 void control_thread(const Params& p, can::Socket& sock, gpio::MotorLines& lines, Shared& shared) {
   const bool rt = make_realtime(p);
   WhiskerCore core(p);
@@ -150,7 +166,7 @@ void control_thread(const Params& p, can::Socket& sock, gpio::MotorLines& lines,
           if (rx == can::Socket::Rx::kFrame) {
             core.on_frame(frame.id, frame.fd, frame.payload(), mono_now_us());
           } else if (rx == can::Socket::Rx::kDown) {
-            std::cerr << "whiskerd: " << sock.last_error() << "; reopening\n";
+            rt_log(shared, "whiskerd: %s; reopening", sock.last_error().c_str());
             sock.reopen();
             break;
           } else if (rx == can::Socket::Rx::kTimeout) {
@@ -159,7 +175,7 @@ void control_thread(const Params& p, can::Socket& sock, gpio::MotorLines& lines,
         }
       } else if (woke >= next_reopen_mono) {
         if (sock.reopen()) {
-          std::cerr << "whiskerd: CAN " << sock.interface() << " reopened\n";
+          rt_log(shared, "whiskerd: CAN %s reopened", sock.interface().c_str());
           reopen_backoff_us = 100000;
         } else {
           reopen_backoff_us = std::min<int64_t>(reopen_backoff_us * 2, 5000000);
@@ -168,18 +184,18 @@ void control_thread(const Params& p, can::Socket& sock, gpio::MotorLines& lines,
       }
 
       if (sock.state() != bus_state) {
-        std::cerr << "whiskerd: CAN " << sock.interface() << " " << can::bus_state_name(bus_state) << " -> "
-                  << can::bus_state_name(sock.state()) << "\n";
+        rt_log(shared, "whiskerd: CAN %s %s -> %s", sock.interface().c_str(), can::bus_state_name(bus_state),
+               can::bus_state_name(sock.state()));
         bus_state = sock.state();
       }
-      if (guard.poll_fault(core)) std::cerr << "whiskerd: motor fault / emergency stop: motors disabled\n";
+      if (guard.poll_fault(core)) rt_log(shared, "whiskerd: motor fault / emergency stop: motors disabled");
       if (g_stop.load(std::memory_order_relaxed)) core.request_stop();
 
       const Safety before = core.safety();
       core.step(now_utime(), woke, item.period);
       if (core.safety() != before) {
-        std::cerr << "whiskerd: " << safety_name(before) << " -> " << safety_name(core.safety())
-                  << (core.reason()[0] ? std::string(" (") + core.reason() + ")" : "") << "\n";
+        rt_log(shared, "whiskerd: %s -> %s%s%s%s", safety_name(before), safety_name(core.safety()),
+               core.reason()[0] ? " (" : "", core.reason(), core.reason()[0] ? ")" : "");
       }
       if (sock.is_open()) send_command(sock, p, item.period.command, core);
       guard.update(core);
@@ -259,6 +275,8 @@ void publisher_thread(const Params& p, Bus& bus, Shared& shared) {
           to_lcm(*item.period.completed_cycle, cycle);
           publish(bus, p.channel_cycle, cycle);
         }
+      } else if (item.kind == Item::Kind::kLog) {
+        std::cerr << item.text.data() << "\n";
       } else if (item.kind == Item::Kind::kStatus) {
         to_lcm(item.status, status);
         publish(bus, p.channel_status, status);

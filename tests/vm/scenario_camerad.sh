@@ -15,6 +15,17 @@ load_vivid() { modprobe vivid n_devs=1 node_types=0x1; }
 check vivid_loads load_vivid
 check vivid_offers_640x480_yuyv bash -c "v4l2-ctl -d /dev/video0 --list-formats-ext | grep -q YUYV"
 
+# A mode vivid does not offer (no MJPEG, no 700x500): camerad takes the nearest and says so.
+printf 'camera: {match_card: vivid, width: 700, height: 500, formats: [MJPG, YUYV]}\n' > /tmp/fallback.yaml
+"$CAMERAD" -c /tmp/fallback.yaml > "$RESULTS_DIR/camerad_fallback.log" 2>&1 &
+fb_pid=$!
+for i in $(seq 1 120); do grep -q "streaming" "$RESULTS_DIR/camerad_fallback.log" && break; sleep 0.5; done
+kill -TERM $fb_pid
+wait $fb_pid
+check camerad_logs_the_fallback_to_the_nearest_mode \
+  grep -q "700x500 MJPG not supported, using the nearest mode [0-9]*x[0-9]* YUYV" "$RESULTS_DIR/camerad_fallback.log"
+check camerad_streams_in_the_fallback_mode grep -q "streaming /dev/video[0-9]* [0-9]*x[0-9]* YUYV" "$RESULTS_DIR/camerad_fallback.log"
+
 "$CAMERAD" -c "$CONFIG" > "$RESULTS_DIR/camerad.log" 2>&1 &
 cam_pid=$!
 "$CHECK" --seconds 60 --results "$RESULTS_DIR/results.txt" > "$RESULTS_DIR/check.log" 2>&1 &
