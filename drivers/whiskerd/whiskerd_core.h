@@ -86,7 +86,7 @@ const char* safety_name(Safety s);
 
 // Counter names, in the order of Counters::values (DRIVER_STATUS counter_names).
 struct Counters {
-  static constexpr int kFixed = 13;
+  static constexpr int kFixed = 14;
   static constexpr int kCount = kFixed + wp::kNumBoards;
   static const char* const kNames[kCount];
   std::array<int64_t, kCount> values{};
@@ -94,7 +94,7 @@ struct Counters {
   enum : int {
     kFrames = 0, kSamples, kHeartbeats, kRejectedUnknownId, kRejectedWrongLength, kRejectedOutOfRange,
     kRejectedWrongFrameType, kGaps, kIncomplete, kStaleBoardPeriods, kDeadlineMisses, kPublishDrops,
-    kCanTxErrors, kGapsBoard0
+    kCanTxErrors, kLateSamples, kGapsBoard0
   };
 };
 

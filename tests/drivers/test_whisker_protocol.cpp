@@ -184,6 +184,8 @@ TEST(WhiskerProtocol, SequenceGapsAreCountedPerBoardAcrossWraparound) {
   a.add(make_sample(4, 10));
   a.add(make_sample(4, 11));
   a.add(make_sample(4, 11));  // duplicate: not a gap, not new
+  a.add(make_sample(1, 0));  // late: arrived after 1 and 2
+  EXPECT_EQ(a.late(), 1);
   EXPECT_EQ(a.gaps(1), 2);
   EXPECT_EQ(a.gaps(4), 0);
   EXPECT_EQ(a.samples(4), 2);

@@ -1,5 +1,6 @@
 #!/bin/bash
-# VM scenario: whiskerd on vcan0 (FD MTU) against the board emulator; LCM over loopback multicast.
+# VM scenario: whiskerd on vcan0 (FD MTU) against the board emulator, in CAN FD mode then in
+# classic mode; LCM over loopback multicast.
 #   scenario_whiskerd.sh RESULTS_DIR WHISKERD WHISKER_VM_CHECK CONFIG
 set -u
 RESULTS_DIR=$1
@@ -20,6 +21,10 @@ wd_pid=$!
 "$CHECK" --interface vcan0 --results "$RESULTS_DIR/results.txt" > "$RESULTS_DIR/check.log" 2>&1 \
   || echo "checker reported failures"
 cat "$RESULTS_DIR/check.log"
+# Where frames could be dropped silently (second column of softnet_stat: backlog drops).
+cat /proc/net/softnet_stat
+ip -s link show vcan0
+sysctl net.core.netdev_max_backlog
 
 kill -TERM $wd_pid
 wait $wd_pid
@@ -33,4 +38,22 @@ check candump_sees_64_byte_fd_motor_frames grep -Eq 'vcan0 200##[0-9A-F][0-9A-F]
 check last_motor_frame_on_the_wire_is_disabled \
   bash -c "tail -n 1 /tmp/motor.log | grep -Eq 'vcan0 200##[0-9A-F][0-9A-F]{4}000000'"
 cp /tmp/motor.log "$RESULTS_DIR/motor.log" 2>/dev/null
+
+# The same script on classic CAN (100 Hz, one frame per whisker, per-board commands).
+sed 's/^can:$/can:\n  mode: classic/' "$CONFIG" > /tmp/whiskerd_classic.yaml
+candump -L vcan0,200:7F8 > /tmp/motor_classic.log 2>&1 &
+dump_pid=$!
+"$WHISKERD" -c /tmp/whiskerd_classic.yaml --no-gpio > "$RESULTS_DIR/whiskerd_classic.log" 2>&1 &
+wd_pid=$!
+"$CHECK" --mode classic --interface vcan0 --results "$RESULTS_DIR/results.txt" > "$RESULTS_DIR/check_classic.log" 2>&1 \
+  || echo "classic checker reported failures"
+cat "$RESULTS_DIR/check_classic.log"
+kill -TERM $wd_pid
+wait $wd_pid
+rc=$?
+kill $dump_pid 2>/dev/null
+check classic_whiskerd_exits_cleanly_on_sigterm test "$rc" = 0
+check classic_whiskerd_runs_classic_can_at_100_hz grep -q "vcan0 (classic CAN, 100 Hz)" "$RESULTS_DIR/whiskerd_classic.log"
+check candump_sees_8_byte_classic_motor_frames_per_board \
+  bash -c "for id in 201 202 203 204 205 206; do grep -Eq \"vcan0 \$id#[0-9A-F]{16}\$\" /tmp/motor_classic.log || exit 1; done"
 exit 0

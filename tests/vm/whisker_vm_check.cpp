@@ -2,7 +2,9 @@
 // scripted content — per-whisker values, sequence gaps on board 2, one frame of each bad kind, and a
 // contact on whisker 5 — while listening to whiskerd's LCM output and its motor command frames, then
 // reports one PASS/FAIL line per checked behaviour into the results file.
-//   whisker_vm_check --interface vcan0 --results FILE
+// --mode classic runs the same script on classic CAN (one frame per whisker, 100 Hz, per-board
+// command frames without sequence numbers) and prefixes its test names with "classic_".
+//   whisker_vm_check --interface vcan0 --results FILE [--mode fd|classic]
 #include <linux/can.h>
 #include <linux/can/error.h>
 #include <linux/can/raw.h>
@@ -20,6 +22,7 @@
 #include <map>
 #include <mutex>
 #include <thread>
+#include <sched.h>
 #include <time.h>
 
 #include <whiskeye/common/bus.h>
@@ -36,25 +39,44 @@ using namespace whiskeye;
 
 namespace {
 
-constexpr int kSamples = 1500;          // 3 s at 500 Hz
-constexpr int kContactFrom = 750;       // whisker 5 touches from here to the end
+// The script in samples; classic mode runs it at a fifth of the rate (same duration).
+struct Script {
+  bool classic = false;
+  int samples = 1500;       // 3 s at 500 Hz
+  int contact_from = 750;   // whisker 5 touches from here to the end
+  int bad_at = 200;
+  int bus_off_at = 400;     // an error frame says bus-off here ...
+  int restart_at = 1100;    // ... and the controller restarted here
+  long period_ns = 2000000;
+  wp::BusMode mode() const { return classic ? wp::BusMode::kClassic : wp::BusMode::kFd; }
+};
+Script classic_script() {
+  Script s;
+  s.classic = true;
+  s.samples = 300;
+  s.contact_from = 150;
+  s.bad_at = 40;
+  s.bus_off_at = 80;
+  s.restart_at = 220;
+  s.period_ns = 10000000;
+  return s;
+}
 constexpr int kContactWhisker = 5;
 constexpr int16_t kContactX = 1200;
-constexpr int kBadAt = 200;
 constexpr double kThetaMax = 45.0 * M_PI / 180.0;
-constexpr int kBusOffAt = 400;     // an error frame says bus-off here ...
-constexpr int kRestartAt = 1100;   // ... and the controller restarted here
 
 int16_t value_x(int w) { return static_cast<int16_t>(10 * (w / 4) + w % 4); }
 int16_t value_theta(int w) { return static_cast<int16_t>(100 + 5 * w); }
-bool board2_skips(int seq) { return (seq >= 100 && seq <= 104) || seq == 300; }  // 6 lost samples
+// 6 lost samples; 270 is past the 8-bit classic sequence wrap.
+bool board2_skips(int seq) { return (seq >= 100 && seq <= 104) || seq == 270; }
 
 struct Results {
   std::ofstream out;
+  std::string prefix;
   int failures = 0;
   void report(const std::string& name, bool ok, const std::string& why = "") {
-    out << (ok ? "PASS " : "FAIL ") << name << (ok ? "" : ": " + why) << "\n";
-    std::cout << (ok ? "PASS " : "FAIL ") << name << (ok ? "" : ": " + why) << std::endl;
+    out << (ok ? "PASS " : "FAIL ") << prefix << name << (ok ? "" : ": " + why) << "\n";
+    std::cout << (ok ? "PASS " : "FAIL ") << prefix << name << (ok ? "" : ": " + why) << std::endl;
     if (!ok) ++failures;
   }
 };
@@ -127,12 +149,15 @@ bool inject_error_frame(const std::string& interface, uint32_t error_class) {
 
 int main(int argc, char** argv) {
   CLI::App app{"whiskerd VM test: board emulator and output checker"};
-  std::string interface = "vcan0", results_path;
+  std::string interface = "vcan0", results_path, mode = "fd";
   app.add_option("--interface", interface);
+  app.add_option("--mode", mode)->check(CLI::IsMember({"fd", "classic"}));
   app.add_option("--results", results_path)->required();
   CLI11_PARSE(app, argc, argv);
 
+  const Script script = mode == "classic" ? classic_script() : Script{};
   Results results;
+  results.prefix = script.classic ? "classic_" : "";
   results.out.open(results_path, std::ios::app);
   Received rx;
   LcmBus bus;
@@ -160,16 +185,17 @@ int main(int argc, char** argv) {
 
   can::Socket tx(interface, true);
   can::Socket motor(interface, true);
-  motor.set_filters({{0x200, 0x7ff}});
-  std::map<uint16_t, wp::MotorCommand> commands;  // by command seq
+  motor.set_filters({{0x200, 0x7f8}});
+  std::map<uint16_t, wp::MotorCommand> commands;  // FD: by command seq
   std::vector<uint16_t> command_order;
+  std::array<std::vector<wp::MotorCommand>, wp::kNumBoards> board_commands;  // classic: per board, in order
   int bad_commands = 0;
   int64_t timestamp_errors = 0, timestamped = 0;
   std::thread motor_thread([&] {
     can::Frame f;
     while (!done) {
       if (motor.receive(f, 50000) != can::Socket::Rx::kFrame) continue;
-      const wp::Decoded d = wp::decode_frame(f.id, f.fd, f.payload(), wp::BusMode::kFd);
+      const wp::Decoded d = wp::decode_frame(f.id, f.fd, f.payload(), script.mode());
       std::lock_guard lock(rx.m);
       ++timestamped;
       if (std::llabs(now_utime() - f.rx_utime) > 1000000) ++timestamp_errors;
@@ -177,8 +203,12 @@ int main(int argc, char** argv) {
         ++bad_commands;
         continue;
       }
-      commands[d.command.seq] = d.command;
-      command_order.push_back(d.command.seq);
+      if (script.classic) {
+        board_commands[d.command_board].push_back(d.command);
+      } else {
+        commands[d.command.seq] = d.command;
+        command_order.push_back(d.command.seq);
+      }
     }
   });
 
@@ -192,10 +222,16 @@ int main(int argc, char** argv) {
   }
 
   // --- board emulation ---
+  // One CPU for the sender: vcan hands frames to the backlog of the CPU that sent them, so a sender
+  // migrating between CPUs could reorder frames, which no real CAN controller does.
+  cpu_set_t one_cpu;
+  CPU_ZERO(&one_cpu);
+  CPU_SET(0, &one_cpu);
+  if (sched_setaffinity(0, sizeof(one_cpu), &one_cpu) != 0) std::cout << "cannot pin the emulator" << std::endl;
   timespec t;
   clock_gettime(CLOCK_MONOTONIC, &t);
   int64_t contact_onset_mono = 0;
-  for (int seq = 0; seq < kSamples; ++seq) {
+  for (int seq = 0; seq < script.samples; ++seq) {
     for (int b = 0; b < wp::kNumBoards; ++b) {
       if (b == 2 && board2_skips(seq)) continue;
       wp::BoardSample s;
@@ -203,16 +239,25 @@ int main(int argc, char** argv) {
       s.seq = static_cast<uint16_t>(seq);
       for (int k = 0; k < 4; ++k) {
         const int w = 4 * b + k;
-        s.whiskers[k].x = (w == kContactWhisker && seq >= kContactFrom) ? kContactX : value_x(w);
+        s.whiskers[k].x = (w == kContactWhisker && seq >= script.contact_from) ? kContactX : value_x(w);
         s.whiskers[k].y = static_cast<int16_t>(-value_x(w));
         s.whiskers[k].theta = value_theta(w);
       }
-      can::Frame f = fd_frame(wp::sample_id({}, b), wp::kFdSampleBytes);
-      wp::encode_sample_fd(s, f.data);
-      send_reliably(tx, f);
+      if (script.classic) {
+        for (int k = 0; k < 4; ++k) {
+          can::Frame f;
+          f.id = wp::sample_id({}, b);
+          f.len = static_cast<uint8_t>(wp::encode_fragment({b, static_cast<uint8_t>(seq & 0xff), k, 0, s.whiskers[k]}, f.data));
+          send_reliably(tx, f);
+        }
+      } else {
+        can::Frame f = fd_frame(wp::sample_id({}, b), wp::kFdSampleBytes);
+        wp::encode_sample_fd(s, f.data);
+        send_reliably(tx, f);
+      }
     }
-    if (seq == kContactFrom) contact_onset_mono = monotonic_us();
-    if (seq % 50 == 0) {
+    if (seq == script.contact_from) contact_onset_mono = monotonic_us();
+    if (seq % (script.classic ? 10 : 50) == 0) {
       for (int b = 0; b < wp::kNumBoards; ++b) {
         can::Frame h;
         h.id = wp::heartbeat_id({}, b);
@@ -220,9 +265,22 @@ int main(int argc, char** argv) {
         send_reliably(tx, h);
       }
     }
-    if (seq == kBusOffAt && !inject_error_frame(interface, CAN_ERR_BUSOFF)) std::cout << "cannot inject bus-off" << std::endl;
-    if (seq == kRestartAt && !inject_error_frame(interface, CAN_ERR_RESTARTED)) std::cout << "cannot inject restart" << std::endl;
-    if (seq == kBadAt) {
+    if (seq == script.bus_off_at && !inject_error_frame(interface, CAN_ERR_BUSOFF)) std::cout << "cannot inject bus-off" << std::endl;
+    if (seq == script.restart_at && !inject_error_frame(interface, CAN_ERR_RESTARTED)) std::cout << "cannot inject restart" << std::endl;
+    if (seq == script.bad_at && script.classic) {
+      can::Frame f;
+      f.id = 0x181;
+      f.len = 5;  // wrong length
+      send_reliably(tx, f);
+      f.id = 0x187;  // node 7 does not exist
+      f.len = 8;
+      send_reliably(tx, f);
+      wp::WhiskerRaw bad;
+      bad.x = 3000;  // beyond the 12-bit ADC
+      f.id = 0x184;
+      f.len = static_cast<uint8_t>(wp::encode_fragment({3, 0x55, 0, 0, bad}, f.data));
+      send_reliably(tx, f);
+    } else if (seq == script.bad_at) {
       can::Frame f = fd_frame(0x181, 20);  // wrong length
       send_reliably(tx, f);
       f = fd_frame(0x187, 32);  // node 7 does not exist
@@ -235,7 +293,7 @@ int main(int argc, char** argv) {
       wp::encode_sample_fd(s, f.data);
       send_reliably(tx, f);
     }
-    sleep_until(t, 2000000);
+    sleep_until(t, script.period_ns);
   }
   (void)contact_onset_mono;
   std::cout << "emulator: " << tx.counters().tx_frames << " frames sent, " << tx.counters().tx_errors
@@ -247,7 +305,8 @@ int main(int argc, char** argv) {
   motor_thread.join();
 
   std::lock_guard lock(rx.m);
-  results.report("whiskerd_publishes_samples_and_states", rx.samples.size() > 500 && rx.states.size() > 500,
+  const std::size_t min_periods = script.classic ? 100 : 500;
+  results.report("whiskerd_publishes_samples_and_states", rx.samples.size() > min_periods && rx.states.size() > min_periods,
                  std::to_string(rx.samples.size()) + " samples, " + std::to_string(rx.states.size()) + " states");
 
   // Decoded and calibrated values in a sample where every board was fresh and before the contact.
@@ -316,7 +375,8 @@ int main(int argc, char** argv) {
     const int64_t got = it == counters.end() ? -1 : it->second;
     results.report("counter_" + name + "_is_" + std::to_string(want), got == want,
                    "got " + std::to_string(got) + " (kernel rx queue overflows: " +
-                       std::to_string(counters.count("can_rx_overflow") ? counters["can_rx_overflow"] : -1) + ")");
+                       std::to_string(counters.count("can_rx_overflow") ? counters["can_rx_overflow"] : -1) +
+                       ", late samples: " + std::to_string(counters.count("late_samples") ? counters["late_samples"] : -1) + ")");
   };
   counter_is("gaps_board2", 6);
   counter_is("gaps_board0", 0);
@@ -364,52 +424,95 @@ int main(int argc, char** argv) {
                      (rx.cycles.empty() ? "" : ", first has " + std::to_string(rx.cycles[0].num_samples) + " samples"));
 
   // Motor command frames.
-  results.report("motor_command_frames_are_valid_fd_commands", commands.size() > 500 && bad_commands == 0,
-                 std::to_string(commands.size()) + " commands, " + std::to_string(bad_commands) + " invalid");
-  int enabled_frames = 0;
-  for (const auto& [seq, c] : commands) enabled_frames += c.enable_mask == 0xFFFFFF;
-  results.report("motor_commands_enable_all_whiskers_while_running", enabled_frames > 300,
-                 std::to_string(enabled_frames) + " fully enabled frames");
-  const bool last_disabled = !command_order.empty() && commands[command_order.back()].enable_mask == 0;
-  results.report("stale_bus_drops_enable", last_disabled && last_state != driver_status_t::STATE_OK &&
-                                              last_message.find("stale") != std::string::npos,
-                 "last mask " + (command_order.empty() ? std::string("none") : std::to_string(commands[command_order.back()].enable_mask)) +
-                     ", status '" + last_message + "'");
+  if (script.classic) {
+    std::size_t frames = 0, boards_seen = 0, enabled_frames = 0, boards_disabled_at_end = 0;
+    for (int b = 0; b < wp::kNumBoards; ++b) {
+      const auto& v = board_commands[b];
+      frames += v.size();
+      boards_seen += !v.empty();
+      const uint32_t board_mask = 0xFu << (4 * b);
+      for (const auto& c : v) enabled_frames += (c.enable_mask & board_mask) == board_mask;
+      boards_disabled_at_end += !v.empty() && (v.back().enable_mask & board_mask) == 0;
+    }
+    results.report("motor_command_frames_are_valid_classic_commands_for_every_board",
+                   boards_seen == wp::kNumBoards && frames > 6 * min_periods && bad_commands == 0,
+                   std::to_string(frames) + " frames from " + std::to_string(boards_seen) + " boards, " +
+                       std::to_string(bad_commands) + " invalid");
+    results.report("motor_commands_enable_all_whiskers_while_running", enabled_frames > 6 * 50,
+                   std::to_string(enabled_frames) + " fully enabled frames");
+    results.report("stale_bus_drops_enable", boards_disabled_at_end == wp::kNumBoards &&
+                                                last_state != driver_status_t::STATE_OK &&
+                                                last_message.find("stale") != std::string::npos,
+                   std::to_string(boards_disabled_at_end) + " boards disabled at the end, status '" + last_message + "'");
+  } else {
+    results.report("motor_command_frames_are_valid_fd_commands", commands.size() > 500 && bad_commands == 0,
+                   std::to_string(commands.size()) + " commands, " + std::to_string(bad_commands) + " invalid");
+    int enabled_frames = 0;
+    for (const auto& [seq, c] : commands) enabled_frames += c.enable_mask == 0xFFFFFF;
+    results.report("motor_commands_enable_all_whiskers_while_running", enabled_frames > 300,
+                   std::to_string(enabled_frames) + " fully enabled frames");
+    const bool last_disabled = !command_order.empty() && commands[command_order.back()].enable_mask == 0;
+    results.report("stale_bus_drops_enable", last_disabled && last_state != driver_status_t::STATE_OK &&
+                                                last_message.find("stale") != std::string::npos,
+                   "last mask " + (command_order.empty() ? std::string("none") : std::to_string(commands[command_order.back()].enable_mask)) +
+                       ", status '" + last_message + "'");
+  }
 
-  // Contact: the first period that sees the contact while protracting stops whisker 5's protraction
-  // in that very motor frame, and RCP_STATE shows the lowered ceiling.
-  bool contact_seen = false, rcp_ok = false;
-  std::string rcp_why = "no protracting period with the contact";
-  float prev_command = NAN;
+  // Contact: every period that sees whisker 5 touching while protracting has the RCP ceiling lowered
+  // and a command that does not rise; the reaction (a falling command, or the command already down at
+  // the ceiling) is seen; in FD mode that period's own motor frame carries exactly that command.
+  // (A period whose LCM messages were lost on a loaded emulator is skipped, never guessed.)
+  int periods_checked = 0, frames_checked = 0;
+  bool reaction = false, rcp_ok = true;
+  std::string rcp_why;
+  const rcp_state_t* prev_state = nullptr;
+  int64_t prev_seq = -1;
   for (const auto& [utime, m] : rx.samples) {
     const auto st = rx.states.find(utime);
     if (st == rx.states.end()) {
-      prev_command = NAN;
+      prev_state = nullptr;
       continue;
     }
     const rcp_state_t& r = st->second;
     const bool touching = m.raw_x[kContactWhisker] == kContactX && m.status[kContactWhisker] == 0;
-    if (touching && r.phase == rcp_state_t::PHASE_PROTRACT && r.enabled && !std::isnan(prev_command)) {
-      contact_seen = true;
-      const auto cmd = commands.find(static_cast<uint16_t>(m.seq & 0xffff));
-      const auto prev = commands.find(static_cast<uint16_t>((m.seq - 1) & 0xffff));
-      if (cmd == commands.end() || prev == commands.end()) {
-        rcp_why = "motor frames of the contact period missing";
-        break;
+    if (touching && r.phase == rcp_state_t::PHASE_PROTRACT && r.enabled && prev_state != nullptr && prev_seq == m.seq - 1) {
+      ++periods_checked;
+      const float cmd = r.theta_command[kContactWhisker], ceiling = r.theta_ceiling[kContactWhisker];
+      const float prev_cmd = prev_state->theta_command[kContactWhisker];
+      if (!(ceiling < kThetaMax - 0.1) || cmd > prev_cmd + 1e-6f) {
+        rcp_ok = false;
+        rcp_why = "seq " + std::to_string(m.seq) + ": ceiling " + std::to_string(ceiling) + " command " +
+                  std::to_string(cmd) + " previous " + std::to_string(prev_cmd);
       }
-      const int16_t target = cmd->second.theta_target[kContactWhisker];
-      const int16_t expected = static_cast<int16_t>(std::lround(r.theta_command[kContactWhisker] * 4096 / (2 * M_PI)));
-      rcp_ok = r.theta_ceiling[kContactWhisker] < kThetaMax - 0.1 && r.theta_command[kContactWhisker] < prev_command &&
-               target == expected && target < prev->second.theta_target[kContactWhisker];
-      rcp_why = "ceiling " + std::to_string(r.theta_ceiling[kContactWhisker]) + " command " +
-                std::to_string(r.theta_command[kContactWhisker]) + " (previous " + std::to_string(prev_command) +
-                ") frame target " + std::to_string(target) + " expected " + std::to_string(expected) +
-                " previous frame " + std::to_string(prev->second.theta_target[kContactWhisker]);
-      break;
+      reaction = reaction || cmd < prev_cmd || std::abs(cmd - ceiling) < 1e-4f;
+      if (!script.classic) {
+        const auto frame = commands.find(static_cast<uint16_t>(m.seq & 0xffff));
+        const auto prev_frame = commands.find(static_cast<uint16_t>((m.seq - 1) & 0xffff));
+        if (frame != commands.end() && prev_frame != commands.end()) {
+          ++frames_checked;
+          const int16_t target = frame->second.theta_target[kContactWhisker];
+          const int16_t expected = static_cast<int16_t>(std::lround(cmd * 4096 / (2 * M_PI)));
+          if (target != expected || target > prev_frame->second.theta_target[kContactWhisker]) {
+            rcp_ok = false;
+            rcp_why = "seq " + std::to_string(m.seq) + ": motor frame target " + std::to_string(target) +
+                      ", expected " + std::to_string(expected) + ", previous frame " +
+                      std::to_string(prev_frame->second.theta_target[kContactWhisker]);
+          }
+        }
+      }
     }
-    prev_command = r.theta_command[kContactWhisker];
+    prev_state = &r;
+    prev_seq = m.seq;
   }
-  results.report("contact_lowers_rcp_ceiling_in_the_next_motor_frame", contact_seen && rcp_ok, rcp_why);
-  std::cout << "contact check: " << rcp_why << std::endl;
+  const bool contact_seen = periods_checked > 0 && reaction && (script.classic || frames_checked > 0);
+  if (rcp_ok && !contact_seen) {
+    rcp_why = std::to_string(periods_checked) + " touching protraction periods, " + std::to_string(frames_checked) +
+              " with motor frames, reaction " + (reaction ? "seen" : "not seen");
+  }
+  std::cout << "contact check: " << periods_checked << " periods, " << frames_checked << " motor frames; " << rcp_why
+            << std::endl;
+  results.report(script.classic ? "contact_lowers_rcp_ceiling_in_the_same_period"
+                                 : "contact_lowers_rcp_ceiling_in_the_next_motor_frame",
+                 contact_seen && rcp_ok, rcp_why);
   return results.failures == 0 ? 0 : 1;
 }

@@ -231,7 +231,10 @@ bool SampleAssembler::accept(Board& b, const BoardSample& s) {
     const uint32_t step = (static_cast<uint32_t>(s.seq) + modulus - b.latest.seq) % modulus;
     if (step == 0) return false;  // duplicate
     // A step in the upper half of the sequence space is a late (reordered) frame, not a gap.
-    if (step > modulus / 2) return false;
+    if (step > modulus / 2) {
+      ++late_;
+      return false;
+    }
     b.gaps += step - 1;
   }
   b.latest = s;

@@ -161,6 +161,8 @@ class SampleAssembler {
   int64_t total_gaps() const;
   // Fragments dropped because their sample never completed (classic mode).
   int64_t incomplete() const { return incomplete_; }
+  // Samples that arrived after a newer one of their board (reordered): ignored, their seq stays a gap.
+  int64_t late() const { return late_; }
   // Count of complete samples per board since start.
   int64_t samples(int board) const { return boards_[board].samples; }
 
@@ -178,6 +180,7 @@ class SampleAssembler {
   BusMode mode_;
   std::array<Board, kNumBoards> boards_{};
   int64_t incomplete_ = 0;
+  int64_t late_ = 0;
 };
 
 // Per-whisker calibration: deflection = R(rotation) * (gain .* (raw - offset)), theta = theta_gain *
