@@ -1,0 +1,245 @@
+// V4L2 mmap streaming capture (see v4l2_capture.h).
+#include "whiskeye/drivers/v4l2_capture.h"
+
+#include <fcntl.h>
+#include <linux/videodev2.h>
+#include <poll.h>
+#include <sys/ioctl.h>
+#include <sys/mman.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+
+namespace whiskeye::v4l2 {
+namespace {
+
+int xioctl(int fd, unsigned long request, void* arg) {
+  int r;
+  do {
+    r = ::ioctl(fd, request, arg);
+  } while (r < 0 && errno == EINTR);
+  return r;
+}
+
+bool gone_errno(int e) { return e == ENODEV || e == EIO || e == ENXIO || e == ENOENT; }
+
+int64_t clock_us(clockid_t id) {
+  timespec t;
+  clock_gettime(id, &t);
+  return static_cast<int64_t>(t.tv_sec) * 1000000 + t.tv_nsec / 1000;
+}
+
+std::string card_of(const v4l2_capability& cap) {
+  return std::string(reinterpret_cast<const char*>(cap.card)) + " / " + reinterpret_cast<const char*>(cap.driver);
+}
+
+}  // namespace
+
+std::string fourcc_name(uint32_t code) {
+  std::string s(4, ' ');
+  for (int i = 0; i < 4; ++i) {
+    const char c = static_cast<char>((code >> (8 * i)) & 0xff);
+    s[i] = (c >= 32 && c < 127) ? c : '?';
+  }
+  return s;
+}
+
+uint32_t fourcc_from_name(const std::string& n) {
+  if (n.size() != 4) return 0;
+  return fourcc(n[0], n[1], n[2], n[3]);
+}
+
+std::string find_device(const CaptureConfig& config) {
+  if (config.match_card.empty()) return config.device;
+  for (int i = 0; i < 64; ++i) {
+    const std::string path = "/dev/video" + std::to_string(i);
+    const int fd = ::open(path.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) continue;
+    v4l2_capability cap{};
+    const bool ok = xioctl(fd, VIDIOC_QUERYCAP, &cap) == 0;
+    ::close(fd);
+    if (!ok) continue;
+    const uint32_t caps = (cap.capabilities & V4L2_CAP_DEVICE_CAPS) ? cap.device_caps : cap.capabilities;
+    if (!(caps & V4L2_CAP_VIDEO_CAPTURE) || !(caps & V4L2_CAP_STREAMING)) continue;
+    if (card_of(cap).find(config.match_card) != std::string::npos) return path;
+  }
+  throw CaptureError("no V4L2 capture device whose card or driver contains '" + config.match_card + "'", true);
+}
+
+Capture::Capture(const CaptureConfig& config, Log log) : log_(std::move(log)) {
+  device_ = find_device(config);
+  fd_ = ::open(device_.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
+  if (fd_ < 0) {
+    const int e = errno;
+    throw CaptureError("open " + device_ + ": " + std::strerror(e), true);
+  }
+  try {
+    v4l2_capability cap{};
+    if (xioctl(fd_, VIDIOC_QUERYCAP, &cap) < 0) {
+      throw CaptureError(device_ + ": not a V4L2 device: " + std::strerror(errno), gone_errno(errno));
+    }
+    const uint32_t caps = (cap.capabilities & V4L2_CAP_DEVICE_CAPS) ? cap.device_caps : cap.capabilities;
+    if (!(caps & V4L2_CAP_VIDEO_CAPTURE) || !(caps & V4L2_CAP_STREAMING)) {
+      throw CaptureError(device_ + " (" + card_of(cap) + ") cannot stream video capture", false);
+    }
+    negotiate(config);
+    map_buffers(config.buffers);
+    for (unsigned i = 0; i < buffers_.size(); ++i) {
+      v4l2_buffer b{};
+      b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+      b.memory = V4L2_MEMORY_MMAP;
+      b.index = i;
+      if (xioctl(fd_, VIDIOC_QBUF, &b) < 0) throw CaptureError(device_ + ": QBUF: " + std::strerror(errno), gone_errno(errno));
+    }
+    int type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    if (xioctl(fd_, VIDIOC_STREAMON, &type) < 0) {
+      throw CaptureError(device_ + ": STREAMON: " + std::strerror(errno), gone_errno(errno));
+    }
+    streaming_ = true;
+  } catch (...) {
+    close_device();
+    throw;
+  }
+}
+
+Capture::~Capture() { close_device(); }
+
+void Capture::close_device() {
+  if (fd_ >= 0 && streaming_) {
+    int type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    xioctl(fd_, VIDIOC_STREAMOFF, &type);
+  }
+  streaming_ = false;
+  for (Buffer& b : buffers_) {
+    if (b.start != nullptr && b.start != MAP_FAILED) ::munmap(b.start, b.length);
+  }
+  buffers_.clear();
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = -1;
+}
+
+void Capture::negotiate(const CaptureConfig& config) {
+  v4l2_format fmt{};
+  bool found = false;
+  for (uint32_t want : config.formats) {
+    fmt = {};
+    fmt.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    fmt.fmt.pix.width = config.width;
+    fmt.fmt.pix.height = config.height;
+    fmt.fmt.pix.pixelformat = want;
+    fmt.fmt.pix.field = V4L2_FIELD_NONE;
+    // TRY_FMT first: the driver answers with its nearest mode without changing anything.
+    if (xioctl(fd_, VIDIOC_TRY_FMT, &fmt) == 0 && fmt.fmt.pix.pixelformat == want) {
+      found = true;
+      break;
+    }
+  }
+  if (!found) {
+    std::string wanted;
+    for (uint32_t f : config.formats) wanted += (wanted.empty() ? "" : ", ") + fourcc_name(f);
+    throw CaptureError(device_ + " supports none of the pixel formats " + wanted, false);
+  }
+  if (xioctl(fd_, VIDIOC_S_FMT, &fmt) < 0) throw CaptureError(device_ + ": S_FMT: " + std::strerror(errno), gone_errno(errno));
+  width_ = fmt.fmt.pix.width;
+  height_ = fmt.fmt.pix.height;
+  stride_ = fmt.fmt.pix.pixelformat == kMJPG ? 0 : fmt.fmt.pix.bytesperline;
+  pixelformat_ = fmt.fmt.pix.pixelformat;
+  if (pixelformat_ != config.formats.front() || width_ != config.width || height_ != config.height) {
+    log_("camerad: " + device_ + ": " + std::to_string(config.width) + "x" + std::to_string(config.height) + " " +
+         fourcc_name(config.formats.front()) + " not supported, using the nearest mode " + std::to_string(width_) +
+         "x" + std::to_string(height_) + " " + fourcc_name(pixelformat_));
+  }
+  v4l2_streamparm parm{};
+  parm.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  parm.parm.capture.timeperframe.numerator = 1000;
+  parm.parm.capture.timeperframe.denominator = static_cast<uint32_t>(std::lround(config.fps * 1000));
+  if (xioctl(fd_, VIDIOC_S_PARM, &parm) == 0 && parm.parm.capture.timeperframe.numerator > 0) {
+    fps_ = static_cast<double>(parm.parm.capture.timeperframe.denominator) / parm.parm.capture.timeperframe.numerator;
+  } else {
+    fps_ = 0;  // driver without frame-rate control
+  }
+  if (std::abs(fps_ - config.fps) > 0.01) {
+    log_("camerad: " + device_ + ": " + std::to_string(config.fps) + " fps not supported, the driver runs at " +
+         (fps_ > 0 ? std::to_string(fps_) + " fps" : std::string("its own rate")));
+  }
+}
+
+void Capture::map_buffers(unsigned count) {
+  v4l2_requestbuffers req{};
+  req.count = count < 4 ? 4 : count;
+  req.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  req.memory = V4L2_MEMORY_MMAP;
+  if (xioctl(fd_, VIDIOC_REQBUFS, &req) < 0) throw CaptureError(device_ + ": REQBUFS: " + std::strerror(errno), gone_errno(errno));
+  if (req.count < 2) throw CaptureError(device_ + ": only " + std::to_string(req.count) + " buffer(s)", false);
+  buffers_.resize(req.count);
+  for (unsigned i = 0; i < req.count; ++i) {
+    v4l2_buffer b{};
+    b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    b.memory = V4L2_MEMORY_MMAP;
+    b.index = i;
+    if (xioctl(fd_, VIDIOC_QUERYBUF, &b) < 0) throw CaptureError(device_ + ": QUERYBUF: " + std::strerror(errno), gone_errno(errno));
+    buffers_[i].length = b.length;
+    buffers_[i].start = ::mmap(nullptr, b.length, PROT_READ | PROT_WRITE, MAP_SHARED, fd_, b.m.offset);
+    if (buffers_[i].start == MAP_FAILED) throw CaptureError(device_ + ": mmap: " + std::strerror(errno), gone_errno(errno));
+  }
+}
+
+Capture::Result Capture::next(FrameView& frame, int timeout_ms) {
+  if (fd_ < 0) return Result::kGone;
+  if (held_ >= 0) {
+    v4l2_buffer b{};
+    b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    b.memory = V4L2_MEMORY_MMAP;
+    b.index = static_cast<uint32_t>(held_);
+    held_ = -1;
+    if (xioctl(fd_, VIDIOC_QBUF, &b) < 0) {
+      last_error_ = device_ + ": QBUF: " + std::strerror(errno);
+      if (gone_errno(errno)) return Result::kGone;
+    }
+  }
+  pollfd p{fd_, POLLIN, 0};
+  const int n = ::poll(&p, 1, timeout_ms);
+  if (n == 0 || (n < 0 && errno == EINTR)) return Result::kTimeout;
+  if (n < 0 || (p.revents & (POLLERR | POLLHUP | POLLNVAL))) {
+    // A vanished device reports POLLERR; DQBUF below tells why.
+    if (!(p.revents & POLLIN)) {
+      v4l2_buffer b{};
+      b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+      b.memory = V4L2_MEMORY_MMAP;
+      if (xioctl(fd_, VIDIOC_DQBUF, &b) < 0 && errno != EAGAIN) {
+        last_error_ = device_ + ": " + std::strerror(errno);
+        return Result::kGone;
+      }
+      last_error_ = device_ + ": poll error";
+      return Result::kGone;
+    }
+  }
+  v4l2_buffer b{};
+  b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  b.memory = V4L2_MEMORY_MMAP;
+  if (xioctl(fd_, VIDIOC_DQBUF, &b) < 0) {
+    if (errno == EAGAIN) return Result::kTimeout;
+    last_error_ = device_ + ": DQBUF: " + std::strerror(errno);
+    return gone_errno(errno) ? Result::kGone : Result::kTimeout;
+  }
+  held_ = static_cast<int>(b.index);
+  frame.data = static_cast<const uint8_t*>(buffers_[b.index].start);
+  frame.size = b.bytesused;
+  frame.width = width_;
+  frame.height = height_;
+  frame.stride = stride_;
+  frame.pixelformat = pixelformat_;
+  frame.sequence = b.sequence;
+  const int64_t ts = static_cast<int64_t>(b.timestamp.tv_sec) * 1000000 + b.timestamp.tv_usec;
+  if ((b.flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) == V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC && ts > 0) {
+    frame.utime = monotonic_to_utime(ts, clock_us(CLOCK_MONOTONIC), clock_us(CLOCK_REALTIME));
+  } else {
+    frame.utime = clock_us(CLOCK_REALTIME);  // driver without usable timestamps: dequeue time
+  }
+  return Result::kFrame;
+}
+
+}  // namespace whiskeye::v4l2

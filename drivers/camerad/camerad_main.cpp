@@ -1,0 +1,221 @@
+// camerad: V4L2 camera -> CAMERA (image_t, the pixels as captured) and DRIVER_STATUS at 1 Hz.
+// The device disappearing (unplugged, driver reloaded: ENODEV / EIO) is not fatal: camerad closes it
+// and reopens with exponential backoff, reporting DEGRADED meanwhile. Bad configuration is the only
+// startup failure.
+#include <signal.h>
+#include <systemd/sd-daemon.h>
+
+#include <CLI/CLI.hpp>
+#include <atomic>
+#include <iostream>
+#include <memory>
+#include <thread>
+
+#include <whiskeye/common/bus.h>
+#include <whiskeye/common/clock.h>
+#include <whiskeye/common/params.h>
+#include <whiskeye/driver_status_t.hpp>
+#include <whiskeye/image_t.hpp>
+
+#include "whiskeye/drivers/v4l2_capture.h"
+
+namespace {
+
+using namespace whiskeye;
+
+std::atomic<bool> g_stop{false};
+void on_signal(int) { g_stop.store(true); }
+
+struct Params {
+  v4l2::CaptureConfig capture;
+  double reopen_initial_s = 0.2;
+  double reopen_max_s = 5.0;
+  double frame_timeout_s = 2.0;  // no frame for this long while streaming: reopen
+  std::string lcm_url;
+  std::string channel = "CAMERA";
+  std::string channel_status = "DRIVER_STATUS";
+  double status_period_s = 1.0;
+};
+
+void load(const ParamNode& root, Params& p) {
+  const ParamNode cam = root.section("camera");
+  cam.get("device", p.capture.device);
+  cam.get("match_card", p.capture.match_card);
+  cam.get("width", p.capture.width, 16u, 8192u);
+  cam.get("height", p.capture.height, 16u, 8192u);
+  cam.get("fps", p.capture.fps, 0.1, 240.0);
+  cam.get("buffers", p.capture.buffers, 4u, 32u);
+  std::vector<std::string> formats;
+  for (uint32_t f : p.capture.formats) formats.push_back(v4l2::fourcc_name(f));
+  cam.get("formats", formats);
+  p.capture.formats.clear();
+  for (const std::string& f : formats) {
+    if (f != "YUYV" && f != "MJPG" && f != "GREY") {
+      throw ParamError(cam.path_of("formats") + ": '" + f + "' is not one of YUYV, MJPG, GREY");
+    }
+    p.capture.formats.push_back(v4l2::fourcc_from_name(f));
+  }
+  if (p.capture.formats.empty()) throw ParamError(cam.path_of("formats") + " is empty");
+  cam.get("reopen_initial_s", p.reopen_initial_s, 0.01, 10.0);
+  cam.get("reopen_max_s", p.reopen_max_s, 0.01, 60.0);
+  cam.get("frame_timeout_s", p.frame_timeout_s, 0.1, 60.0);
+  const ParamNode lcm = root.section("lcm");
+  lcm.get("url", p.lcm_url);
+  lcm.get("channel", p.channel);
+  lcm.get("channel_status", p.channel_status);
+  lcm.get("status_period_s", p.status_period_s, 0.1, 60.0);
+  root.check_no_unknown_keys();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"camerad: V4L2 camera capture (mmap streaming) published as CAMERA over LCM"};
+  std::string config_path, device;
+  bool print_config = false;
+  app.add_option("-c,--config", config_path, "camerad YAML (config/camerad.yaml); defaults without it");
+  app.add_option("-d,--device", device, "video device, overrides camera.device");
+  app.add_flag("--print-config", print_config, "print every parameter and exit");
+  CLI11_PARSE(app, argc, argv);
+
+  Params p;
+  try {
+    const ParamNode root = config_path.empty() ? ParamNode::empty() : ParamNode::from_file(config_path);
+    load(root, p);
+    if (print_config) {
+      std::cout << root.dump();
+      return 0;
+    }
+    std::cerr << root.dump();
+  } catch (const std::exception& e) {
+    std::cerr << "camerad: bad config: " << e.what() << "\n";
+    return 2;
+  }
+  if (!device.empty()) {
+    p.capture.device = device;
+    p.capture.match_card.clear();
+  }
+
+  std::unique_ptr<LcmBus> bus;
+  try {
+    bus = std::make_unique<LcmBus>(p.lcm_url);
+  } catch (const std::exception& e) {
+    std::cerr << "camerad: " << e.what() << "\n";
+    return 1;
+  }
+  struct sigaction sa {};
+  sa.sa_handler = on_signal;
+  sigaction(SIGTERM, &sa, nullptr);
+  sigaction(SIGINT, &sa, nullptr);
+
+  auto log = [](const std::string& line) { std::cerr << line << "\n"; };
+  std::unique_ptr<v4l2::Capture> cap;
+  v4l2::Backoff backoff(p.reopen_initial_s, p.reopen_max_s);
+  int64_t next_open_us = 0;
+  std::string last_open_error;
+  int64_t frames = 0, reopens = 0, device_lost = 0, open_failures = 0, sequence_gaps = 0, publish_errors = 0;
+  int64_t interval_frames = 0;
+  double interval_latency_max_us = 0, interval_latency_sum_us = 0;
+  int64_t last_frame_us = 0;
+  int64_t last_sequence = -1;
+  const int64_t status_period_us = static_cast<int64_t>(p.status_period_s * 1e6);
+  int64_t next_status_us = monotonic_us() + status_period_us;
+  uint64_t watchdog_usec = 0;
+  const bool watchdog = sd_watchdog_enabled(0, &watchdog_usec) > 0;
+  int64_t last_watchdog_us = 0;
+  bool ready_sent = false;
+  image_t img;
+
+  while (!g_stop.load()) {
+    const int64_t now = monotonic_us();
+    if (!cap && now >= next_open_us) {
+      try {
+        cap = std::make_unique<v4l2::Capture>(p.capture, log);
+        std::cerr << "camerad: streaming " << cap->device() << " " << cap->width() << "x" << cap->height() << " "
+                  << v4l2::fourcc_name(cap->pixelformat()) << " at " << cap->fps() << " fps, " << cap->num_buffers()
+                  << " buffers\n";
+        if (frames > 0 || device_lost > 0) ++reopens;
+        backoff.reset();
+        last_open_error.clear();
+        last_frame_us = now;
+        last_sequence = -1;
+      } catch (const v4l2::CaptureError& e) {
+        ++open_failures;
+        if (e.what() != last_open_error) std::cerr << "camerad: " << e.what() << "; retrying\n";
+        last_open_error = e.what();
+        next_open_us = now + static_cast<int64_t>(backoff.next() * 1e6);
+      }
+      if (!ready_sent) {
+        sd_notify(0, "READY=1");  // ready = running its loop; a missing camera is a status, not a failure
+        ready_sent = true;
+      }
+    }
+    if (cap) {
+      v4l2::FrameView f;
+      const auto r = cap->next(f, 200);
+      if (r == v4l2::Capture::Result::kFrame) {
+        img.utime = f.utime;
+        img.seq = f.sequence;
+        img.width = static_cast<int32_t>(f.width);
+        img.height = static_cast<int32_t>(f.height);
+        img.row_stride = static_cast<int32_t>(f.stride);
+        img.pixelformat = static_cast<int32_t>(f.pixelformat);
+        img.size = static_cast<int32_t>(f.size);
+        img.data.assign(f.data, f.data + f.size);
+        try {
+          publish(*bus, p.channel, img);
+        } catch (const std::exception& e) {
+          ++publish_errors;
+        }
+        ++frames;
+        ++interval_frames;
+        const double latency = static_cast<double>(now_utime() - f.utime);
+        interval_latency_sum_us += latency;
+        interval_latency_max_us = std::max(interval_latency_max_us, latency);
+        if (last_sequence >= 0 && f.sequence > last_sequence + 1) sequence_gaps += f.sequence - last_sequence - 1;
+        last_sequence = f.sequence;
+        last_frame_us = monotonic_us();
+      } else if (r == v4l2::Capture::Result::kGone ||
+                 monotonic_us() - last_frame_us > static_cast<int64_t>(p.frame_timeout_s * 1e6)) {
+        ++device_lost;
+        std::cerr << "camerad: " << (r == v4l2::Capture::Result::kGone ? cap->last_error() : cap->device() + ": no frames")
+                  << "; closing and reopening\n";
+        cap.reset();
+        next_open_us = monotonic_us() + static_cast<int64_t>(backoff.next() * 1e6);
+      }
+    } else {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+
+    const int64_t t = monotonic_us();
+    if (t >= next_status_us) {
+      next_status_us += status_period_us;
+      if (next_status_us < t) next_status_us = t + status_period_us;
+      driver_status_t st;
+      st.utime = now_utime();
+      st.driver = "camerad";
+      st.state = cap ? driver_status_t::STATE_OK : driver_status_t::STATE_DEGRADED;
+      st.message = cap ? cap->device() + " " + std::to_string(cap->width()) + "x" + std::to_string(cap->height()) +
+                             " " + v4l2::fourcc_name(cap->pixelformat())
+                       : "no camera: " + (last_open_error.empty() ? std::string("reopening") : last_open_error);
+      st.counter_names = {"frames", "device_lost", "reopens", "open_failures", "sequence_gaps", "publish_errors"};
+      st.counter_values = {frames, device_lost, reopens, open_failures, sequence_gaps, publish_errors};
+      st.num_counters = static_cast<int32_t>(st.counter_names.size());
+      st.stat_names = {"fps", "latency_mean_us", "latency_max_us"};
+      st.stat_values = {static_cast<double>(interval_frames) / p.status_period_s,
+                        interval_frames ? interval_latency_sum_us / static_cast<double>(interval_frames) : 0.0,
+                        interval_latency_max_us};
+      st.num_stats = 3;
+      publish(*bus, p.channel_status, st);
+      interval_frames = 0;
+      interval_latency_sum_us = interval_latency_max_us = 0;
+    }
+    if (watchdog && t - last_watchdog_us >= static_cast<int64_t>(watchdog_usec / 2)) {
+      sd_notify(0, "WATCHDOG=1");
+      last_watchdog_us = t;
+    }
+  }
+  sd_notify(0, "STOPPING=1");
+  std::cerr << "camerad: stopped after " << frames << " frames\n";
+  return 0;
+}

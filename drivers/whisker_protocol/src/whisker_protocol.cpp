@@ -1,0 +1,324 @@
+// Whisker CAN protocol v1: byte layouts as documented in docs/can-protocol.md (all little-endian).
+#include "whiskeye/drivers/whisker_protocol.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace whiskeye::wp {
+namespace {
+
+int16_t get_i16(std::span<const uint8_t> d, std::size_t at) {
+  return static_cast<int16_t>(static_cast<uint16_t>(d[at] | (d[at + 1] << 8)));
+}
+uint16_t get_u16(std::span<const uint8_t> d, std::size_t at) {
+  return static_cast<uint16_t>(d[at] | (d[at + 1] << 8));
+}
+void put_u16(std::span<uint8_t> d, std::size_t at, uint16_t v) {
+  d[at] = static_cast<uint8_t>(v & 0xff);
+  d[at + 1] = static_cast<uint8_t>(v >> 8);
+}
+void put_i16(std::span<uint8_t> d, std::size_t at, int16_t v) { put_u16(d, at, static_cast<uint16_t>(v)); }
+
+Decoded reject(Reject r, std::string reason) {
+  Decoded d;
+  d.kind = FrameKind::kRejected;
+  d.reject = r;
+  d.reason = std::move(reason);
+  return d;
+}
+
+std::string hex_id(uint32_t id) {
+  static const char* digits = "0123456789abcdef";
+  std::string s = "0x";
+  for (int shift = 8; shift >= 0; shift -= 4) s += digits[(id >> shift) & 0xf];
+  return s;
+}
+
+bool whisker_in_range(const WhiskerRaw& w) {
+  return std::abs(w.x) <= kHallLimit && std::abs(w.y) <= kHallLimit && std::abs(w.theta) <= kThetaLimit;
+}
+
+WhiskerRaw read_whisker(std::span<const uint8_t> d, std::size_t at) {
+  WhiskerRaw w;
+  w.x = get_i16(d, at);
+  w.y = get_i16(d, at + 2);
+  w.theta = get_i16(d, at + 4);
+  return w;
+}
+
+void write_whisker(std::span<uint8_t> d, std::size_t at, const WhiskerRaw& w) {
+  put_i16(d, at, w.x);
+  put_i16(d, at + 2, w.y);
+  put_i16(d, at + 4, w.theta);
+}
+
+// Node id (1..6) of `id` relative to `base`, or -1.
+int board_of(uint32_t id, uint32_t base) {
+  if (id <= base || id > base + kNumBoards) return -1;
+  return static_cast<int>(id - base - 1);
+}
+
+std::string length_reason(const char* what, std::size_t got, std::size_t want) {
+  return std::string(what) + ": " + std::to_string(got) + " bytes, expected " + std::to_string(want);
+}
+
+}  // namespace
+
+const char* reject_name(Reject r) {
+  switch (r) {
+    case Reject::kNone: return "none";
+    case Reject::kUnknownId: return "unknown_id";
+    case Reject::kWrongLength: return "wrong_length";
+    case Reject::kOutOfRange: return "out_of_range";
+    case Reject::kWrongFrameType: return "wrong_frame_type";
+    case Reject::kCount: break;
+  }
+  return "?";
+}
+
+Decoded decode_frame(uint32_t id, bool fd, std::span<const uint8_t> data, BusMode mode,
+                     const ProtocolIds& ids) {
+  const bool want_fd = mode == BusMode::kFd;
+  if (int board = board_of(id, ids.heartbeat_base); board >= 0) {
+    // Heartbeats are the same in both modes and may be sent as classic frames on an FD bus.
+    if (data.size() != kHeartbeatBytes) {
+      return reject(Reject::kWrongLength, length_reason("heartbeat", data.size(), kHeartbeatBytes));
+    }
+    Decoded d;
+    d.kind = FrameKind::kHeartbeat;
+    d.heartbeat = {board, data[0], data[1]};
+    return d;
+  }
+  if (int board = board_of(id, ids.sample_base); board >= 0) {
+    if (fd != want_fd) {
+      return reject(Reject::kWrongFrameType,
+                    std::string("sample frame ") + hex_id(id) + (fd ? " is FD on a classic bus" : " is classic on an FD bus"));
+    }
+    Decoded d;
+    if (want_fd) {
+      if (data.size() != kFdSampleBytes) {
+        return reject(Reject::kWrongLength, length_reason("FD sample", data.size(), kFdSampleBytes));
+      }
+      d.kind = FrameKind::kSample;
+      BoardSample& s = d.sample;
+      s.board = board;
+      s.seq = get_u16(data, 0);
+      s.status = data[2];
+      const uint8_t faults = data[3];
+      for (int k = 0; k < kWhiskersPerBoard; ++k) {
+        s.whiskers[k] = read_whisker(data, 4 + 6 * static_cast<std::size_t>(k));
+        s.whiskers[k].fault = (faults >> k) & 1;
+        if (!whisker_in_range(s.whiskers[k])) {
+          return reject(Reject::kOutOfRange, "sample " + hex_id(id) + " whisker " + std::to_string(k) +
+                                                 " value out of range");
+        }
+      }
+    } else {
+      if (data.size() != kClassicBytes) {
+        return reject(Reject::kWrongLength, length_reason("classic sample", data.size(), kClassicBytes));
+      }
+      d.kind = FrameKind::kFragment;
+      WhiskerFragment& f = d.fragment;
+      f.board = board;
+      f.seq = data[0];
+      f.index = data[1] & 0x03;
+      f.status = static_cast<uint8_t>(data[1] >> 3);
+      f.whisker = read_whisker(data, 2);
+      f.whisker.fault = (data[1] >> 2) & 1;
+      if (!whisker_in_range(f.whisker)) {
+        return reject(Reject::kOutOfRange, "sample " + hex_id(id) + " value out of range");
+      }
+    }
+    return d;
+  }
+  if (id >= ids.command_base && id <= ids.command_base + kNumBoards) {
+    Decoded d;
+    d.kind = FrameKind::kCommand;
+    MotorCommand& c = d.command;
+    if (want_fd) {
+      if (id != ids.command_base || !fd) {
+        return reject(Reject::kWrongFrameType, "command " + hex_id(id) + " is not the FD broadcast command");
+      }
+      if (data.size() != kFdCommandBytes) {
+        return reject(Reject::kWrongLength, length_reason("FD command", data.size(), kFdCommandBytes));
+      }
+      c.seq = get_u16(data, 0);
+      c.enable_mask = data[2] | (data[3] << 8) | (static_cast<uint32_t>(data[4]) << 16);
+      for (int w = 0; w < kNumWhiskers; ++w) {
+        c.theta_target[w] = get_i16(data, 6 + 2 * static_cast<std::size_t>(w));
+        if (std::abs(c.theta_target[w]) > kThetaLimit) {
+          return reject(Reject::kOutOfRange, "command target of whisker " + std::to_string(w) + " out of range");
+        }
+      }
+      return d;
+    }
+    const int board = board_of(id, ids.command_base);
+    if (board < 0 || fd) {
+      return reject(Reject::kWrongFrameType, "command " + hex_id(id) + " is not a classic per-board command");
+    }
+    if (data.size() != kClassicBytes) {
+      return reject(Reject::kWrongLength, length_reason("classic command", data.size(), kClassicBytes));
+    }
+    d.command_board = board;
+    for (int k = 0; k < kWhiskersPerBoard; ++k) {
+      const int w = board * kWhiskersPerBoard + k;
+      const int16_t t = get_i16(data, 2 * static_cast<std::size_t>(k));
+      if (t == kClassicDisabled) continue;
+      if (std::abs(t) > kThetaLimit) {
+        return reject(Reject::kOutOfRange, "command target of whisker " + std::to_string(w) + " out of range");
+      }
+      c.theta_target[w] = t;
+      c.enable_mask |= 1u << w;
+    }
+    return d;
+  }
+  return reject(Reject::kUnknownId, "unknown CAN id " + hex_id(id));
+}
+
+std::size_t encode_sample_fd(const BoardSample& s, std::span<uint8_t> out) {
+  if (out.size() < kFdSampleBytes) return 0;
+  std::fill(out.begin(), out.begin() + kFdSampleBytes, 0);
+  put_u16(out, 0, s.seq);
+  out[2] = s.status;
+  uint8_t faults = 0;
+  for (int k = 0; k < kWhiskersPerBoard; ++k) {
+    write_whisker(out, 4 + 6 * static_cast<std::size_t>(k), s.whiskers[k]);
+    if (s.whiskers[k].fault) faults |= static_cast<uint8_t>(1 << k);
+  }
+  out[3] = faults;
+  return kFdSampleBytes;
+}
+
+std::size_t encode_fragment(const WhiskerFragment& f, std::span<uint8_t> out) {
+  if (out.size() < kClassicBytes) return 0;
+  out[0] = f.seq;
+  out[1] = static_cast<uint8_t>((f.index & 0x03) | (f.whisker.fault ? 0x04 : 0) | (f.status << 3));
+  write_whisker(out, 2, f.whisker);
+  return kClassicBytes;
+}
+
+std::size_t encode_heartbeat(const Heartbeat& h, std::span<uint8_t> out) {
+  if (out.size() < kHeartbeatBytes) return 0;
+  out[0] = h.state;
+  out[1] = h.error;
+  return kHeartbeatBytes;
+}
+
+std::size_t encode_command_fd(const MotorCommand& c, std::span<uint8_t> out) {
+  if (out.size() < kFdCommandBytes) return 0;
+  std::fill(out.begin(), out.begin() + kFdCommandBytes, 0);
+  put_u16(out, 0, c.seq);
+  out[2] = static_cast<uint8_t>(c.enable_mask & 0xff);
+  out[3] = static_cast<uint8_t>((c.enable_mask >> 8) & 0xff);
+  out[4] = static_cast<uint8_t>((c.enable_mask >> 16) & 0xff);
+  for (int w = 0; w < kNumWhiskers; ++w) put_i16(out, 6 + 2 * static_cast<std::size_t>(w), c.theta_target[w]);
+  return kFdCommandBytes;
+}
+
+std::size_t encode_command_classic(const MotorCommand& c, int board, std::span<uint8_t> out) {
+  if (out.size() < kClassicBytes || board < 0 || board >= kNumBoards) return 0;
+  for (int k = 0; k < kWhiskersPerBoard; ++k) {
+    const int w = board * kWhiskersPerBoard + k;
+    const bool on = (c.enable_mask >> w) & 1;
+    put_i16(out, 2 * static_cast<std::size_t>(k), on ? c.theta_target[w] : kClassicDisabled);
+  }
+  return kClassicBytes;
+}
+
+bool SampleAssembler::accept(Board& b, const BoardSample& s) {
+  if (b.have) {
+    const uint32_t modulus = mode_ == BusMode::kFd ? 0x10000u : 0x100u;
+    const uint32_t step = (static_cast<uint32_t>(s.seq) + modulus - b.latest.seq) % modulus;
+    if (step == 0) return false;  // duplicate
+    // A step in the upper half of the sequence space is a late (reordered) frame, not a gap.
+    if (step > modulus / 2) {
+      ++late_;
+      return false;
+    }
+    b.gaps += step - 1;
+  }
+  b.latest = s;
+  b.have = true;
+  ++b.samples;
+  return true;
+}
+
+bool SampleAssembler::add(const BoardSample& s) {
+  if (s.board < 0 || s.board >= kNumBoards) return false;
+  return accept(boards_[s.board], s);
+}
+
+bool SampleAssembler::add(const WhiskerFragment& f) {
+  if (f.board < 0 || f.board >= kNumBoards) return false;
+  Board& b = boards_[f.board];
+  if (b.pending_active && b.pending.seq != f.seq) {
+    ++incomplete_;  // the previous sample lost a fragment
+    b.pending_active = false;
+  }
+  if (!b.pending_active) {
+    b.pending = BoardSample{};
+    b.pending.board = f.board;
+    b.pending.seq = f.seq;
+    b.pending_mask = 0;
+    b.pending_active = true;
+  }
+  b.pending.whiskers[f.index] = f.whisker;
+  b.pending.status |= f.status;
+  b.pending_mask |= static_cast<uint8_t>(1 << f.index);
+  if (b.pending_mask != 0x0f) return false;
+  b.pending_active = false;
+  return accept(b, b.pending);
+}
+
+int64_t SampleAssembler::total_gaps() const {
+  int64_t n = 0;
+  for (const auto& b : boards_) n += b.gaps;
+  return n;
+}
+
+CalibratedWhisker calibrate(const WhiskerRaw& raw, const WhiskerCalibration& c) {
+  return calibrate(raw, c, std::cos(c.rotation), std::sin(c.rotation));
+}
+
+int16_t theta_to_counts(double theta_rad, const WhiskerCalibration& c) {
+  const double counts = std::round(theta_rad / c.theta_gain + c.theta_offset);
+  return static_cast<int16_t>(std::clamp(counts, -static_cast<double>(kThetaLimit), static_cast<double>(kThetaLimit)));
+}
+
+double frame_time_us(BusMode mode, std::size_t n, double arb_bps, double data_bps) {
+  const double data_bits = 8.0 * static_cast<double>(n);
+  if (mode == BusMode::kClassic) {
+    // SOF..CRC (34 + 8n bits) is stuffed: worst case one stuff bit per 4 after the first.
+    const double stuffed = 34.0 + data_bits;
+    const double bits = stuffed + std::floor((stuffed - 1.0) / 4.0) + 13.0;  // + CRC del, ACK, EOF, IFS
+    return bits / arb_bps * 1e6;
+  }
+  // FD, 11-bit id, BRS. Nominal rate: SOF..BRS (17 bits, worst-case stuffing 4) and CRC delimiter,
+  // ACK, ACK delimiter, EOF, IFS (13 bits). Data rate: ESI, DLC, data (dynamically stuffed), stuff
+  // count (4) and CRC (17 or 21 bits) with a fixed stuff bit every 4 bits.
+  const double nominal = 17.0 + 4.0 + 13.0;
+  const double crc = n > 16 ? 21.0 : 17.0;
+  const double dyn = 5.0 + data_bits;
+  const double fast = dyn + std::floor(dyn / 4.0) + 4.0 + crc + std::ceil((crc + 4.0) / 4.0);
+  return nominal / arb_bps * 1e6 + fast / data_bps * 1e6;
+}
+
+BusLoad bus_load(BusMode mode, double rate_hz, double arb_bps, double data_bps) {
+  constexpr double kHeartbeatHz = 10.0;
+  double frames = 0, busy_us = 0;
+  auto add = [&](double per_s, std::size_t bytes, BusMode m) {
+    frames += per_s;
+    busy_us += per_s * frame_time_us(m, bytes, arb_bps, data_bps);
+  };
+  if (mode == BusMode::kFd) {
+    add(rate_hz * kNumBoards, kFdSampleBytes, BusMode::kFd);
+    add(rate_hz, kFdCommandBytes, BusMode::kFd);
+  } else {
+    add(rate_hz * kNumWhiskers, kClassicBytes, BusMode::kClassic);
+    add(rate_hz * kNumBoards, kClassicBytes, BusMode::kClassic);
+  }
+  add(kHeartbeatHz * kNumBoards, kHeartbeatBytes, BusMode::kClassic);
+  return {frames, busy_us / 1e6};
+}
+
+}  // namespace whiskeye::wp

@@ -1,0 +1,180 @@
+// whiskerd's control core, free of sockets, threads and clocks so it is unit-tested and benchmarked
+// on the host: frames in (on_frame), one control period out (step) — latest sample of every board
+// -> calibration -> rcp_whisking controller -> motor command -> the messages to publish — plus the
+// safety state machine (GPIO fault: motors off at once and latched; stop request or stale bus:
+// retract, then drop enable). The daemon (whiskerd_main.cpp) is the thin wiring around it.
+#pragma once
+
+#include <whiskeye/common/params.h>
+#include <whiskeye/rcp/controller.h>
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+
+#include "latency_stats.h"
+#include "whiskeye/drivers/motor_lines.h"
+#include "whiskeye/drivers/whisker_protocol.h"
+
+namespace whiskeye {
+struct whisker_sample_t;
+struct rcp_state_t;
+struct whisk_cycle_t;
+struct driver_status_t;
+}  // namespace whiskeye
+
+namespace whiskeye::whiskerd {
+
+static_assert(wp::kNumWhiskers == rcp::kNumWhiskers);
+constexpr int kN = wp::kNumWhiskers;
+
+struct Params {
+  // can
+  std::string interface = "can0";
+  wp::BusMode mode = wp::BusMode::kFd;
+  wp::ProtocolIds ids;
+  double rate_hz = 500.0;         // control and sample rate
+  double stale_timeout_s = 0.1;   // no frame for this long -> retract, drop enable
+  // safety
+  double retract_time_s = 1.0;    // longest time to wait for the retraction ramp before dropping enable
+  bool whisk_on_start = true;     // start whisking as soon as every board is streaming
+  // calibration, per whisker
+  std::array<wp::WhiskerCalibration, kN> calibration{};
+  // gpio
+  bool gpio = true;
+  gpio::LineNames lines;
+  // real time
+  int rt_priority = 80;  // SCHED_FIFO priority of the control thread
+  int rt_cpu = -1;       // pin the control thread to this CPU; -1 = no pinning
+  bool lock_memory = true;
+  // lcm
+  std::string lcm_url;
+  std::string channel_sample = "WHISKER_SAMPLE";
+  std::string channel_state = "RCP_STATE";
+  std::string channel_cycle = "WHISK_CYCLE";
+  std::string channel_status = "DRIVER_STATUS";
+  double status_period_s = 1.0;
+  // the whisking controller (section `rcp`: pattern, detector, rcp)
+  rcp::ControllerParams controller;
+};
+
+// Loads a whole whiskerd.yaml (every section optional); unknown keys and bad values throw ParamError
+// naming the key.
+void load(const ParamNode& root, Params& p);
+
+// Everything one control period produces, as plain data (no allocation except a completed cycle).
+struct PeriodOutput {
+  int64_t utime = 0;
+  int64_t seq = 0;
+  std::array<float, kN> theta{}, deflection_x{}, deflection_y{};
+  std::array<int16_t, kN> raw_x{}, raw_y{}, raw_theta{};
+  std::array<int8_t, kN> status{};
+  int64_t cycle = 0;
+  int8_t phase = 2;
+  double cycle_phase = 0;
+  bool enabled = false;
+  std::array<float, kN> contact{}, theta_ceiling{}, theta_command{};
+  wp::MotorCommand command;
+  std::unique_ptr<rcp::WhiskCycle> completed_cycle;
+};
+
+enum class Safety { kWaiting, kRunning, kRetracting, kDisabled, kFault, kStopped };
+const char* safety_name(Safety s);
+
+// Counter names, in the order of Counters::values (DRIVER_STATUS counter_names).
+struct Counters {
+  static constexpr int kFixed = 14;
+  static constexpr int kCount = kFixed + wp::kNumBoards;
+  static const char* const kNames[kCount];
+  std::array<int64_t, kCount> values{};
+  int64_t& operator[](int i) { return values[i]; }
+  enum : int {
+    kFrames = 0, kSamples, kHeartbeats, kRejectedUnknownId, kRejectedWrongLength, kRejectedOutOfRange,
+    kRejectedWrongFrameType, kGaps, kIncomplete, kStaleBoardPeriods, kDeadlineMisses, kPublishDrops,
+    kCanTxErrors, kLateSamples, kGapsBoard0
+  };
+};
+
+class WhiskerCore {
+ public:
+  explicit WhiskerCore(const Params& params);
+
+  // One received frame; mono_us is the receive time on the monotonic clock.
+  void on_frame(uint32_t id, bool fd, std::span<const uint8_t> data, int64_t mono_us);
+  // One control period: utime = epoch time of the period, mono_us = the monotonic clock.
+  void step(int64_t utime, int64_t mono_us, PeriodOutput& out);
+
+  // GPIO fault or emergency stop: motors off from this period on, latched until restart.
+  void fault();
+  // SIGTERM or a fatal error: retract, drop enable, then finished().
+  void request_stop();
+  bool finished() const { return safety_ == Safety::kStopped; }
+  // What the enable line should be.
+  bool motors_enabled() const { return motors_enabled_; }
+  Safety safety() const { return safety_; }
+  bool bus_stale(int64_t mono_us) const;
+  const char* reason() const { return reason_; }
+
+  Counters& counters() { return counters_; }
+  const wp::SampleAssembler& assembler() const { return assembler_; }
+  const rcp::Controller& controller() const { return controller_; }
+
+ private:
+  void start_retract(int64_t mono_us, const char* why);
+
+  Params params_;
+  rcp::Controller controller_;
+  wp::SampleAssembler assembler_;
+  std::array<double, kN> cos_r_{}, sin_r_{};
+  std::array<int64_t, wp::kNumBoards> used_samples_{};  // board sample count consumed last period
+  int64_t last_frame_mono_ = -1;
+  int64_t seq_ = 0;
+  uint16_t command_seq_ = 0;
+  Safety safety_ = Safety::kWaiting;
+  bool stop_requested_ = false;
+  bool motors_enabled_ = false;
+  int64_t retract_start_mono_ = 0;
+  const char* reason_ = "waiting for every board";
+  Counters counters_;
+};
+
+// Couples the motor lines to the core, once per period: poll_fault() before step() (a fault or
+// e-stop drops the enable line at once, then latches the core in Safety::kFault); update() after
+// step() makes the enable line follow motors_enabled().
+class LineGuard {
+ public:
+  explicit LineGuard(gpio::MotorLines& lines) : lines_(lines) { lines_.set_enable(false); }
+  // True if a new fault was seen this call.
+  bool poll_fault(WhiskerCore& core);
+  void update(const WhiskerCore& core);
+  bool enabled() const { return on_; }
+
+ private:
+  gpio::MotorLines& lines_;
+  bool on_ = false;
+};
+
+// Status of one reporting interval, as plain data pushed through the ring by the control thread.
+struct StatusSnapshot {
+  int64_t utime = 0;
+  Safety safety = Safety::kWaiting;
+  const char* reason = "";
+  const char* bus_state = "";
+  std::array<int64_t, Counters::kCount> counters{};
+  int64_t can_rx = 0, can_error_frames = 0, can_bus_off = 0, can_error_passive = 0, can_reopens = 0,
+          can_rx_overflow = 0;
+  LatencySummary wake_latency;  // clock_nanosleep deadline -> running
+  LatencySummary loop_time;     // work per period
+  LatencySummary period_jitter; // |actual period - nominal|
+  bool rt_scheduling = false;
+};
+
+// LCM conversions (daemon side).
+void to_lcm(const PeriodOutput& in, whisker_sample_t& sample, rcp_state_t& state);
+void to_lcm(const rcp::WhiskCycle& in, whisk_cycle_t& out);
+void to_lcm(const StatusSnapshot& in, driver_status_t& out);
+
+}  // namespace whiskeye::whiskerd

@@ -1,0 +1,242 @@
+// Whisker CAN protocol codec, sample assembler, calibration and bus-load figures (no bus needed).
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "whiskeye/drivers/whisker_protocol.h"
+
+using namespace whiskeye::wp;
+
+namespace {
+
+BoardSample make_sample(int board, uint16_t seq) {
+  BoardSample s;
+  s.board = board;
+  s.seq = seq;
+  s.status = kBoardMotorDisabled;
+  for (int k = 0; k < kWhiskersPerBoard; ++k) {
+    s.whiskers[k] = {static_cast<int16_t>(100 * k - 150), static_cast<int16_t>(-7 * k), static_cast<int16_t>(300 - k), k == 2};
+  }
+  return s;
+}
+
+}  // namespace
+
+TEST(WhiskerProtocol, FdSampleRoundTrips) {
+  std::array<uint8_t, 64> buf{};
+  const BoardSample in = make_sample(3, 0xBEEF);
+  ASSERT_EQ(encode_sample_fd(in, buf), kFdSampleBytes);
+  const Decoded d = decode_frame(0x184, true, std::span(buf.data(), kFdSampleBytes), BusMode::kFd);
+  ASSERT_EQ(d.kind, FrameKind::kSample) << d.reason;
+  EXPECT_EQ(d.sample.board, 3);
+  EXPECT_EQ(d.sample.seq, 0xBEEF);
+  EXPECT_EQ(d.sample.status, kBoardMotorDisabled);
+  for (int k = 0; k < kWhiskersPerBoard; ++k) {
+    EXPECT_EQ(d.sample.whiskers[k].x, in.whiskers[k].x);
+    EXPECT_EQ(d.sample.whiskers[k].y, in.whiskers[k].y);
+    EXPECT_EQ(d.sample.whiskers[k].theta, in.whiskers[k].theta);
+    EXPECT_EQ(d.sample.whiskers[k].fault, k == 2);
+  }
+}
+
+TEST(WhiskerProtocol, FdSampleLayoutIsLittleEndianAsDocumented) {
+  std::array<uint8_t, 32> buf{};
+  BoardSample s;
+  s.seq = 0x0102;
+  s.whiskers[0] = {0x0304, -2, 5, false};
+  encode_sample_fd(s, buf);
+  EXPECT_EQ(buf[0], 0x02);
+  EXPECT_EQ(buf[1], 0x01);
+  EXPECT_EQ(buf[4], 0x04);
+  EXPECT_EQ(buf[5], 0x03);
+  EXPECT_EQ(buf[6], 0xFE);
+  EXPECT_EQ(buf[7], 0xFF);
+  EXPECT_EQ(buf[8], 5);
+}
+
+TEST(WhiskerProtocol, RejectsTruncatedFrame) {
+  std::array<uint8_t, 32> buf{};
+  encode_sample_fd(make_sample(0, 1), buf);
+  const Decoded d = decode_frame(0x181, true, std::span(buf.data(), 24), BusMode::kFd);
+  EXPECT_EQ(d.kind, FrameKind::kRejected);
+  EXPECT_EQ(d.reject, Reject::kWrongLength);
+  EXPECT_NE(d.reason.find("24 bytes"), std::string::npos) << d.reason;
+}
+
+TEST(WhiskerProtocol, RejectsUnknownId) {
+  std::array<uint8_t, 32> buf{};
+  for (uint32_t id : {0x180u, 0x187u, 0x555u, 0x700u}) {
+    const Decoded d = decode_frame(id, true, buf, BusMode::kFd);
+    EXPECT_EQ(d.reject, Reject::kUnknownId) << std::hex << id;
+    EXPECT_NE(d.reason.find("unknown CAN id"), std::string::npos);
+  }
+}
+
+TEST(WhiskerProtocol, RejectsOutOfRangeHallAndEncoderValues) {
+  std::array<uint8_t, 32> buf{};
+  BoardSample s = make_sample(1, 5);
+  s.whiskers[1].x = 3000;
+  encode_sample_fd(s, buf);
+  EXPECT_EQ(decode_frame(0x182, true, buf, BusMode::kFd).reject, Reject::kOutOfRange);
+  s = make_sample(1, 5);
+  s.whiskers[3].theta = -2000;
+  encode_sample_fd(s, buf);
+  EXPECT_EQ(decode_frame(0x182, true, buf, BusMode::kFd).reject, Reject::kOutOfRange);
+  s.whiskers[3].theta = -kThetaLimit;
+  encode_sample_fd(s, buf);
+  EXPECT_EQ(decode_frame(0x182, true, buf, BusMode::kFd).kind, FrameKind::kSample);
+}
+
+TEST(WhiskerProtocol, RejectsClassicSampleOnFdBus) {
+  std::array<uint8_t, 8> buf{};
+  EXPECT_EQ(decode_frame(0x181, false, buf, BusMode::kFd).reject, Reject::kWrongFrameType);
+}
+
+TEST(WhiskerProtocol, ConfigurableIdsAreHonoured) {
+  ProtocolIds ids;
+  ids.sample_base = 0x300;
+  std::array<uint8_t, 32> buf{};
+  encode_sample_fd(make_sample(5, 9), buf);
+  EXPECT_EQ(decode_frame(0x306, true, buf, BusMode::kFd, ids).kind, FrameKind::kSample);
+  EXPECT_EQ(decode_frame(0x186, true, buf, BusMode::kFd, ids).reject, Reject::kUnknownId);
+}
+
+TEST(WhiskerProtocol, HeartbeatDecodes) {
+  std::array<uint8_t, 2> buf{};
+  encode_heartbeat({4, 0x05, kBoardFault}, buf);
+  const Decoded d = decode_frame(0x705, false, buf, BusMode::kFd);
+  ASSERT_EQ(d.kind, FrameKind::kHeartbeat);
+  EXPECT_EQ(d.heartbeat.board, 4);
+  EXPECT_EQ(d.heartbeat.state, 0x05);
+  EXPECT_EQ(d.heartbeat.error, kBoardFault);
+}
+
+TEST(WhiskerProtocol, FdCommandRoundTripsWithEnableMask) {
+  MotorCommand c;
+  c.seq = 77;
+  c.enable_mask = 0xA5A5A5;
+  for (int w = 0; w < kNumWhiskers; ++w) c.theta_target[w] = static_cast<int16_t>(40 * w - 500);
+  std::array<uint8_t, 64> buf{};
+  ASSERT_EQ(encode_command_fd(c, buf), kFdCommandBytes);
+  const Decoded d = decode_frame(0x200, true, buf, BusMode::kFd);
+  ASSERT_EQ(d.kind, FrameKind::kCommand) << d.reason;
+  EXPECT_EQ(d.command.seq, 77);
+  EXPECT_EQ(d.command.enable_mask, 0xA5A5A5u);
+  EXPECT_EQ(d.command.theta_target, c.theta_target);
+}
+
+TEST(WhiskerProtocol, ClassicCommandMarksDisabledWhiskers) {
+  MotorCommand c;
+  c.enable_mask = 0b1011u << 8;  // board 2: whiskers 8, 9, 11
+  c.theta_target[8] = 10;
+  c.theta_target[9] = -20;
+  c.theta_target[10] = 30;
+  c.theta_target[11] = 40;
+  std::array<uint8_t, 8> buf{};
+  ASSERT_EQ(encode_command_classic(c, 2, buf), kClassicBytes);
+  const Decoded d = decode_frame(0x203, false, buf, BusMode::kClassic);
+  ASSERT_EQ(d.kind, FrameKind::kCommand) << d.reason;
+  EXPECT_EQ(d.command_board, 2);
+  EXPECT_EQ(d.command.enable_mask, c.enable_mask);
+  EXPECT_EQ(d.command.theta_target[9], -20);
+  EXPECT_EQ(d.command.theta_target[10], 0);
+}
+
+TEST(WhiskerProtocol, ClassicFragmentsAssembleIntoBoardSample) {
+  SampleAssembler a(BusMode::kClassic);
+  const BoardSample in = make_sample(2, 0);
+  std::array<uint8_t, 8> buf{};
+  int completed = 0;
+  for (int k = 0; k < kWhiskersPerBoard; ++k) {
+    WhiskerFragment f{2, 200, k, kBoardMotorDisabled, in.whiskers[k]};
+    encode_fragment(f, buf);
+    const Decoded d = decode_frame(0x183, false, buf, BusMode::kClassic);
+    ASSERT_EQ(d.kind, FrameKind::kFragment) << d.reason;
+    completed += a.add(d.fragment);
+  }
+  EXPECT_EQ(completed, 1);
+  EXPECT_EQ(a.latest(2).seq, 200);
+  EXPECT_EQ(a.latest(2).whiskers[3].theta, in.whiskers[3].theta);
+  EXPECT_EQ(a.latest(2).status, kBoardMotorDisabled);
+}
+
+TEST(WhiskerProtocol, LostFragmentDropsTheSampleAndCountsTheGap) {
+  SampleAssembler a(BusMode::kClassic);
+  auto feed = [&](uint8_t seq, int skip) {
+    for (int k = 0; k < kWhiskersPerBoard; ++k) {
+      if (k != skip) a.add(WhiskerFragment{0, seq, k, 0, {}});
+    }
+  };
+  feed(1, -1);
+  feed(2, 1);  // incomplete
+  feed(3, -1);
+  EXPECT_EQ(a.samples(0), 2);
+  EXPECT_EQ(a.incomplete(), 1);
+  EXPECT_EQ(a.gaps(0), 1);
+}
+
+TEST(WhiskerProtocol, SequenceGapsAreCountedPerBoardAcrossWraparound) {
+  SampleAssembler a(BusMode::kFd);
+  for (uint16_t s : {65533, 65534, 1, 2}) a.add(make_sample(1, s));  // 65535 and 0 lost
+  a.add(make_sample(4, 10));
+  a.add(make_sample(4, 11));
+  a.add(make_sample(4, 11));  // duplicate: not a gap, not new
+  a.add(make_sample(1, 0));  // late: arrived after 1 and 2
+  EXPECT_EQ(a.late(), 1);
+  EXPECT_EQ(a.gaps(1), 2);
+  EXPECT_EQ(a.gaps(4), 0);
+  EXPECT_EQ(a.samples(4), 2);
+  EXPECT_EQ(a.total_gaps(), 2);
+}
+
+TEST(WhiskerProtocol, CalibrationAppliesOffsetGainAndRotation) {
+  WhiskerCalibration c;
+  c.offset_x = 100;
+  c.offset_y = -100;
+  c.gain_x = 0.001;
+  c.gain_y = 0.002;
+  c.rotation = M_PI / 2;
+  c.theta_offset = 10;
+  const CalibratedWhisker out = calibrate({1100, -100, 10 + 512, false}, c);
+  // (1.0, 0) rotated by 90 deg -> (0, 1)
+  EXPECT_NEAR(out.x, 0.0, 1e-6);
+  EXPECT_NEAR(out.y, 1.0, 1e-6);
+  EXPECT_NEAR(out.theta, M_PI / 4, 1e-6);
+  EXPECT_EQ(theta_to_counts(M_PI / 4, c), 10 + 512);
+  EXPECT_EQ(theta_to_counts(10.0, c), kThetaLimit);  // clamped
+}
+
+TEST(WhiskerProtocol, BusLoadMatchesTheDocumentedTable) {
+  // docs/can-protocol.md: FD 1/5 Mbit/s at 500 Hz, and classic 1 Mbit/s at 100 Hz, fit; classic at
+  // 500 Hz does not.
+  const BusLoad fd = bus_load(BusMode::kFd, 500, 1e6, 5e6);
+  EXPECT_NEAR(fd.frames_per_s, 3560, 1e-9);
+  EXPECT_GT(fd.busy_fraction, 0.30);
+  EXPECT_LT(fd.busy_fraction, 0.45);
+  EXPECT_LT(bus_load(BusMode::kClassic, 100, 1e6, 1e6).busy_fraction, 0.45);
+  EXPECT_GT(bus_load(BusMode::kClassic, 500, 1e6, 1e6).busy_fraction, 1.0);
+  // Classic 8-byte frame, worst-case stuffing: 135 bits.
+  EXPECT_NEAR(frame_time_us(BusMode::kClassic, 8, 1e6, 1e6), 135.0, 1e-9);
+}
+
+TEST(WhiskerProtocol, RandomBytesNeverCrashAndAreCounted) {
+  std::mt19937 rng(42);
+  DecodeCounters counters;
+  std::array<uint8_t, 64> buf{};
+  for (int i = 0; i < 20000; ++i) {
+    const uint32_t id = rng() % 0x800;
+    const std::size_t len = rng() % 65;
+    for (auto& b : buf) b = static_cast<uint8_t>(rng());
+    const Decoded d = decode_frame(id, rng() % 2, std::span(buf.data(), len), i % 3 ? BusMode::kFd : BusMode::kClassic);
+    counters.count(d);
+    if (d.kind == FrameKind::kRejected) {
+      EXPECT_FALSE(d.reason.empty());
+    }
+  }
+  EXPECT_EQ(counters.frames, 20000);
+  EXPECT_GT(counters.rejected[static_cast<int>(Reject::kUnknownId)], 0);
+  EXPECT_GT(counters.total_rejected(), 19000);
+}

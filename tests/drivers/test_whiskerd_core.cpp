@@ -1,0 +1,345 @@
+// whiskerd's control core without a bus: frames in, one period out; the safety state machine; the
+// lock-free ring and latency statistics; configuration errors.
+#include <gtest/gtest.h>
+
+#include <whiskeye/driver_status_t.hpp>
+#include <whiskeye/rcp_state_t.hpp>
+#include <whiskeye/whisk_cycle_t.hpp>
+#include <whiskeye/whisker_sample_t.hpp>
+
+#include <array>
+#include <cmath>
+
+#include "latency_stats.h"
+#include "spsc_ring.h"
+#include "whiskerd_core.h"
+
+using namespace whiskeye;
+using namespace whiskeye::whiskerd;
+
+namespace {
+
+constexpr int64_t kPeriod = 2000;
+
+Params test_params() {
+  Params p;
+  p.controller.detector.learn_cycles = 0;
+  p.stale_timeout_s = 0.02;
+  p.retract_time_s = 0.2;
+  return p;
+}
+
+// Feeds one sample of every board (board 5 optionally missing) and runs one period.
+struct Rig {
+  explicit Rig(const Params& p = test_params()) : core(p) {}
+  void feed(int seq, int16_t x5 = 20, bool skip_board5 = false) {
+    for (int b = 0; b < wp::kNumBoards; ++b) {
+      if (skip_board5 && b == 5) continue;
+      wp::BoardSample s;
+      s.board = b;
+      s.seq = static_cast<uint16_t>(seq);
+      for (int k = 0; k < 4; ++k) {
+        const int w = 4 * b + k;
+        s.whiskers[k] = {static_cast<int16_t>(w == 5 ? x5 : w), static_cast<int16_t>(-w), static_cast<int16_t>(10 * w), false};
+      }
+      std::array<uint8_t, 32> buf{};
+      wp::encode_sample_fd(s, buf);
+      core.on_frame(wp::sample_id({}, b), true, buf, mono);
+    }
+  }
+  void step() {
+    mono += kPeriod;
+    utime += kPeriod;
+    core.step(utime, mono, out);
+  }
+  void run(int periods, int16_t x5 = 20) {
+    for (int i = 0; i < periods; ++i) {
+      feed(seq++, x5);
+      step();
+    }
+  }
+  WhiskerCore core;
+  PeriodOutput out;
+  int64_t mono = 1000000, utime = 1700000000000000;
+  int seq = 0;
+};
+
+}  // namespace
+
+TEST(WhiskerdCore, WaitsForEveryBoardBeforeEnablingMotors) {
+  Rig rig;
+  rig.feed(0, 20, /*skip_board5=*/true);
+  rig.step();
+  EXPECT_EQ(rig.core.safety(), Safety::kWaiting);
+  EXPECT_FALSE(rig.core.motors_enabled());
+  EXPECT_EQ(rig.out.command.enable_mask, 0u);
+  EXPECT_EQ(rig.out.status[20], int8_t{whisker_sample_t::STATUS_STALE});
+  rig.seq = 1;
+  rig.run(1);
+  EXPECT_EQ(rig.core.safety(), Safety::kRunning);
+  EXPECT_EQ(rig.out.command.enable_mask, 0xFFFFFFu);
+}
+
+TEST(WhiskerdCore, CalibratesDecodedValuesIntoThePeriodOutput) {
+  Params p = test_params();
+  p.calibration[7].offset_x = 7;
+  p.calibration[7].gain_x = 0.5;
+  Rig rig(p);
+  rig.run(1);
+  EXPECT_EQ(rig.out.raw_theta[9], 90);
+  EXPECT_NEAR(rig.out.theta[9], 90 * wp::kThetaRadPerCount, 1e-6);
+  EXPECT_NEAR(rig.out.deflection_y[9], -9.0 / 2047, 1e-6);
+  EXPECT_NEAR(rig.out.deflection_x[7], 0.0, 1e-6);
+  EXPECT_EQ(rig.out.status[9], 0);
+}
+
+TEST(WhiskerdCore, RepeatedSampleIsMarkedStale) {
+  Rig rig;
+  rig.run(3);
+  rig.step();  // no new frames this period
+  for (int w = 0; w < 24; ++w) EXPECT_EQ(rig.out.status[w], int8_t{whisker_sample_t::STATUS_STALE}) << w;
+}
+
+TEST(WhiskerdCore, CountsRejectedFramesByReasonAndGapsPerBoard) {
+  Rig rig;
+  std::array<uint8_t, 32> buf{};
+  rig.core.on_frame(0x181, true, std::span(buf.data(), 8), 0);
+  rig.core.on_frame(0x187, true, buf, 0);
+  rig.run(2);
+  rig.seq += 3;
+  rig.run(1);
+  auto& c = rig.core.counters();
+  EXPECT_EQ(c[Counters::kRejectedWrongLength], 1);
+  EXPECT_EQ(c[Counters::kRejectedUnknownId], 1);
+  EXPECT_EQ(c[Counters::kGapsBoard0 + 4], 3);
+  EXPECT_EQ(c[Counters::kGaps], 3 * wp::kNumBoards);
+}
+
+TEST(WhiskerdCore, FaultDisablesMotorsAtOnceAndLatches) {
+  Rig rig;
+  rig.run(20);
+  ASSERT_TRUE(rig.core.motors_enabled());
+  rig.core.fault();
+  EXPECT_FALSE(rig.core.motors_enabled());
+  rig.run(1);
+  EXPECT_EQ(rig.out.command.enable_mask, 0u);
+  rig.run(200);
+  EXPECT_EQ(rig.core.safety(), Safety::kFault);
+  EXPECT_FALSE(rig.core.motors_enabled());
+}
+
+TEST(WhiskerdLines, EnableLineFollowsTheCoreAndAFaultEdgeDropsItBeforeTheNextStep) {
+  gpio::FakeMotorLines lines;
+  Rig rig;
+  LineGuard guard(lines);
+  EXPECT_FALSE(lines.enable);
+  for (int i = 0; i < 10; ++i) {
+    guard.poll_fault(rig.core);
+    rig.run(1);
+    guard.update(rig.core);
+  }
+  EXPECT_TRUE(lines.enable);
+  // A pulse on the fault line that is already over when polled still counts.
+  lines.fault_edge = true;
+  EXPECT_TRUE(guard.poll_fault(rig.core));
+  EXPECT_FALSE(lines.enable);  // dropped before the next step runs
+  EXPECT_EQ(rig.core.safety(), Safety::kFault);
+  const int writes = lines.enable_writes;
+  for (int i = 0; i < 50; ++i) {
+    EXPECT_FALSE(guard.poll_fault(rig.core));
+    rig.run(1);
+    guard.update(rig.core);
+  }
+  EXPECT_FALSE(lines.enable);
+  EXPECT_EQ(lines.enable_writes, writes);  // latched: never re-enabled
+}
+
+TEST(WhiskerdLines, NoGpioLinesNeverReportAFault) {
+  gpio::NoMotorLines lines;
+  Rig rig;
+  LineGuard guard(lines);
+  rig.run(5);
+  EXPECT_FALSE(guard.poll_fault(rig.core));
+  guard.update(rig.core);
+  EXPECT_TRUE(guard.enabled());
+}
+
+TEST(WhiskerdCore, StaleBusRetractsThenDropsEnableThenRecovers) {
+  Rig rig;
+  rig.run(300);
+  ASSERT_EQ(rig.core.safety(), Safety::kRunning);
+  int periods = 0;
+  while (rig.core.safety() != Safety::kRetracting && periods < 100) {
+    rig.step();
+    ++periods;
+  }
+  ASSERT_EQ(rig.core.safety(), Safety::kRetracting);
+  EXPECT_LE(periods * kPeriod, 0.02e6 + 2 * kPeriod);  // within the stale timeout
+  EXPECT_TRUE(rig.core.motors_enabled());              // still driving the retraction
+  for (int i = 0; i < 200 && rig.core.safety() == Safety::kRetracting; ++i) rig.step();
+  EXPECT_EQ(rig.core.safety(), Safety::kDisabled);
+  EXPECT_FALSE(rig.core.motors_enabled());
+  EXPECT_NE(std::string(rig.core.reason()).find("stale"), std::string::npos);
+  rig.run(3);
+  EXPECT_EQ(rig.core.safety(), Safety::kRunning);
+  EXPECT_TRUE(rig.core.motors_enabled());
+}
+
+TEST(WhiskerdCore, StopRequestRetractsToRestThenFinishes) {
+  Params p = test_params();
+  p.retract_time_s = 2.0;  // longer than the controller's ramp: the ramp decides
+  Rig rig(p);
+  rig.run(300);
+  rig.core.request_stop();
+  int periods = 0;
+  while (!rig.core.finished() && periods < 1000) {
+    rig.run(1);
+    ++periods;
+  }
+  EXPECT_TRUE(rig.core.finished());
+  EXPECT_FALSE(rig.core.motors_enabled());
+  EXPECT_EQ(rig.out.command.enable_mask, 0u);
+  EXPECT_NEAR(rig.out.theta_command[0], test_params().controller.pattern.theta_rest, 0.05);
+}
+
+TEST(WhiskerdCore, ContactLowersTheCeilingAndTheMotorTarget) {
+  Rig rig;
+  // Whisk until protraction, then touch whisker 5.
+  rig.run(300);
+  while (rig.out.phase != rcp_state_t::PHASE_PROTRACT || rig.out.cycle_phase < 0.1) rig.run(1);
+  const float before = rig.out.theta_command[5];
+  const int16_t target_before = rig.out.command.theta_target[5];
+  rig.run(1, 1500);
+  EXPECT_LT(rig.out.theta_ceiling[5], 0.0);
+  EXPECT_LT(rig.out.theta_command[5], before);
+  EXPECT_LT(rig.out.command.theta_target[5], target_before);
+  EXPECT_GT(rig.out.theta_command[6], rig.out.theta_command[5]);  // neighbours keep whisking
+}
+
+TEST(WhiskerdCore, CompletedCycleIsHandedOutOnce) {
+  Rig rig;
+  int cycles = 0;
+  for (int i = 0; i < 1300; ++i) {
+    rig.run(1);
+    if (rig.out.completed_cycle) {
+      ++cycles;
+      whisk_cycle_t msg;
+      to_lcm(*rig.out.completed_cycle, msg);
+      EXPECT_EQ(msg.num_samples, static_cast<int>(msg.sample_utime.size()));
+      EXPECT_GT(msg.num_samples, 400);
+    }
+  }
+  EXPECT_GE(cycles, 1);
+}
+
+TEST(WhiskerdCore, StatusMessageCarriesCountersAndLatencies) {
+  StatusSnapshot s;
+  s.safety = Safety::kRunning;
+  s.reason = "";
+  s.bus_state = "error-active";
+  s.counters[Counters::kGapsBoard0 + 2] = 6;
+  s.loop_time = {10, 20, 30, 500};
+  driver_status_t m;
+  to_lcm(s, m);
+  EXPECT_EQ(m.state, int8_t{driver_status_t::STATE_OK});
+  EXPECT_EQ(m.driver, "whiskerd");
+  bool found = false;
+  for (int i = 0; i < m.num_counters; ++i) {
+    if (m.counter_names[i] == "gaps_board2") found = m.counter_values[i] == 6;
+  }
+  EXPECT_TRUE(found);
+  EXPECT_EQ(m.num_stats, static_cast<int>(m.stat_values.size()));
+  s.bus_state = "bus-off";
+  to_lcm(s, m);
+  EXPECT_EQ(m.state, int8_t{driver_status_t::STATE_DEGRADED});
+  EXPECT_NE(m.message.find("bus-off"), std::string::npos);
+}
+
+TEST(WhiskerdConfig, UnknownKeyIsAnErrorNamingIt) {
+  Params p;
+  try {
+    load(ParamNode::from_string("can:\n  intrface: can1\n"), p);
+    FAIL();
+  } catch (const ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("can.intrface"), std::string::npos) << e.what();
+  }
+}
+
+TEST(WhiskerdConfig, ClassicModeDefaultsToAFeasibleRateAndRejectsTooFast) {
+  Params p;
+  load(ParamNode::from_string("can: {mode: classic}\n"), p);
+  EXPECT_EQ(p.mode, wp::BusMode::kClassic);
+  EXPECT_EQ(p.rate_hz, 100.0);
+  Params q;
+  EXPECT_THROW(load(ParamNode::from_string("can: {mode: classic, rate_hz: 500}\n"), q), ParamError);
+}
+
+TEST(WhiskerdConfig, OverlappingIdRangesAreRejected) {
+  Params p;
+  EXPECT_THROW(load(ParamNode::from_string("can: {ids: {sample_base: 0x200}}\n"), p), ParamError);
+}
+
+TEST(WhiskerdConfig, ShippedConfigLoads) {
+  Params p;
+  load(ParamNode::from_file(WHISKEYE_SOURCE_DIR "/config/whiskerd.yaml"), p);
+  EXPECT_EQ(p.interface, "can0");
+  EXPECT_EQ(p.ids.command_base, 0x200u);
+}
+
+TEST(SpscRing, DropsWhenFullInsteadOfBlocking) {
+  SpscRing<int, 4> ring;
+  for (int i = 0; i < 4; ++i) EXPECT_TRUE(ring.try_push(i));
+  int x = 99;
+  EXPECT_FALSE(ring.try_push(x));
+  int out = -1;
+  EXPECT_TRUE(ring.try_pop(out));
+  EXPECT_EQ(out, 0);
+  EXPECT_TRUE(ring.try_push(x));
+  for (int want : {1, 2, 3, 99}) {
+    ASSERT_TRUE(ring.try_pop(out));
+    EXPECT_EQ(out, want);
+  }
+  EXPECT_FALSE(ring.try_pop(out));
+}
+
+TEST(LatencyStats, ReportsPercentilesAndMaxPerInterval) {
+  LatencyStats s(1000);
+  for (int i = 1; i <= 100; ++i) s.add(i);
+  const LatencySummary a = s.take();
+  EXPECT_EQ(a.count, 100);
+  EXPECT_EQ(a.max_us, 100);
+  EXPECT_NEAR(a.p50_us, 51, 1);
+  EXPECT_NEAR(a.p99_us, 100, 1);
+  EXPECT_EQ(s.take().count, 0);
+}
+
+TEST(WhiskerdCore, ClassicModeAssemblesPerWhiskerFramesAndRuns) {
+  Params p = test_params();
+  p.mode = wp::BusMode::kClassic;
+  p.rate_hz = 100;
+  WhiskerCore core(p);
+  PeriodOutput out;
+  int64_t mono = 1000000, utime = 1700000000000000;
+  for (int seq = 0; seq < 3; ++seq) {
+    for (int b = 0; b < wp::kNumBoards; ++b) {
+      for (int k = 0; k < 4; ++k) {
+        const int w = 4 * b + k;
+        wp::WhiskerFragment f{b, static_cast<uint8_t>(seq), k, 0, {static_cast<int16_t>(w), 0, static_cast<int16_t>(w), false}};
+        std::array<uint8_t, 8> buf{};
+        wp::encode_fragment(f, buf);
+        core.on_frame(wp::sample_id({}, b), false, buf, mono);
+      }
+    }
+    mono += 10000;
+    utime += 10000;
+    core.step(utime, mono, out);
+  }
+  EXPECT_EQ(core.safety(), Safety::kRunning);
+  EXPECT_EQ(out.raw_x[17], 17);
+  EXPECT_EQ(out.status[17], 0);
+  EXPECT_EQ(core.counters()[Counters::kSamples], 3 * wp::kNumBoards);
+  // An FD frame on a classic bus is rejected, not decoded.
+  std::array<uint8_t, 32> fd{};
+  core.on_frame(wp::sample_id({}, 0), true, fd, mono);
+  EXPECT_EQ(core.counters()[Counters::kRejectedWrongFrameType], 1);
+}

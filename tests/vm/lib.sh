@@ -1,0 +1,31 @@
+# Helpers for VM scenario scripts (sourced inside the guest; $1 of the scenario is the results dir).
+RESULTS_DIR=${RESULTS_DIR:?}
+RESULTS_FILE=$RESULTS_DIR/results.txt
+
+pass() { echo "PASS $1" >> "$RESULTS_FILE"; echo "PASS $1"; }
+fail() { echo "FAIL $1: $2" >> "$RESULTS_FILE"; echo "FAIL $1: $2"; }
+# check NAME COMMAND...: one reported test per call.
+check() {
+  local name=$1; shift
+  local out
+  if out=$("$@" 2>&1); then pass "$name"; else fail "$name" "$(echo "$out" | tail -n 3 | tr '\n' ' ')"; fi
+}
+# Loopback multicast for LCM udpm:// inside the guest.
+setup_lcm_loopback() {
+  ip link set lo up
+  ip route add 224.0.0.0/4 dev lo
+  # Large receive buffers: the checkers take 500 Hz whisker traffic and 600 kB camera frames.
+  sysctl -qw net.core.rmem_max=16777216
+  export LCM_DEFAULT_URL="udpm://239.255.76.67:7667?ttl=0&recv_buf_size=8388608"
+}
+setup_vcan() {
+  # Module autoloading would run the initramfs's modprobe, not the host's: load explicitly.
+  modprobe vcan
+  modprobe can_raw
+  # vcan hands every frame to the per-CPU input backlog (netdev_max_backlog, 1000 by default) and
+  # drops silently beyond it; a stalled emulated CPU followed by a burst must not lose frames.
+  sysctl -qw net.core.netdev_max_backlog=100000
+  ip link add dev "$1" type vcan
+  ip link set "$1" mtu 72
+  ip link set "$1" up
+}

@@ -1,0 +1,54 @@
+#!/bin/bash
+# VM scenario: camerad captures from vivid (a virtual V4L2 camera in the guest kernel); mid-stream the
+# device is unbound and the driver unloaded and reloaded; camerad must recover on its own.
+#   scenario_camerad.sh RESULTS_DIR CAMERAD CAMERA_VM_CHECK CONFIG
+set -u
+RESULTS_DIR=$1
+CAMERAD=$2
+CHECK=$3
+CONFIG=$4
+source "$(dirname "$0")/lib.sh"
+
+setup_lcm_loopback
+# One vivid instance with only a video capture node (input 0: a webcam with 640x480 at 5 fps).
+load_vivid() { modprobe vivid n_devs=1 node_types=0x1; }
+check vivid_loads load_vivid
+check vivid_offers_640x480_yuyv bash -c "v4l2-ctl -d /dev/video0 --list-formats-ext | grep -q YUYV"
+
+# A mode vivid does not offer (no MJPEG, no 700x500): camerad takes the nearest and says so.
+printf 'camera: {match_card: vivid, width: 700, height: 500, formats: [MJPG, YUYV]}\n' > /tmp/fallback.yaml
+"$CAMERAD" -c /tmp/fallback.yaml > "$RESULTS_DIR/camerad_fallback.log" 2>&1 &
+fb_pid=$!
+for i in $(seq 1 120); do grep -q "streaming" "$RESULTS_DIR/camerad_fallback.log" && break; sleep 0.5; done
+kill -TERM $fb_pid
+wait $fb_pid
+check camerad_logs_the_fallback_to_the_nearest_mode \
+  grep -q "700x500 MJPG not supported, using the nearest mode [0-9]*x[0-9]* YUYV" "$RESULTS_DIR/camerad_fallback.log"
+check camerad_streams_in_the_fallback_mode grep -q "streaming /dev/video[0-9]* [0-9]*x[0-9]* YUYV" "$RESULTS_DIR/camerad_fallback.log"
+
+"$CAMERAD" -c "$CONFIG" > "$RESULTS_DIR/camerad.log" 2>&1 &
+cam_pid=$!
+"$CHECK" --seconds 60 --results "$RESULTS_DIR/results.txt" > "$RESULTS_DIR/check.log" 2>&1 &
+check_pid=$!
+
+# Let camerad stream for a couple of seconds first (startup on an emulated CPU is slow).
+for i in $(seq 1 120); do grep -q "streaming" "$RESULTS_DIR/camerad.log" && break; sleep 0.5; done
+sleep 3
+# The device disappears under camerad (as an unplug would), then the driver is unloaded and
+# reloaded. Unbinding first releases camerad's hold on the module so rmmod cannot fail "in use".
+echo vivid.0 > /sys/bus/platform/drivers/vivid/unbind
+sleep 1
+unload_vivid() {
+  for i in 1 2 3 4 5 6 7 8 9 10; do rmmod vivid 2>/dev/null && return 0; sleep 0.3; done
+  rmmod vivid
+}
+check vivid_unloads_mid_stream unload_vivid
+check vivid_reloads load_vivid
+
+wait $check_pid
+cat "$RESULTS_DIR/check.log"
+kill -TERM $cam_pid
+wait $cam_pid
+check camerad_exits_cleanly_on_sigterm test $? = 0
+check camerad_logged_the_loss grep -q "reopening" "$RESULTS_DIR/camerad.log"
+exit 0

@@ -1,0 +1,55 @@
+#!/bin/bash
+# VM scenario: whiskerd on vcan0 (FD MTU) against the board emulator, in CAN FD mode then in
+# classic mode; LCM over loopback multicast.
+#   scenario_whiskerd.sh RESULTS_DIR WHISKERD WHISKER_VM_CHECK CONFIG
+set -u
+RESULTS_DIR=$1
+WHISKERD=$2
+CHECK=$3
+CONFIG=$4
+source "$(dirname "$0")/lib.sh"
+
+setup_lcm_loopback
+setup_vcan vcan0
+
+# run_mode MODE CONFIG PREFIX: candump records the motor commands on the wire (independently of the
+# checker's own decoding) in /tmp/motor_MODE.log; whiskerd runs until the checker is done, then
+# gets SIGTERM.
+run_mode() {
+  local mode=$1 config=$2 prefix=$3
+  candump -L vcan0,200:7F8 > "/tmp/motor_$mode.log" 2>&1 &
+  local dump_pid=$!
+  "$WHISKERD" -c "$config" --no-gpio > "$RESULTS_DIR/whiskerd_$mode.log" 2>&1 &
+  local wd_pid=$!
+  "$CHECK" --mode "$mode" --interface vcan0 --results "$RESULTS_DIR/results.txt" > "$RESULTS_DIR/check_$mode.log" 2>&1 \
+    || echo "$mode checker reported failures"
+  cat "$RESULTS_DIR/check_$mode.log"
+  kill -TERM $wd_pid
+  wait $wd_pid
+  local rc=$?
+  kill $dump_pid 2>/dev/null
+  check "${prefix}whiskerd_exits_cleanly_on_sigterm" test "$rc" = 0
+  check "${prefix}whiskerd_reports_motors_disabled_at_exit" grep -q 'stopped, motors disabled' "$RESULTS_DIR/whiskerd_$mode.log"
+  cp "/tmp/motor_$mode.log" "$RESULTS_DIR/" 2>/dev/null
+}
+
+run_mode fd "$CONFIG" ""
+# Where frames could be dropped silently (second column of softnet_stat: backlog drops).
+cat /proc/net/softnet_stat
+ip -s link show vcan0
+# FD frames of 64 bytes on 0x200 (candump prints 128 hex digits after ##<flags>).
+check candump_sees_64_byte_fd_motor_frames grep -Eq 'vcan0 200##[0-9A-F][0-9A-F]{128}$' /tmp/motor_fd.log
+# The last command on the wire has the enable mask (bytes 2..4) cleared.
+check last_motor_frame_on_the_wire_is_disabled \
+  bash -c "tail -n 1 /tmp/motor_fd.log | grep -Eq 'vcan0 200##[0-9A-F][0-9A-F]{4}000000'"
+
+# The same script on classic CAN (100 Hz, one frame per whisker, per-board commands).
+sed 's/^can:$/can:\n  mode: classic/' "$CONFIG" > /tmp/whiskerd_classic.yaml
+run_mode classic /tmp/whiskerd_classic.yaml classic_
+check classic_whiskerd_runs_classic_can_at_100_hz grep -q "vcan0 (classic CAN, 100 Hz)" "$RESULTS_DIR/whiskerd_classic.log"
+check candump_sees_8_byte_classic_motor_frames_per_board \
+  bash -c "for id in 201 202 203 204 205 206; do grep -Eq \"vcan0 \$id#[0-9A-F]{16}\$\" /tmp/motor_classic.log || exit 1; done"
+# Every board's last classic command disables all four whiskers (0x8000 = disabled).
+check classic_last_motor_frames_are_disabled \
+  bash -c "for id in 201 202 203 204 205 206; do grep \"vcan0 \$id#\" /tmp/motor_classic.log | tail -n 1 | grep -q '#0080008000800080' || exit 1; done"
+exit 0
