@@ -1,0 +1,100 @@
+// Experience map (RatSLAM): a graph of experiences (poses of the base in the map frame, each tied
+// to a template and the pose-cell estimate at creation) linked by the odometry measured between
+// them. Per cycle, the action rule decides between staying, creating an experience, or
+// re-localising onto an existing one (a loop closure), and the graph is relaxed.
+//
+// Relaxation: each loop computes, for every link a→b, the error between b and a ∘ δ, and moves
+// both ends towards agreement — positions by `correction`·error, headings by `correction`·sin of
+// the heading error (equal to the error to first order, the right sign for any error below π) —
+// averaging over a node's links (damped Jacobi). Headings are kept as unit complex numbers
+// (cos, sin) and turned by multiplication with a Taylor-series rotation, so the loop needs no
+// trigonometry, square root or division; arrays are contiguous (no pointer chasing).
+#pragma once
+
+#include "whiskeye/common/params.h"
+#include "whiskeye/common/se2.h"
+#include "whiskeye/slam/types.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace whiskeye::slam {
+
+class PoseCells;
+
+struct ExperienceMapParams {
+  double delta_pc_threshold = 2.0;  // cells: farther than this from every experience of the template → new
+  double correction = 0.5;          // fraction of a link's error removed per loop
+  int loops = 20;                   // relaxation loops per cycle
+};
+void load(const ParamNode& node, ExperienceMapParams& p);
+
+struct Experience {
+  int id = -1;
+  Pose2 pose;                 // base in the map frame
+  double pc_x = 0.0, pc_y = 0.0, pc_theta = 0.0;  // pose-cell estimate at creation, cells
+  int64_t utime_created = 0;
+  int template_id = -1;
+  int visual_template_id = -1;   // -1: the template has no visual part
+  int tactile_template_id = -1;  // -1: no tactile part
+  bool dense = false;            // tactile data present (contact) — the paper's dense node
+};
+
+struct Link {
+  int from = -1;
+  int to = -1;
+  Pose2 delta;  // pose of `to` in the frame of `from`, as measured by odometry
+  int64_t utime_created = 0;
+};
+
+class ExperienceMap {
+ public:
+  explicit ExperienceMap(const ExperienceMapParams& params = {});
+
+  const std::vector<Experience>& experiences() const;  // poses as of the last relaxation
+  const std::vector<Link>& links() const { return links_; }
+  int current_id() const { return current_; }
+  int size() const { return static_cast<int>(meta_.size()); }
+  // Odometry since the current experience (or since the origin before the first one).
+  const Pose2& offset() const { return offset_; }
+  // current experience ∘ offset: the dead-reckoned pose of the base.
+  Pose2 current_pose() const;
+
+  void integrate(double vx, double vy, double omega, double dt);
+
+  // The action rule for one cycle; template_id < 0 means no template this cycle (nothing to do).
+  Event on_cycle(int template_id, int visual_template_id, int tactile_template_id, bool dense, double pc_x,
+                 double pc_y, double pc_theta, const PoseCells& cells, int64_t utime);
+
+  // Building blocks (public for tests and the benchmark).
+  int add_experience(const Pose2& pose, const Experience& meta);
+  void add_link(int from, int to, const Pose2& delta, int64_t utime);
+  void set_current(int id, const Pose2& offset = {});
+  void relax(int loops);
+
+  const ExperienceMapParams& params() const { return params_; }
+  void set_params(const ExperienceMapParams& p) { params_ = p; }
+
+  void serialise(std::vector<uint8_t>& out) const;
+  void deserialise(const std::vector<uint8_t>& in, size_t& pos);
+
+ private:
+  void sync_poses() const;
+
+  ExperienceMapParams params_;
+  mutable std::vector<Experience> meta_;
+  mutable bool poses_dirty_ = false;
+  std::vector<Link> links_;
+  std::vector<std::vector<int>> by_template_;
+  // Relaxation state, structure of arrays.
+  std::vector<double> x_, y_, c_, s_;
+  std::vector<int32_t> lfrom_, lto_;
+  std::vector<double> ldx_, ldy_, ldc_, lds_;
+  std::vector<double> inv_degree_;
+  std::vector<int32_t> degree_;
+  std::vector<double> ax_, ay_, as_;  // scratch: per-loop sums of position errors and sin(heading error)
+  int current_ = -1;
+  Pose2 offset_;
+};
+
+}  // namespace whiskeye::slam

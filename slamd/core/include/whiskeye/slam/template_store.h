@@ -1,0 +1,130 @@
+// Template memory and matching (paper Algorithm 1 "COMP"): every stored template is one whisk
+// cycle's visual and tactile parts under one id. For the current template
+//   ε_i = V_i/σ_V + PFH_i/σ_PFH + SDA_i/σ_SDA
+// where V_i is the minimum over column shifts ±shift_max of the mean absolute difference over the
+// overlap (intensities in [0, 1]) — computed afresh for every stored template i — and PFH_i, SDA_i
+// are L1 distances. Only the terms in use this cycle count (mode ∩ senses present); a stored
+// template that lacks a part in use is not a candidate. The result is the argmin over templates.
+//
+// Storage is contiguous (one byte per visual pixel, 16 bits per PFH bin, one float per SDA entry):
+// 64×40 + 125·2 + 24·4 = 2,906 bytes per template, plus 32 bytes of bookkeeping.
+#pragma once
+
+#include "whiskeye/common/params.h"
+#include "whiskeye/slam/tactile_template.h"
+#include "whiskeye/slam/types.h"
+#include "whiskeye/slam/visual_template.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace whiskeye::slam {
+
+struct MatchParams {
+  int shift_max = 5;   // template columns, each way
+  int shift_step = 1;
+  // σ's: the scale of each term (the paper's α = 1/σ_V, β = 1/σ_PFH, γ = 1/σ_SDA). Units: V is a
+  // mean absolute intensity difference in [0, 1]; PFH an L1 distance of pair fractions in [0, 2];
+  // SDA an L1 distance of slopes (deflection/s) summed over 24 whiskers. estimate_sigmas() gives
+  // data-driven values.
+  double sigma_visual = 0.25;
+  double sigma_pfh = 0.5;
+  double sigma_sda = 5.0;
+  // Match if ε ≤ threshold; one threshold per combination of terms in use this cycle, as a
+  // visual-only ε and a three-term ε have different scales.
+  double threshold_visual = 0.1;
+  double threshold_tactile = 0.2;
+  double threshold_vita = 0.3;
+  // Skip templates whose mean intensity differs by more than this (≥ 1: never skip). Visual terms
+  // only; with global normalisation all means are equal, so it is off by default.
+  double prefilter_mean_diff = 1.0;
+};
+void load(const ParamNode& node, MatchParams& p);
+
+// Which terms a comparison uses.
+struct Terms {
+  bool visual = false;
+  bool tactile = false;
+};
+
+// The current cycle's template (parts absent are nullptr).
+struct Query {
+  const VisualTemplate* visual = nullptr;
+  const TactileTemplate* tactile = nullptr;
+};
+
+struct BestMatch {
+  int id = -1;  // -1: no candidate
+  double error = 0.0, visual = 0.0, pfh = 0.0, sda = 0.0;  // divided by σ
+  int shift = 0;
+};
+
+struct SigmaEstimate {
+  double sigma_visual = 0.0, sigma_pfh = 0.0, sigma_sda = 0.0;  // 0: not enough data for that term
+  int pairs = 0;
+};
+
+class TemplateStore {
+ public:
+  TemplateStore() = default;
+  TemplateStore(int visual_width, int visual_height);
+
+  int size() const { return static_cast<int>(has_visual_.size()); }
+  int visual_width() const { return width_; }
+  int visual_height() const { return height_; }
+
+  // Appends; returns the new id. Parts absent are stored as zeros and flagged missing.
+  int add(const Query& q, double pc_x, double pc_y, double pc_theta);
+
+  BestMatch match(const Query& q, const Terms& terms, const MatchParams& p) const;
+
+  bool has_visual(int id) const { return has_visual_[static_cast<size_t>(id)] != 0; }
+  bool has_tactile(int id) const { return has_tactile_[static_cast<size_t>(id)] != 0; }
+  int num_contacts(int id) const { return num_contacts_[static_cast<size_t>(id)]; }
+  // Column-major (x·height + y): see visual_distance().
+  const uint8_t* visual(int id) const { return &visual_[static_cast<size_t>(id) * pixels()]; }
+  const uint16_t* pfh(int id) const { return &pfh_[static_cast<size_t>(id) * kPfhBins]; }
+  const float* sda(int id) const { return &sda_[static_cast<size_t>(id) * kSdaSize]; }
+  // Pose-cell coordinates (cells) at creation: where a match injects energy.
+  double pc_x(int id) const { return pc_[static_cast<size_t>(id) * 3]; }
+  double pc_y(int id) const { return pc_[static_cast<size_t>(id) * 3 + 1]; }
+  double pc_theta(int id) const { return pc_[static_cast<size_t>(id) * 3 + 2]; }
+
+  // Injection decay (OpenRatSLAM's rule): each match of a template adds `active`, every cycle all
+  // templates relax by `restore` back towards `active`.
+  double decay(int id) const { return decay_[static_cast<size_t>(id)]; }
+  void bump_decay(int id, double active) { decay_[static_cast<size_t>(id)] += active; }
+  void restore_decay(double restore, double floor);
+
+  // Standard deviation of each raw term (not divided by σ) over pairs of stored templates.
+  SigmaEstimate estimate_sigmas(const MatchParams& p, int max_pairs = 20000) const;
+
+  // Raw (un-normalised) visual term between two COLUMN-MAJOR images (the stored layout): the
+  // minimum over shifts s = 0, ±step, ... ±shift_max of the mean |cur(c) − stored(c − s)| over the
+  // overlapping columns, in [0, 1]; exposed for tests and the benchmark.
+  static double visual_distance(const uint8_t* cur, const uint8_t* stored, int w, int h, int shift_max, int shift_step,
+                                int* best_shift);
+
+  void serialise(std::vector<uint8_t>& out) const;
+  // Reads what serialise() wrote at `pos`, advancing it; throws std::runtime_error on bad data.
+  static TemplateStore deserialise(const std::vector<uint8_t>& in, size_t& pos);
+
+  bool operator==(const TemplateStore&) const = default;
+
+ private:
+  size_t pixels() const { return static_cast<size_t>(width_) * static_cast<size_t>(height_); }
+
+  int width_ = 0;
+  int height_ = 0;
+  std::vector<uint8_t> visual_;
+  std::vector<float> visual_mean_;
+  std::vector<uint8_t> has_visual_;
+  std::vector<uint16_t> pfh_;
+  std::vector<float> sda_;
+  std::vector<uint8_t> has_tactile_;
+  std::vector<int32_t> num_contacts_;
+  std::vector<double> pc_;
+  std::vector<double> decay_;
+};
+
+}  // namespace whiskeye::slam

@@ -1,0 +1,46 @@
+// Visual template (paper Fig. 2 / Algorithm 1 "visual process"): decode → greyscale → crop →
+// block-average subsample → normalise. The result is stored compactly as one byte per pixel
+// (intensity in [0, 1] quantised to 0..255), which is what the matcher compares.
+#pragma once
+
+#include "whiskeye/common/params.h"
+#include "whiskeye/slam/types.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace whiskeye::slam {
+
+struct VisualParams {
+  // Crop rectangle in source pixels; width/height 0 = to the image edge. The original ViTa-SLAM
+  // kept the upper 640×300 of the 640×480 frame (the floor carries no place information).
+  int crop_x = 0;
+  int crop_y = 0;
+  int crop_width = 640;
+  int crop_height = 300;
+  int template_width = 64;
+  int template_height = 40;
+  // Global normalisation v·N/mean, clamped to [0, 1]; 0 = off (OpenRatSLAM's vt_normalisation).
+  double global_normalisation = 0.4;
+  // Patch normalisation: each pixel minus the mean over a (2k+1)² patch, divided by the patch's
+  // standard deviation, mapped back to [0, 1] as 0.5 + z/6 (clamped). 0 = off.
+  int patch_radius = 0;
+};
+void load(const ParamNode& node, VisualParams& p);
+
+struct VisualTemplate {
+  int width = 0;
+  int height = 0;
+  std::vector<uint8_t> pixels;  // row-major, width·height
+  float mean = 0.0f;            // mean intensity in [0, 1] (for the matcher's prefilter)
+};
+
+// Throws InputError naming the problem (size/stride/data length mismatch, unknown FourCC, corrupt
+// JPEG, empty crop).
+VisualTemplate make_visual_template(const ImageView& image, const VisualParams& params);
+
+// From an already greyscale float image in [0, 1] (tests, and the path every format ends in).
+VisualTemplate make_visual_template_from_grey(const float* grey, int width, int height, int stride_floats,
+                                              const VisualParams& params);
+
+}  // namespace whiskeye::slam

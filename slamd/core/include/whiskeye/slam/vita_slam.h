@@ -1,0 +1,92 @@
+// ViTa-SLAM (paper Algorithm 1): one call per whisk cycle with the camera frame, the whisk cycle and
+// the odometry since the previous cycle. Per cycle:
+//   1. path integration: every odometry sample steps the pose cells and the experience map's
+//      offset (body-frame vx, vy, ω);
+//   2. templates: visual (if the mode uses vision and a frame came) and tactile (if the mode uses
+//      touch and a whisk cycle came); the terms compared are the mode's terms that are present —
+//      a missing sense degrades, never stops; a whisk cycle without contact adds no tactile terms
+//      when vision is available;
+//   3. match against every stored template: ε ≤ τ → match (inject energy at the template's pose
+//      cells, with the decay rule) else a new template (stored with the current pose-cell estimate);
+//   4. the experience map's action rule (same / new / re-localise) and relaxation.
+// State (templates, pose cells, map, odometry clock) serialises to a versioned binary blob and
+// restores exactly: a restored instance produces byte-identical results.
+//
+// Checkpoint format (all little-endian):
+//   magic "VITASLAM" (8 bytes) | u32 version (=1) | u8 mode | i64 last odometry utime | u8 has it |
+//   5 × i64 stats | template store | pose cells | experience map | u32 FNV-1a of all previous bytes
+//   template store: i32 w, i32 h, then arrays (u64 count + elements): visual u8, visual mean f32,
+//     has_visual u8, pfh u16, sda f32, has_tactile u8, num_contacts i32, pc (x,y,θ) f64, decay f64
+//   pose cells: i32 dim_xy, i32 dim_theta, u64 count + f32 activity [θ][y][x]
+//   experience map: u64 n, n × (f64 x, y, cos θ, sin θ, pc_x, pc_y, pc_θ, i64 utime, i32 template,
+//     visual, tactile id, u8 dense) | u64 links, each (i32 from, to, f64 dx, dy, dθ, i64 utime) |
+//     i32 current | f64 offset x, y, θ
+#pragma once
+
+#include "whiskeye/common/params.h"
+#include "whiskeye/common/robot_geometry.h"
+#include "whiskeye/slam/experience_map.h"
+#include "whiskeye/slam/pose_cells.h"
+#include "whiskeye/slam/tactile_template.h"
+#include "whiskeye/slam/template_store.h"
+#include "whiskeye/slam/types.h"
+#include "whiskeye/slam/visual_template.h"
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace whiskeye::slam {
+
+struct SlamParams {
+  Mode mode = Mode::Vita;
+  VisualParams visual;
+  TactileParams tactile;
+  MatchParams match;
+  PoseCellParams pose_cells;
+  ExperienceMapParams experience_map;
+  double max_odometry_dt = 1.0;  // s; a longer gap between odometry samples is integrated as this
+};
+// `node` is the `slam:` section of config/slam.yaml. Strict: unknown keys and out-of-range values
+// are ParamErrors naming the key.
+void load(const ParamNode& node, SlamParams& p);
+
+struct SlamStats {
+  int64_t cycles = 0;
+  int64_t bad_images = 0;           // frames refused (InputError); the cycle went on without vision
+  int64_t empty_whisk_cycles = 0;   // whisk cycles without a valid sample; went on without touch
+  int64_t odometry_out_of_order = 0;
+  int64_t odometry_gaps = 0;        // dt > max_odometry_dt, clamped
+};
+
+class VitaSlam {
+ public:
+  VitaSlam(const SlamParams& params, const RobotGeometry& geometry);
+
+  CycleResult process_cycle(const CycleInput& input);
+
+  const ExperienceMap& map() const { return map_; }
+  const TemplateStore& templates() const { return store_; }
+  const PoseCells& pose_cells() const { return cells_; }
+  const SlamParams& params() const { return params_; }
+  const SlamStats& stats() const { return stats_; }
+  // Current experience ∘ its odometry offset ∘ the odometry since the last cycle.
+  Pose2 dead_reckon(const Pose2& odometry_offset_since_last_cycle) const;
+
+  std::vector<uint8_t> serialise() const;
+  // Throws std::runtime_error naming the problem: bad magic/version/checksum, truncated data, or
+  // dimensions (mode, template size, pose-cell grid) that differ from `params`.
+  static VitaSlam deserialise(std::span<const uint8_t> data, const SlamParams& params, const RobotGeometry& geometry);
+
+ private:
+  SlamParams params_;
+  RobotGeometry geometry_;
+  TemplateStore store_;
+  PoseCells cells_;
+  ExperienceMap map_;
+  SlamStats stats_;
+  int64_t last_odometry_utime_ = 0;
+  bool have_odometry_time_ = false;
+};
+
+}  // namespace whiskeye::slam

@@ -1,0 +1,305 @@
+// Experience map: action rule and relaxation. See experience_map.h.
+#include "whiskeye/slam/experience_map.h"
+
+#include "binary_io.h"
+#include "whiskeye/slam/pose_cells.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace whiskeye::slam {
+
+void load(const ParamNode& n, ExperienceMapParams& p) {
+  n.get("delta_pc_threshold", p.delta_pc_threshold, 0.0, 1000.0);
+  n.get("correction", p.correction, 0.0, 1.0);
+  n.get("loops", p.loops, 0, 10000);
+}
+
+ExperienceMap::ExperienceMap(const ExperienceMapParams& params) : params_(params) {}
+
+const std::vector<Experience>& ExperienceMap::experiences() const {
+  sync_poses();
+  return meta_;
+}
+
+void ExperienceMap::sync_poses() const {
+  if (!poses_dirty_) return;
+  for (size_t i = 0; i < meta_.size(); ++i) meta_[i].pose = {x_[i], y_[i], std::atan2(s_[i], c_[i])};
+  poses_dirty_ = false;
+}
+
+Pose2 ExperienceMap::current_pose() const {
+  if (current_ < 0) return offset_;
+  const auto i = static_cast<size_t>(current_);
+  return compose(Pose2{x_[i], y_[i], std::atan2(s_[i], c_[i])}, offset_);
+}
+
+void ExperienceMap::integrate(double vx, double vy, double omega, double dt) {
+  offset_ = integrate_body_velocity(offset_, vx, vy, omega, dt);
+}
+
+int ExperienceMap::add_experience(const Pose2& pose, const Experience& meta) {
+  sync_poses();
+  Experience e = meta;
+  e.id = size();
+  e.pose = pose;
+  meta_.push_back(e);
+  x_.push_back(pose.x);
+  y_.push_back(pose.y);
+  c_.push_back(std::cos(pose.theta));
+  s_.push_back(std::sin(pose.theta));
+  inv_degree_.push_back(0.0);
+  degree_.push_back(0);
+  if (e.template_id >= 0) {
+    if (static_cast<size_t>(e.template_id) >= by_template_.size()) by_template_.resize(static_cast<size_t>(e.template_id) + 1);
+    by_template_[static_cast<size_t>(e.template_id)].push_back(e.id);
+  }
+  return e.id;
+}
+
+void ExperienceMap::add_link(int from, int to, const Pose2& delta, int64_t utime) {
+  if (from < 0 || to < 0 || from >= size() || to >= size() || from == to) {
+    throw std::invalid_argument("ExperienceMap::add_link: bad ends " + std::to_string(from) + " -> " + std::to_string(to));
+  }
+  links_.push_back({from, to, delta, utime});
+  lfrom_.push_back(from);
+  lto_.push_back(to);
+  ldx_.push_back(delta.x);
+  ldy_.push_back(delta.y);
+  ldc_.push_back(std::cos(delta.theta));
+  lds_.push_back(std::sin(delta.theta));
+  // A node's correction is the mean over its links.
+  ++degree_[static_cast<size_t>(from)];
+  ++degree_[static_cast<size_t>(to)];
+  inv_degree_[static_cast<size_t>(from)] = 1.0 / degree_[static_cast<size_t>(from)];
+  inv_degree_[static_cast<size_t>(to)] = 1.0 / degree_[static_cast<size_t>(to)];
+}
+
+void ExperienceMap::set_current(int id, const Pose2& offset) {
+  current_ = id;
+  offset_ = offset;
+}
+
+namespace {
+
+// Applies one loop's accumulated pulls to every node (a damped Jacobi step): positions move by
+// f · (mean position error); headings turn by δ = f · (mean sin of the heading error), with the
+// rotation (cos δ, sin δ) from its Taylor series (|δ| ≤ f ≤ 1; the error is < 3e-6 at δ = 1 and
+// at rounding level for the small δ of a settled map). No sqrt, division or trig: the loop
+// vectorises. A separate out-of-line function so the restrict guarantees survive.
+__attribute__((noinline)) void apply_corrections(size_t n, double f, const double* __restrict inv,
+                                                 double* __restrict x, double* __restrict y, double* __restrict c,
+                                                 double* __restrict s, double* __restrict ax, double* __restrict ay,
+                                                 double* __restrict as) {
+  for (size_t i = 0; i < n; ++i) {
+    const double k = f * inv[i];
+    x[i] += k * ax[i];
+    y[i] += k * ay[i];
+    const double d = k * as[i];
+    const double d2 = d * d;
+    // Horner forms of cos and sin to d⁸ and d⁹, multiplying by constant reciprocals (a division
+    // would not be turned into a multiplication without -freciprocal-math).
+    constexpr double k2 = 1.0 / 2, k12 = 1.0 / 12, k30 = 1.0 / 30, k56 = 1.0 / 56;
+    constexpr double k6 = 1.0 / 6, k20 = 1.0 / 20, k42 = 1.0 / 42, k72 = 1.0 / 72;
+    const double cd = 1.0 - d2 * k2 * (1.0 - d2 * k12 * (1.0 - d2 * k30 * (1.0 - d2 * k56)));
+    const double sd = d * (1.0 - d2 * k6 * (1.0 - d2 * k20 * (1.0 - d2 * k42 * (1.0 - d2 * k72))));
+    const double nc = c[i] * cd - s[i] * sd;
+    const double ns = s[i] * cd + c[i] * sd;
+    c[i] = nc;
+    s[i] = ns;
+    ax[i] = 0.0;
+    ay[i] = 0.0;
+    as[i] = 0.0;
+  }
+}
+
+}  // namespace
+
+void ExperienceMap::relax(int loops) {
+  const size_t n = x_.size();
+  const size_t nl = lfrom_.size();
+  if (nl == 0 || loops <= 0) return;
+  ax_.assign(n, 0.0);
+  ay_.assign(n, 0.0);
+  as_.assign(n, 0.0);
+  const double f = params_.correction;
+  double* __restrict x = x_.data();
+  double* __restrict y = y_.data();
+  double* __restrict c = c_.data();
+  double* __restrict s = s_.data();
+  double* __restrict ax = ax_.data();
+  double* __restrict ay = ay_.data();
+  double* __restrict as = as_.data();
+  const double* __restrict inv = inv_degree_.data();
+  for (int loop = 0; loop < loops; ++loop) {
+    for (size_t l = 0; l < nl; ++l) {
+      const auto a = static_cast<size_t>(lfrom_[l]);
+      const auto b = static_cast<size_t>(lto_[l]);
+      const double ca = c[a], sa = s[a];
+      const double px = x[a] + ca * ldx_[l] - sa * ldy_[l];
+      const double py = y[a] + sa * ldx_[l] + ca * ldy_[l];
+      const double ex = x[b] - px, ey = y[b] - py;
+      ax[a] += ex;
+      ay[a] += ey;
+      ax[b] -= ex;
+      ay[b] -= ey;
+      // q = R_a·R_δ: the heading b should have.
+      const double qc = ca * ldc_[l] - sa * lds_[l];
+      const double qs = sa * ldc_[l] + ca * lds_[l];
+      // sin of b's heading error ε = θ_b − (θ_a + δθ): a turns by +ε, b by −ε.
+      const double es = qc * s[b] - qs * c[b];
+      as[a] += es;
+      as[b] -= es;
+    }
+    apply_corrections(n, f, inv, x, y, c, s, ax, ay, as);
+  }
+  // Products of unit complex numbers drift off the circle by rounding only; renormalise once.
+  for (size_t i = 0; i < n; ++i) {
+    const double k = 1.0 / std::sqrt(c[i] * c[i] + s[i] * s[i]);
+    c[i] *= k;
+    s[i] *= k;
+  }
+  poses_dirty_ = true;
+}
+
+Event ExperienceMap::on_cycle(int template_id, int visual_template_id, int tactile_template_id, bool dense,
+                              double pc_x, double pc_y, double pc_theta, const PoseCells& cells, int64_t utime) {
+  Event ev;
+  ev.type = EventType::SameExperience;
+  ev.from_id = ev.to_id = current_;
+  if (template_id < 0) return ev;
+
+  Experience meta;
+  meta.pc_x = pc_x;
+  meta.pc_y = pc_y;
+  meta.pc_theta = pc_theta;
+  meta.utime_created = utime;
+  meta.template_id = template_id;
+  meta.visual_template_id = visual_template_id;
+  meta.tactile_template_id = tactile_template_id;
+  meta.dense = dense;
+
+  auto create = [&]() {
+    const Pose2 pose = current_pose();
+    const int from = current_;
+    const int id = add_experience(pose, meta);
+    if (from >= 0) add_link(from, id, offset_, utime);
+    set_current(id);
+    ev = {EventType::NewExperience, from, id};
+  };
+
+  const std::vector<int>* candidates =
+      static_cast<size_t>(template_id) < by_template_.size() ? &by_template_[static_cast<size_t>(template_id)] : nullptr;
+  if (candidates == nullptr || candidates->empty()) {
+    create();
+  } else {
+    int nearest = -1;
+    double dmin = 0.0;
+    for (int id : *candidates) {
+      const Experience& e = meta_[static_cast<size_t>(id)];
+      const double d = cells.distance(e.pc_x, e.pc_y, e.pc_theta, pc_x, pc_y, pc_theta);
+      if (nearest < 0 || d < dmin) {
+        nearest = id;
+        dmin = d;
+      }
+    }
+    if (dmin > params_.delta_pc_threshold) {
+      create();
+    } else if (nearest != current_) {
+      const int from = current_;
+      if (from >= 0) {
+        bool linked = false;
+        for (size_t l = 0; l < lfrom_.size() && !linked; ++l) {
+          linked = (lfrom_[l] == from && lto_[l] == nearest) || (lfrom_[l] == nearest && lto_[l] == from);
+        }
+        if (!linked) add_link(from, nearest, offset_, utime);
+      }
+      set_current(nearest);
+      ev = {EventType::Relocalise, from, nearest};
+    }
+  }
+  relax(params_.loops);
+  return ev;
+}
+
+void ExperienceMap::serialise(std::vector<uint8_t>& out) const {
+  bin::put<uint64_t>(out, meta_.size());
+  for (size_t i = 0; i < meta_.size(); ++i) {
+    const Experience& e = meta_[i];
+    bin::put<double>(out, x_[i]);
+    bin::put<double>(out, y_[i]);
+    bin::put<double>(out, c_[i]);
+    bin::put<double>(out, s_[i]);
+    bin::put<double>(out, e.pc_x);
+    bin::put<double>(out, e.pc_y);
+    bin::put<double>(out, e.pc_theta);
+    bin::put<int64_t>(out, e.utime_created);
+    bin::put<int32_t>(out, e.template_id);
+    bin::put<int32_t>(out, e.visual_template_id);
+    bin::put<int32_t>(out, e.tactile_template_id);
+    bin::put<uint8_t>(out, e.dense ? 1 : 0);
+  }
+  bin::put<uint64_t>(out, links_.size());
+  for (size_t l = 0; l < links_.size(); ++l) {
+    bin::put<int32_t>(out, links_[l].from);
+    bin::put<int32_t>(out, links_[l].to);
+    bin::put<double>(out, links_[l].delta.x);
+    bin::put<double>(out, links_[l].delta.y);
+    bin::put<double>(out, links_[l].delta.theta);
+    bin::put<int64_t>(out, links_[l].utime_created);
+  }
+  bin::put<int32_t>(out, current_);
+  bin::put<double>(out, offset_.x);
+  bin::put<double>(out, offset_.y);
+  bin::put<double>(out, offset_.theta);
+}
+
+void ExperienceMap::deserialise(const std::vector<uint8_t>& in, size_t& pos) {
+  ExperienceMap m(params_);
+  const auto n = bin::get<uint64_t>(in, pos);
+  if (n > in.size()) throw std::runtime_error("checkpoint: experience count is larger than the data");
+  for (uint64_t i = 0; i < n; ++i) {
+    Experience e;
+    const double x = bin::get<double>(in, pos), y = bin::get<double>(in, pos);
+    const double c = bin::get<double>(in, pos), s = bin::get<double>(in, pos);
+    e.pc_x = bin::get<double>(in, pos);
+    e.pc_y = bin::get<double>(in, pos);
+    e.pc_theta = bin::get<double>(in, pos);
+    e.utime_created = bin::get<int64_t>(in, pos);
+    e.template_id = bin::get<int32_t>(in, pos);
+    e.visual_template_id = bin::get<int32_t>(in, pos);
+    e.tactile_template_id = bin::get<int32_t>(in, pos);
+    e.dense = bin::get<uint8_t>(in, pos) != 0;
+    if (e.template_id < -1 || e.template_id > (1 << 28)) throw std::runtime_error("checkpoint: bad template id");
+    m.add_experience({x, y, std::atan2(s, c)}, e);
+    // Restore the exact heading representation, not its round trip through an angle.
+    m.c_.back() = c;
+    m.s_.back() = s;
+  }
+  const auto nl = bin::get<uint64_t>(in, pos);
+  if (nl > in.size()) throw std::runtime_error("checkpoint: link count is larger than the data");
+  for (uint64_t l = 0; l < nl; ++l) {
+    const int from = bin::get<int32_t>(in, pos), to = bin::get<int32_t>(in, pos);
+    Pose2 d;
+    d.x = bin::get<double>(in, pos);
+    d.y = bin::get<double>(in, pos);
+    d.theta = bin::get<double>(in, pos);
+    const auto ut = bin::get<int64_t>(in, pos);
+    try {
+      m.add_link(from, to, d, ut);
+    } catch (const std::invalid_argument& e) {
+      throw std::runtime_error(std::string("checkpoint: ") + e.what());
+    }
+  }
+  m.current_ = bin::get<int32_t>(in, pos);
+  if (m.current_ < -1 || m.current_ >= m.size()) throw std::runtime_error("checkpoint: bad current experience");
+  m.offset_.x = bin::get<double>(in, pos);
+  m.offset_.y = bin::get<double>(in, pos);
+  m.offset_.theta = bin::get<double>(in, pos);
+  m.poses_dirty_ = true;
+  *this = std::move(m);
+}
+
+}  // namespace whiskeye::slam

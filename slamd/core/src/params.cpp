@@ -1,0 +1,22 @@
+// Loading SlamParams from the `slam:` section of config/slam.yaml (one section per module).
+#include "whiskeye/slam/vita_slam.h"
+
+namespace whiskeye::slam {
+
+void load(const ParamNode& node, SlamParams& p) {
+  std::string mode = to_string(p.mode);
+  node.get("mode", mode);
+  try {
+    p.mode = parse_mode(mode);
+  } catch (const std::invalid_argument& e) {
+    throw ParamError(node.source() + ": '" + node.path_of("mode") + "': " + e.what());
+  }
+  node.get("max_odometry_dt", p.max_odometry_dt, 1e-3, 60.0);
+  load(node.section("visual"), p.visual);
+  load(node.section("tactile"), p.tactile);
+  load(node.section("match"), p.match);
+  load(node.section("pose_cells"), p.pose_cells);
+  load(node.section("experience_map"), p.experience_map);
+}
+
+}  // namespace whiskeye::slam

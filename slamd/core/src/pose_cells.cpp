@@ -1,0 +1,414 @@
+// Pose-cell attractor network; see pose_cells.h for the model and why it is computed this way.
+#include "whiskeye/slam/pose_cells.h"
+
+#include "binary_io.h"
+
+#include "whiskeye/common/se2.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace whiskeye::slam {
+
+void load(const ParamNode& n, PoseCellParams& p) {
+  n.get("dim_xy", p.dim_xy, 5, 256);
+  n.get("dim_theta", p.dim_theta, 4, 360);
+  n.get("cell_size", p.cell_size, 1e-3, 100.0);
+  n.get("exc_radius", p.exc_radius, 0, 10);
+  n.get("exc_sigma", p.exc_sigma, 0.05, 20.0);
+  n.get("inh_radius", p.inh_radius, 0, 10);
+  n.get("inh_sigma", p.inh_sigma, 0.05, 20.0);
+  n.get("global_inhibition", p.global_inhibition, 0.0, 0.1);
+  n.get("inject_energy", p.inject_energy, 0.0, 10.0);
+  n.get("vt_active_decay", p.vt_active_decay, 0.0, 10.0);
+  n.get("vt_restore", p.vt_restore, 0.0, 10.0);
+  n.get("inject_exclude_newest", p.inject_exclude_newest, 0, 100000);
+  n.get("best_radius", p.best_radius, 0, 20);
+  n.get("settle_steps", p.settle_steps, 0, 100);
+  n.get("max_substeps", p.max_substeps, 1, 10000);
+}
+
+PoseCells::PoseCells(const PoseCellParams& params) : params_(params), n_(params.dim_xy), nt_(params.dim_theta) {
+  const size_t cells = static_cast<size_t>(n_) * static_cast<size_t>(n_) * static_cast<size_t>(nt_);
+  p_.assign(cells, 0.0f);
+  a_.assign(cells, 0.0f);
+  b_.assign(cells, 0.0f);
+  e_.assign(cells, 0.0f);
+  i_.assign(cells, 0.0f);
+  layer_.assign(static_cast<size_t>(n_) * static_cast<size_t>(n_), 0.0f);
+  res_x_.assign(static_cast<size_t>(nt_), 0.0);
+  res_y_.assign(static_cast<size_t>(nt_), 0.0);
+  build_kernels();
+  p_[idx(0, n_ / 2, n_ / 2)] = 1.0f;  // one cell at the grid centre, heading 0
+}
+
+void PoseCells::set_params(const PoseCellParams& params) {
+  if (params.dim_xy != n_ || params.dim_theta != nt_) {
+    throw std::invalid_argument("PoseCells::set_params: dimensions cannot change");
+  }
+  params_ = params;
+  build_kernels();
+}
+
+void PoseCells::build_kernels() {
+  auto gauss = [](int r, double sigma) {
+    std::vector<float> k(static_cast<size_t>(2 * r + 1));
+    double sum = 0.0;
+    for (int i = -r; i <= r; ++i) sum += std::exp(-0.5 * i * i / (sigma * sigma));
+    for (int i = -r; i <= r; ++i) k[static_cast<size_t>(i + r)] = static_cast<float>(std::exp(-0.5 * i * i / (sigma * sigma)) / sum);
+    return k;  // 1-D factors normalised to 1, so the 3-D kernel sums to 1
+  };
+  exc_kernel_ = gauss(params_.exc_radius, params_.exc_sigma);
+  inh_kernel_ = gauss(params_.inh_radius, params_.inh_sigma);
+  row_.assign(static_cast<size_t>(n_ + 2 * std::max(params_.exc_radius, params_.inh_radius)), 0.0f);
+  wrap_xy_.resize(static_cast<size_t>(n_ + 2 * kPad));
+  for (int i = -kPad; i < n_ + kPad; ++i) wrap_xy_[static_cast<size_t>(i + kPad)] = wrap(i, n_);
+  wrap_t_.resize(static_cast<size_t>(nt_ + 2 * kPad));
+  for (int i = -kPad; i < nt_ + kPad; ++i) wrap_t_[static_cast<size_t>(i + kPad)] = wrap(i, nt_);
+  cos_xy_.resize(static_cast<size_t>(n_));
+  sin_xy_.resize(static_cast<size_t>(n_));
+  cos_t_.resize(static_cast<size_t>(nt_));
+  sin_t_.resize(static_cast<size_t>(nt_));
+  for (int i = 0; i < n_; ++i) {
+    cos_xy_[static_cast<size_t>(i)] = static_cast<float>(std::cos(kTwoPi * i / n_));
+    sin_xy_[static_cast<size_t>(i)] = static_cast<float>(std::sin(kTwoPi * i / n_));
+  }
+  for (int i = 0; i < nt_; ++i) {
+    cos_t_[static_cast<size_t>(i)] = static_cast<float>(std::cos(kTwoPi * i / nt_));
+    sin_t_[static_cast<size_t>(i)] = static_cast<float>(std::sin(kTwoPi * i / nt_));
+  }
+}
+
+PoseCells::Support PoseCells::support_of(const std::vector<float>& g) const {
+  Support s;
+  s.x.assign(static_cast<size_t>(n_), 0);
+  s.y.assign(static_cast<size_t>(n_), 0);
+  s.t.assign(static_cast<size_t>(nt_), 0);
+  for (int t = 0; t < nt_; ++t) {
+    for (int y = 0; y < n_; ++y) {
+      const float* row = &g[idx(t, y, 0)];
+      uint8_t any = 0;
+      // Branch-free so the scan vectorises.
+      for (int x = 0; x < n_; ++x) {
+        const uint8_t nz = row[x] != 0.0f;
+        s.x[static_cast<size_t>(x)] |= nz;
+        any |= nz;
+      }
+      s.y[static_cast<size_t>(y)] |= any;
+      s.t[static_cast<size_t>(t)] |= any;
+    }
+  }
+  return s;
+}
+
+PoseCells::Support PoseCells::dilate(const Support& s, int r) const {
+  auto dil = [r](const std::vector<uint8_t>& m) {
+    const int n = static_cast<int>(m.size());
+    std::vector<uint8_t> out(m.size(), 0);
+    for (int i = 0; i < n; ++i) {
+      if (m[static_cast<size_t>(i)] == 0) continue;
+      for (int k = -r; k <= r; ++k) out[static_cast<size_t>(((i + k) % n + n) % n)] = 1;
+    }
+    return out;
+  };
+  return {dil(s.x), dil(s.y), dil(s.t)};
+}
+
+PoseCells::Support PoseCells::convolve(const std::vector<float>& src, std::vector<float>& dst,
+                                       const std::vector<float>& kernel, int r, const Support& s,
+                                       const Support& region) {
+  const Support d = dilate(s, r);
+  const int taps = 2 * r + 1;
+  const float* k = kernel.data();
+  // Pass x: rows (t, y) of the source support, through a wrapped, padded copy of the row so the
+  // inner loop is contiguous.
+  for (int t = 0; t < nt_; ++t) {
+    if (s.t[static_cast<size_t>(t)] == 0) continue;
+    for (int y = 0; y < n_; ++y) {
+      if (s.y[static_cast<size_t>(y)] == 0) continue;
+      const float* in = &src[idx(t, y, 0)];
+      // Padded row: r wrapped cells each side (a table lookup, no modulo in the loop).
+      const int* wx = &wrap_xy_[static_cast<size_t>(kPad - r)];
+      for (int i = 0; i < n_ + 2 * r; ++i) row_[static_cast<size_t>(i)] = in[wx[i]];
+      float* out = &a_[idx(t, y, 0)];
+      std::fill(out, out + n_, 0.0f);
+      for (int j = 0; j < taps; ++j) {
+        const float w = k[j];
+        const float* rr = &row_[static_cast<size_t>(j)];
+        for (int x = 0; x < n_; ++x) out[x] += w * rr[x];
+      }
+    }
+  }
+  // Pass y: rows (t ∈ s.t, y ∈ d.y) from the rows of pass x that exist.
+  for (int t = 0; t < nt_; ++t) {
+    if (s.t[static_cast<size_t>(t)] == 0) continue;
+    for (int y = 0; y < n_; ++y) {
+      if (d.y[static_cast<size_t>(y)] == 0) continue;
+      float* out = &b_[idx(t, y, 0)];
+      std::fill(out, out + n_, 0.0f);
+      for (int j = 0; j < taps; ++j) {
+        const int yi = wrap_xy_[static_cast<size_t>(kPad + y + j - r)];
+        if (s.y[static_cast<size_t>(yi)] == 0) continue;
+        const float w = k[j];
+        const float* in = &a_[idx(t, yi, 0)];
+        for (int x = 0; x < n_; ++x) out[x] += w * in[x];
+      }
+    }
+  }
+  // Pass θ: every row of `region` (⊇ d) is written, zero where nothing reaches; rows outside the
+  // region are never read by the caller.
+  for (int t = 0; t < nt_; ++t) {
+    if (region.t[static_cast<size_t>(t)] == 0) continue;
+    for (int y = 0; y < n_; ++y) {
+      if (region.y[static_cast<size_t>(y)] == 0) continue;
+      float* out = &dst[idx(t, y, 0)];
+      std::fill(out, out + n_, 0.0f);
+      if (d.t[static_cast<size_t>(t)] == 0 || d.y[static_cast<size_t>(y)] == 0) continue;
+      for (int j = 0; j < taps; ++j) {
+        const int ti = wrap_t_[static_cast<size_t>(kPad + t + j - r)];
+        if (s.t[static_cast<size_t>(ti)] == 0) continue;
+        const float w = k[j];
+        const float* in = &b_[idx(ti, y, 0)];
+        for (int x = 0; x < n_; ++x) out[x] += w * in[x];
+      }
+    }
+  }
+  return d;
+}
+
+void PoseCells::dynamics() {
+  if (support_dirty_) support_ = support_of(p_);
+  const Support region = dilate(dilate(support_, params_.exc_radius), params_.inh_radius);
+  const Support se = convolve(p_, e_, exc_kernel_, params_.exc_radius, support_, region);
+  convolve(e_, i_, inh_kernel_, params_.inh_radius, se, region);
+  // The new activity lies inside `region`; outside it p_ is already zero (the old support is inside).
+  const float g = static_cast<float>(params_.global_inhibition);
+  Support next;
+  next.x.assign(static_cast<size_t>(n_), 0);
+  next.y.assign(static_cast<size_t>(n_), 0);
+  next.t.assign(static_cast<size_t>(nt_), 0);
+  double total = 0.0;
+  for (int t = 0; t < nt_; ++t) {
+    if (region.t[static_cast<size_t>(t)] == 0) continue;
+    for (int y = 0; y < n_; ++y) {
+      if (region.y[static_cast<size_t>(y)] == 0) continue;
+      const size_t o = idx(t, y, 0);
+      float row_sum = 0.0f;
+      uint8_t any = 0;
+      for (int x = 0; x < n_; ++x) {
+        const float v = e_[o + static_cast<size_t>(x)] - i_[o + static_cast<size_t>(x)];
+        const float q = v >= g ? v - g : 0.0f;
+        p_[o + static_cast<size_t>(x)] = q;
+        row_sum += q;
+        const uint8_t nz = q != 0.0f;
+        next.x[static_cast<size_t>(x)] |= nz;
+        any |= nz;
+      }
+      next.y[static_cast<size_t>(y)] |= any;
+      next.t[static_cast<size_t>(t)] |= any;
+      total += row_sum;
+    }
+  }
+  if (!(total > 0.0)) {
+    // Everything was inhibited (only possible with extreme parameters): restart at the centre
+    // rather than divide by zero.
+    std::fill(p_.begin(), p_.end(), 0.0f);
+    p_[idx(0, n_ / 2, n_ / 2)] = 1.0f;
+    support_dirty_ = true;
+    t_mask_valid_ = false;
+    return;
+  }
+  const auto inv = static_cast<float>(1.0 / total);
+  for (int t = 0; t < nt_; ++t) {
+    if (next.t[static_cast<size_t>(t)] == 0) continue;
+    for (int y = 0; y < n_; ++y) {
+      if (next.y[static_cast<size_t>(y)] == 0) continue;
+      float* row = &p_[idx(t, y, 0)];
+      for (int x = 0; x < n_; ++x) row[x] *= inv;
+    }
+  }
+  support_ = std::move(next);
+  support_dirty_ = false;
+  t_mask_valid_ = true;
+}
+
+void PoseCells::translate_layers(double vx_cells, double vy_cells) {
+  const size_t sheet = static_cast<size_t>(n_) * static_cast<size_t>(n_);
+  bool moved_xy = false;
+  for (int t = 0; t < nt_; ++t) {
+    // Every layer's remainder follows the motion, occupied or not, so that activity spreading into
+    // a layer finds it consistent with its neighbours.
+    const double c = cos_t_[static_cast<size_t>(t)], s = sin_t_[static_cast<size_t>(t)];
+    double& rx = res_x_[static_cast<size_t>(t)];
+    double& ry = res_y_[static_cast<size_t>(t)];
+    rx += c * vx_cells - s * vy_cells;
+    ry += s * vx_cells + c * vy_cells;
+    const double kx = std::round(rx), ky = std::round(ry);
+    if (kx == 0.0 && ky == 0.0) continue;
+    rx -= kx;
+    ry -= ky;
+    // Occupied layers: a translation never changes which layers hold activity.
+    if (t_mask_valid_ && support_.t[static_cast<size_t>(t)] == 0) continue;
+    float* layer = &p_[idx(t, 0, 0)];
+    moved_xy = true;
+    const int ix = wrap(static_cast<int>(kx), n_), iy = wrap(static_cast<int>(ky), n_);
+    std::copy(layer, layer + sheet, layer_.begin());
+    for (int y = 0; y < n_; ++y) {
+      const float* src = &layer_[static_cast<size_t>(wrap(y - iy, n_) * n_)];
+      float* out = layer + static_cast<size_t>(y * n_);
+      // Exact cyclic shift of the row by ix: two contiguous copies.
+      std::copy(src + (n_ - ix), src + n_, out);
+      std::copy(src, src + (n_ - ix), out + ix);
+    }
+  }
+  if (moved_xy) support_dirty_ = true;
+}
+
+void PoseCells::rotate(double dtheta_cells) {
+  res_t_ += dtheta_cells;
+  const double k = std::round(res_t_);
+  if (k == 0.0) return;
+  res_t_ -= k;
+  const int it = wrap(static_cast<int>(k), nt_);
+  const size_t sheet = static_cast<size_t>(n_) * static_cast<size_t>(n_);
+  a_ = p_;
+  for (int t = 0; t < nt_; ++t) {
+    std::copy_n(&a_[idx(wrap(t - it, nt_), 0, 0)], sheet, &p_[idx(t, 0, 0)]);
+  }
+  if (t_mask_valid_) {
+    const std::vector<uint8_t> m = support_.t;
+    for (int t = 0; t < nt_; ++t) support_.t[static_cast<size_t>(t)] = m[static_cast<size_t>(wrap(t - it, nt_))];
+  }
+  // The sub-cell remainders travel with the activity they belong to.
+  const std::vector<double> rx = res_x_, ry = res_y_;
+  for (int t = 0; t < nt_; ++t) {
+    res_x_[static_cast<size_t>(t)] = rx[static_cast<size_t>(wrap(t - it, nt_))];
+    res_y_[static_cast<size_t>(t)] = ry[static_cast<size_t>(wrap(t - it, nt_))];
+  }
+}
+
+void PoseCells::step(double vx, double vy, double omega, double dt) {
+  dynamics();
+  if (dt <= 0.0) return;
+  const double trans = std::hypot(vx, vy) * dt / params_.cell_size;
+  const double rot = omega * dt / (kTwoPi / nt_);
+  const int sub = std::clamp(static_cast<int>(std::ceil(std::max(trans, std::abs(rot)))), 1, params_.max_substeps);
+  for (int i = 0; i < sub; ++i) {
+    translate_layers(vx * dt / sub / params_.cell_size, vy * dt / sub / params_.cell_size);
+    rotate(rot / sub);
+  }
+}
+
+void PoseCells::settle() { dynamics(); }
+
+void PoseCells::inject(double x, double y, double theta, double energy) {
+  if (!(energy > 0.0)) return;
+  const int ix = wrap(static_cast<int>(std::lround(x)), n_);
+  const int iy = wrap(static_cast<int>(std::lround(y)), n_);
+  const int it = wrap(static_cast<int>(std::lround(theta)), nt_);
+  p_[idx(it, iy, ix)] += static_cast<float>(energy);
+  support_dirty_ = true;
+  t_mask_valid_ = false;
+}
+
+void PoseCells::best(double& bx, double& by, double& bt) const {
+  const size_t m = static_cast<size_t>(std::max_element(p_.begin(), p_.end()) - p_.begin());
+  const int x0 = static_cast<int>(m % static_cast<size_t>(n_));
+  const int y0 = static_cast<int>((m / static_cast<size_t>(n_)) % static_cast<size_t>(n_));
+  const int t0 = static_cast<int>(m / (static_cast<size_t>(n_) * static_cast<size_t>(n_)));
+  const int r = params_.best_radius;
+  double cx = 0, sx = 0, cy = 0, sy = 0, ct = 0, st = 0, mass = 0, rx = 0, ry = 0;
+  for (int dt = -r; dt <= r; ++dt) {
+    const int t = wrap(t0 + dt, nt_);
+    double layer_mass = 0.0;
+    for (int dy = -r; dy <= r; ++dy) {
+      const int y = wrap(y0 + dy, n_);
+      for (int dx = -r; dx <= r; ++dx) {
+        const int x = wrap(x0 + dx, n_);
+        const double v = p_[idx(t, y, x)];
+        if (v == 0.0) continue;
+        cx += v * cos_xy_[static_cast<size_t>(x)];
+        sx += v * sin_xy_[static_cast<size_t>(x)];
+        cy += v * cos_xy_[static_cast<size_t>(y)];
+        sy += v * sin_xy_[static_cast<size_t>(y)];
+        ct += v * cos_t_[static_cast<size_t>(t)];
+        st += v * sin_t_[static_cast<size_t>(t)];
+        layer_mass += v;
+      }
+    }
+    mass += layer_mass;
+    rx += layer_mass * res_x_[static_cast<size_t>(t)];
+    ry += layer_mass * res_y_[static_cast<size_t>(t)];
+  }
+  // The grid holds activity at whole cells; the carried sub-cell motion completes the estimate.
+  const double ox = mass > 0.0 ? rx / mass : 0.0, oy = mass > 0.0 ? ry / mass : 0.0;
+  auto cell = [](double s, double c, double offset, int n) {
+    double v = wrap_angle_positive(std::atan2(s, c)) * n / kTwoPi + offset;
+    v = std::fmod(v, static_cast<double>(n));
+    if (v < 0.0) v += n;
+    return v >= n ? v - n : v;
+  };
+  bx = cell(sx, cx, ox, n_);
+  by = cell(sy, cy, oy, n_);
+  bt = cell(st, ct, res_t_, nt_);
+}
+
+double PoseCells::distance(double x1, double y1, double t1, double x2, double y2, double t2) const {
+  auto d = [](double a, double b, int n) {
+    const double v = std::fmod(std::abs(a - b), static_cast<double>(n));
+    return std::min(v, n - v);
+  };
+  const double dx = d(x1, x2, n_), dy = d(y1, y2, n_), dt = d(t1, t2, nt_);
+  return std::sqrt(dx * dx + dy * dy + dt * dt);
+}
+
+double PoseCells::packet_fraction() const {
+  const size_t m = static_cast<size_t>(std::max_element(p_.begin(), p_.end()) - p_.begin());
+  const int x0 = static_cast<int>(m % static_cast<size_t>(n_));
+  const int y0 = static_cast<int>((m / static_cast<size_t>(n_)) % static_cast<size_t>(n_));
+  const int t0 = static_cast<int>(m / (static_cast<size_t>(n_) * static_cast<size_t>(n_)));
+  const int r = params_.best_radius;
+  double in = 0.0, total = 0.0;
+  for (float v : p_) total += v;
+  for (int dt = -r; dt <= r; ++dt) {
+    for (int dy = -r; dy <= r; ++dy) {
+      for (int dx = -r; dx <= r; ++dx) in += p_[idx(wrap(t0 + dt, nt_), wrap(y0 + dy, n_), wrap(x0 + dx, n_))];
+    }
+  }
+  return total > 0.0 ? in / total : 0.0;
+}
+
+void PoseCells::serialise(std::vector<uint8_t>& out) const {
+  bin::put<int32_t>(out, n_);
+  bin::put<int32_t>(out, nt_);
+  bin::put_vec(out, p_);
+  bin::put_vec(out, res_x_);
+  bin::put_vec(out, res_y_);
+  bin::put<double>(out, res_t_);
+}
+
+void PoseCells::deserialise(const std::vector<uint8_t>& in, size_t& pos) {
+  const auto n = bin::get<int32_t>(in, pos);
+  const auto nt = bin::get<int32_t>(in, pos);
+  if (n != n_ || nt != nt_) {
+    throw std::runtime_error("checkpoint: pose cells are " + std::to_string(n) + "x" + std::to_string(n) + "x" +
+                             std::to_string(nt) + ", the parameters say " + std::to_string(n_) + "x" +
+                             std::to_string(n_) + "x" + std::to_string(nt_));
+  }
+  std::vector<float> p = bin::get_vec<float>(in, pos);
+  if (p.size() != p_.size()) throw std::runtime_error("checkpoint: pose-cell array has the wrong length");
+  std::vector<double> rx = bin::get_vec<double>(in, pos), ry = bin::get_vec<double>(in, pos);
+  if (rx.size() != res_x_.size() || ry.size() != res_y_.size()) {
+    throw std::runtime_error("checkpoint: pose-cell remainders have the wrong length");
+  }
+  res_t_ = bin::get<double>(in, pos);
+  p_ = std::move(p);
+  support_dirty_ = true;
+  t_mask_valid_ = false;
+  res_x_ = std::move(rx);
+  res_y_ = std::move(ry);
+}
+
+}  // namespace whiskeye::slam

@@ -1,0 +1,224 @@
+// Tactile template: contact estimation from θ and deflection, PFH and SDA. See tactile_template.h
+// for the model; docs/slam-core.md for why it differs from the original ViTa-SLAM code.
+#include "whiskeye/slam/tactile_template.h"
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace whiskeye::slam {
+
+void load(const ParamNode& n, TactileParams& p) {
+  n.get("contact_threshold", p.contact_threshold, 0.0, 1e6);
+  n.get("min_contact_samples", p.min_contact_samples, 1, 100000);
+  n.get("use_contact_flags", p.use_contact_flags);
+  n.get("min_theta_span", p.min_theta_span, 0.0, 1.0);
+  n.get("fallback_radius_fraction", p.fallback_radius_fraction, 0.01, 1.0);
+  std::string kind = p.pfh == PfhKind::Rusu ? "rusu" : "histogram";
+  n.get("pfh", kind);
+  if (kind == "rusu") {
+    p.pfh = PfhKind::Rusu;
+  } else if (kind == "histogram") {
+    p.pfh = PfhKind::Histogram;
+  } else {
+    throw ParamError(n.source() + ": '" + n.path_of("pfh") + "' = \"" + kind + "\" must be \"rusu\" or \"histogram\"");
+  }
+  n.get("normal_neighbours", p.normal_neighbours, 3, kNumWhiskers);
+  std::vector<double> lo(p.histogram_min.begin(), p.histogram_min.end());
+  std::vector<double> hi(p.histogram_max.begin(), p.histogram_max.end());
+  n.get("histogram_min", lo);
+  n.get("histogram_max", hi);
+  if (lo.size() != 3 || hi.size() != 3) {
+    throw ParamError(n.source() + ": '" + n.path_of("histogram_min") + "' and 'histogram_max' must be [x, y, z]");
+  }
+  for (int i = 0; i < 3; ++i) {
+    if (!(hi[static_cast<size_t>(i)] > lo[static_cast<size_t>(i)])) {
+      throw ParamError(n.source() + ": '" + n.path_of("histogram_max") + "' must exceed histogram_min on every axis");
+    }
+    p.histogram_min[static_cast<size_t>(i)] = lo[static_cast<size_t>(i)];
+    p.histogram_max[static_cast<size_t>(i)] = hi[static_cast<size_t>(i)];
+  }
+}
+
+namespace {
+
+struct WhiskerTrace {
+  std::vector<double> theta;
+  std::vector<double> magnitude;
+  std::vector<int64_t> utime;
+};
+
+// The samples of whisker w that count as contact; empty when below min_contact_samples.
+WhiskerTrace contact_samples(const WhiskCycleInput& cycle, int w, const TactileParams& p) {
+  WhiskerTrace t;
+  const auto i = static_cast<size_t>(w);
+  for (const WhiskSample& s : cycle.samples) {
+    if (!s.valid) continue;
+    const double m = std::hypot(static_cast<double>(s.deflection_x[i]), static_cast<double>(s.deflection_y[i]));
+    if (!std::isfinite(m) || !std::isfinite(s.theta[i])) continue;
+    if (m <= p.contact_threshold) continue;
+    if (p.use_contact_flags && !s.contact[i]) continue;
+    t.theta.push_back(s.theta[i]);
+    t.magnitude.push_back(m);
+    t.utime.push_back(s.utime);
+  }
+  if (static_cast<int>(t.theta.size()) < p.min_contact_samples) t = {};
+  return t;
+}
+
+int bin_of(double v, double lo, double hi) {
+  const int b = static_cast<int>(std::floor((v - lo) / (hi - lo) * kPfhBinsPerDim));
+  return std::clamp(b, 0, kPfhBinsPerDim - 1);
+}
+
+}  // namespace
+
+std::vector<ContactEstimate> estimate_contacts(const WhiskCycleInput& cycle, const RobotGeometry& geometry,
+                                               const TactileParams& p) {
+  std::vector<ContactEstimate> out;
+  for (int w = 0; w < kNumWhiskers; ++w) {
+    const WhiskerTrace t = contact_samples(cycle, w, p);
+    if (t.theta.empty()) continue;
+    const WhiskerGeometry& g = geometry.whiskers[static_cast<size_t>(w)];
+    ContactEstimate c;
+    c.whisker = w;
+    // Least squares |d| = a + k·θ over all contact samples (protraction and retraction lie on the
+    // same line for a contact fixed in the head frame); θ_c is where the line crosses zero.
+    const double n = static_cast<double>(t.theta.size());
+    const double tm = std::accumulate(t.theta.begin(), t.theta.end(), 0.0) / n;
+    const double mm = std::accumulate(t.magnitude.begin(), t.magnitude.end(), 0.0) / n;
+    double sxx = 0.0, sxy = 0.0;
+    double tmin = t.theta.front(), tmax = t.theta.front();
+    for (size_t i = 0; i < t.theta.size(); ++i) {
+      sxx += (t.theta[i] - tm) * (t.theta[i] - tm);
+      sxy += (t.theta[i] - tm) * (t.magnitude[i] - mm);
+      tmin = std::min(tmin, t.theta[i]);
+      tmax = std::max(tmax, t.theta[i]);
+    }
+    const double k = sxx > 0.0 ? sxy / sxx : 0.0;
+    if (tmax - tmin >= p.min_theta_span && k > 0.0) {
+      c.theta_contact = tm - mm / k;
+      c.radius = std::clamp(g.bend_gain / k, 1e-3 * g.length, g.length);
+    } else {
+      c.fitted = false;
+      c.theta_contact = t.theta.front();
+      c.radius = p.fallback_radius_fraction * g.length;
+    }
+    c.p_contact_in_head = geometry.whisker_point(w, c.theta_contact, c.radius);
+    out.push_back(c);
+  }
+  return out;
+}
+
+std::array<double, kPfhBins> compute_pfh(const std::vector<Vec3>& pts, const Vec3& viewpoint, int neighbours) {
+  std::array<double, kPfhBins> h{};
+  const size_t n = pts.size();
+  if (n < 3) return h;
+  std::vector<Eigen::Vector3d> p(n), nrm(n);
+  for (size_t i = 0; i < n; ++i) p[i] = {pts[i].x, pts[i].y, pts[i].z};
+  const size_t k = std::clamp<size_t>(static_cast<size_t>(neighbours), 3, n);
+  const Eigen::Vector3d vp(viewpoint.x, viewpoint.y, viewpoint.z);
+  std::vector<size_t> order(n);
+  for (size_t i = 0; i < n; ++i) {
+    std::iota(order.begin(), order.end(), size_t{0});
+    // Ties broken by index so the choice does not depend on the pose of the cloud.
+    std::partial_sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(k), order.end(),
+                      [&](size_t a, size_t b) {
+                        const double da = (p[a] - p[i]).squaredNorm(), db = (p[b] - p[i]).squaredNorm();
+                        return da < db || (da == db && a < b);
+                      });
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (size_t j = 0; j < k; ++j) mean += p[order[j]];
+    mean /= static_cast<double>(k);
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    for (size_t j = 0; j < k; ++j) {
+      const Eigen::Vector3d d = p[order[j]] - mean;
+      cov += d * d.transpose();
+    }
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
+    Eigen::Vector3d nv = es.eigenvectors().col(0);  // smallest eigenvalue: the surface normal
+    if (nv.dot(vp - p[i]) < 0.0) nv = -nv;
+    nrm[i] = nv;
+  }
+  double pairs = 0.0;
+  for (size_t i = 0; i < n; ++i) {
+    for (size_t j = i + 1; j < n; ++j) {
+      Eigen::Vector3d d = p[j] - p[i];
+      const double dist = d.norm();
+      if (dist < 1e-9) continue;
+      d /= dist;
+      size_t s = i, t = j;
+      // Rusu: the source is the point whose normal is closer to the connecting line.
+      if (std::abs(nrm[i].dot(d)) < std::abs(nrm[j].dot(d))) {
+        std::swap(s, t);
+        d = -d;
+      }
+      const Eigen::Vector3d& u = nrm[s];
+      Eigen::Vector3d v = u.cross(d);
+      const double vn = v.norm();
+      if (vn < 1e-9) continue;  // normal along the line: the frame is undefined
+      v /= vn;
+      const Eigen::Vector3d w = u.cross(v);
+      const double alpha = v.dot(nrm[t]);
+      const double phi = u.dot(d);
+      const double theta = std::atan2(w.dot(nrm[t]), u.dot(nrm[t]));
+      const int b = (bin_of(alpha, -1.0, 1.0) * kPfhBinsPerDim + bin_of(phi, -1.0, 1.0)) * kPfhBinsPerDim +
+                    bin_of(theta, -kPi, kPi);
+      h[static_cast<size_t>(b)] += 1.0;
+      pairs += 1.0;
+    }
+  }
+  if (pairs > 0.0) {
+    for (double& x : h) x /= pairs;
+  }
+  return h;
+}
+
+std::array<double, kPfhBins> compute_point_histogram(const std::vector<Vec3>& pts, const TactileParams& p) {
+  std::array<double, kPfhBins> h{};
+  if (pts.size() < 3) return h;
+  for (const Vec3& q : pts) {
+    const int b = (bin_of(q.x, p.histogram_min[0], p.histogram_max[0]) * kPfhBinsPerDim +
+                   bin_of(q.y, p.histogram_min[1], p.histogram_max[1])) *
+                      kPfhBinsPerDim +
+                  bin_of(q.z, p.histogram_min[2], p.histogram_max[2]);
+    h[static_cast<size_t>(b)] += 1.0;
+  }
+  for (double& x : h) x /= static_cast<double>(pts.size());
+  return h;
+}
+
+std::array<float, kSdaSize> compute_sda(const WhiskCycleInput& cycle, const TactileParams& p) {
+  std::array<float, kSdaSize> sda{};
+  for (int w = 0; w < kNumWhiskers; ++w) {
+    const WhiskerTrace t = contact_samples(cycle, w, p);
+    if (t.magnitude.empty()) continue;
+    const size_t imax =
+        static_cast<size_t>(std::max_element(t.magnitude.begin(), t.magnitude.end()) - t.magnitude.begin());
+    const double dt = static_cast<double>(t.utime[imax] - t.utime[0]) * 1e-6;
+    if (imax == 0 || dt <= 0.0) continue;
+    sda[static_cast<size_t>(w)] = static_cast<float>((t.magnitude[imax] - t.magnitude[0]) / dt);
+  }
+  return sda;
+}
+
+TactileTemplate make_tactile_template(const WhiskCycleInput& cycle, const RobotGeometry& geometry,
+                                      const TactileParams& p) {
+  TactileTemplate t;
+  const std::vector<ContactEstimate> contacts = estimate_contacts(cycle, geometry, p);
+  t.num_contacts = static_cast<int>(contacts.size());
+  std::vector<Vec3> pts;
+  pts.reserve(contacts.size());
+  for (const ContactEstimate& c : contacts) pts.push_back(c.p_contact_in_head);
+  const std::array<double, kPfhBins> h =
+      p.pfh == PfhKind::Rusu ? compute_pfh(pts, Vec3{}, p.normal_neighbours) : compute_point_histogram(pts, p);
+  for (int i = 0; i < kPfhBins; ++i) {
+    t.pfh[static_cast<size_t>(i)] = static_cast<uint16_t>(std::lround(std::clamp(h[static_cast<size_t>(i)], 0.0, 1.0) * 65535.0));
+  }
+  t.sda = compute_sda(cycle, p);
+  return t;
+}
+
+}  // namespace whiskeye::slam

@@ -1,0 +1,251 @@
+// Template memory and matching. The visual term is the hot loop (every stored template, every
+// shift, every cycle): see visual_distance() for how it stays a single contiguous, auto-vectorised
+// sum of absolute byte differences per shift.
+#include "whiskeye/slam/template_store.h"
+
+#include "binary_io.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+
+namespace whiskeye::slam {
+
+void load(const ParamNode& n, MatchParams& p) {
+  n.get("shift_max", p.shift_max, 0, 512);
+  n.get("shift_step", p.shift_step, 1, 512);
+  n.get("sigma_visual", p.sigma_visual, 1e-9, 1e9);
+  n.get("sigma_pfh", p.sigma_pfh, 1e-9, 1e9);
+  n.get("sigma_sda", p.sigma_sda, 1e-9, 1e9);
+  n.get("threshold_visual", p.threshold_visual, 0.0, 1e9);
+  n.get("threshold_tactile", p.threshold_tactile, 0.0, 1e9);
+  n.get("threshold_vita", p.threshold_vita, 0.0, 1e9);
+  n.get("prefilter_mean_diff", p.prefilter_mean_diff, 0.0, 1.0);
+}
+
+namespace {
+
+// Sum of |a[i] − b[i]|: GCC turns this exact shape into psadbw (SSE2) at -O3; unrolled so the
+// loop overhead does not dominate one psadbw per 16 bytes.
+uint32_t sad_u8(const uint8_t* __restrict a, const uint8_t* __restrict b, size_t n) {
+  uint32_t s = 0;
+#pragma GCC unroll 8
+  for (size_t i = 0; i < n; ++i) s += static_cast<uint32_t>(std::abs(static_cast<int>(a[i]) - static_cast<int>(b[i])));
+  return s;
+}
+
+// Row-major → column-major. Stored column-major, a column shift s is a flat offset of s·h and the
+// overlap of two templates is ONE contiguous run of (w − |s|)·h bytes: no per-row tails, no
+// straddling corrections, just one long vectorised SAD per shift.
+void to_column_major(const uint8_t* rm, int w, int h, uint8_t* cm) {
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) cm[static_cast<size_t>(x) * static_cast<size_t>(h) + static_cast<size_t>(y)] = rm[static_cast<size_t>(y) * static_cast<size_t>(w) + static_cast<size_t>(x)];
+}
+
+uint32_t l1_u16(const uint16_t* __restrict a, const uint16_t* __restrict b, size_t n) {
+  uint32_t s = 0;
+  for (size_t i = 0; i < n; ++i) s += static_cast<uint32_t>(std::abs(static_cast<int>(a[i]) - static_cast<int>(b[i])));
+  return s;
+}
+
+float l1_f32(const float* __restrict a, const float* __restrict b, size_t n) {
+  float s = 0.0f;
+  for (size_t i = 0; i < n; ++i) s += std::abs(a[i] - b[i]);
+  return s;
+}
+
+}  // namespace
+
+TemplateStore::TemplateStore(int visual_width, int visual_height) : width_(visual_width), height_(visual_height) {}
+
+int TemplateStore::add(const Query& q, double pc_x, double pc_y, double pc_theta) {
+  const int id = size();
+  const size_t np = pixels();
+  if (q.visual != nullptr) {
+    if (q.visual->width != width_ || q.visual->height != height_ || q.visual->pixels.size() != np) {
+      throw std::invalid_argument("TemplateStore::add: visual template is " + std::to_string(q.visual->width) + "x" +
+                                  std::to_string(q.visual->height) + ", the store holds " + std::to_string(width_) +
+                                  "x" + std::to_string(height_));
+    }
+    visual_.resize(visual_.size() + np);
+    to_column_major(q.visual->pixels.data(), width_, height_, &visual_[visual_.size() - np]);
+    visual_mean_.push_back(q.visual->mean);
+  } else {
+    visual_.resize(visual_.size() + np, 0);
+    visual_mean_.push_back(0.0f);
+  }
+  has_visual_.push_back(q.visual != nullptr ? 1 : 0);
+  if (q.tactile != nullptr) {
+    pfh_.insert(pfh_.end(), q.tactile->pfh.begin(), q.tactile->pfh.end());
+    sda_.insert(sda_.end(), q.tactile->sda.begin(), q.tactile->sda.end());
+    num_contacts_.push_back(q.tactile->num_contacts);
+  } else {
+    pfh_.resize(pfh_.size() + kPfhBins, 0);
+    sda_.resize(sda_.size() + kSdaSize, 0.0f);
+    num_contacts_.push_back(0);
+  }
+  has_tactile_.push_back(q.tactile != nullptr ? 1 : 0);
+  pc_.push_back(pc_x);
+  pc_.push_back(pc_y);
+  pc_.push_back(pc_theta);
+  decay_.push_back(0.0);
+  return id;
+}
+
+double TemplateStore::visual_distance(const uint8_t* cur, const uint8_t* st, int w, int h, int shift_max,
+                                      int shift_step, int* best_shift) {
+  uint64_t best_num = std::numeric_limits<uint64_t>::max();
+  uint64_t best_den = 1;
+  int best_s = 0;
+  const int smax = std::min(shift_max, w - 1);
+  // Shifts in the order 0, +step, −step, +2·step, ...: ties go to the smallest |shift|.
+  for (int k = 0; k * shift_step <= smax; ++k) {
+    for (int sign = 1; sign >= -1; sign -= 2) {
+      if (k == 0 && sign < 0) continue;
+      const int s = sign * k * shift_step;
+      // Current column c against stored column c − s.
+      const size_t off = static_cast<size_t>(std::abs(s)) * static_cast<size_t>(h);
+      const size_t len = static_cast<size_t>(w - std::abs(s)) * static_cast<size_t>(h);
+      const uint32_t sad = s >= 0 ? sad_u8(cur + off, st, len) : sad_u8(cur, st + off, len);
+      const uint64_t den = len;
+      // Compare sad/den exactly (cross-multiplied) so the choice never depends on rounding.
+      if (static_cast<uint64_t>(sad) * best_den < best_num * den ||
+          best_num == std::numeric_limits<uint64_t>::max()) {
+        best_num = sad;
+        best_den = den;
+        best_s = s;
+      }
+    }
+  }
+  if (best_shift != nullptr) *best_shift = best_s;
+  return static_cast<double>(best_num) / static_cast<double>(best_den) / 255.0;
+}
+
+BestMatch TemplateStore::match(const Query& q, const Terms& terms, const MatchParams& p) const {
+  BestMatch best;
+  if ((!terms.visual && !terms.tactile) || (terms.visual && q.visual == nullptr) ||
+      (terms.tactile && q.tactile == nullptr)) {
+    return best;
+  }
+  const size_t np = pixels();
+  std::vector<uint8_t> cur;
+  if (terms.visual) {
+    if (q.visual->width != width_ || q.visual->height != height_ || q.visual->pixels.size() != np) {
+      throw std::invalid_argument("TemplateStore::match: visual template is " + std::to_string(q.visual->width) + "x" +
+                                  std::to_string(q.visual->height) + ", the store holds " + std::to_string(width_) + "x" +
+                                  std::to_string(height_));
+    }
+    cur.resize(np);
+    to_column_major(q.visual->pixels.data(), width_, height_, cur.data());
+  }
+  const double inv_v = 1.0 / p.sigma_visual;
+  const double inv_pfh = 1.0 / (65535.0 * p.sigma_pfh);
+  const double inv_sda = 1.0 / p.sigma_sda;
+  const int n = size();
+  for (int i = 0; i < n; ++i) {
+    const auto iu = static_cast<size_t>(i);
+    if (terms.visual && (has_visual_[iu] == 0 ||
+                         std::abs(static_cast<double>(visual_mean_[iu]) - q.visual->mean) > p.prefilter_mean_diff)) {
+      continue;
+    }
+    if (terms.tactile && has_tactile_[iu] == 0) continue;
+    double ev = 0.0, ep = 0.0, es = 0.0;
+    int shift = 0;
+    if (terms.tactile) {
+      ep = l1_u16(q.tactile->pfh.data(), &pfh_[iu * kPfhBins], kPfhBins) * inv_pfh;
+      es = l1_f32(q.tactile->sda.data(), &sda_[iu * kSdaSize], kSdaSize) * inv_sda;
+    }
+    if (terms.visual) {
+      // A fresh minimum per stored template (the original code carried it across templates).
+      ev = visual_distance(cur.data(), &visual_[iu * np], width_, height_, p.shift_max, p.shift_step,
+                           &shift) *
+           inv_v;
+    }
+    const double e = ev + ep + es;
+    if (best.id < 0 || e < best.error) {
+      best = {i, e, ev, ep, es, shift};
+    }
+  }
+  return best;
+}
+
+void TemplateStore::restore_decay(double restore, double floor) {
+  for (double& d : decay_) d = std::max(floor, d - restore);
+}
+
+SigmaEstimate TemplateStore::estimate_sigmas(const MatchParams& p, int max_pairs) const {
+  SigmaEstimate out;
+  const int n = size();
+  if (n < 2) return out;
+  const int64_t all = static_cast<int64_t>(n) * (n - 1) / 2;
+  const int64_t stride = std::max<int64_t>(1, all / std::max(1, max_pairs));
+  struct Acc {
+    double s = 0.0, s2 = 0.0;
+    int64_t k = 0;
+    void add(double x) { s += x; s2 += x * x; ++k; }
+    double sd() const { return k < 2 ? 0.0 : std::sqrt(std::max(0.0, (s2 - s * s / k) / (k - 1))); }
+  } av, ap, as;
+  int64_t idx = 0;
+  const size_t np = pixels();
+  for (int i = 0; i < n; ++i) {
+    for (int j = i + 1; j < n; ++j, ++idx) {
+      if (idx % stride != 0) continue;
+      const auto iu = static_cast<size_t>(i), ju = static_cast<size_t>(j);
+      if (has_visual_[iu] != 0 && has_visual_[ju] != 0) {
+        av.add(visual_distance(&visual_[iu * np], &visual_[ju * np], width_, height_, p.shift_max, p.shift_step,
+                               nullptr));
+      }
+      if (has_tactile_[iu] != 0 && has_tactile_[ju] != 0) {
+        ap.add(l1_u16(&pfh_[iu * kPfhBins], &pfh_[ju * kPfhBins], kPfhBins) / 65535.0);
+        as.add(l1_f32(&sda_[iu * kSdaSize], &sda_[ju * kSdaSize], kSdaSize));
+      }
+      ++out.pairs;
+    }
+  }
+  out.sigma_visual = av.sd();
+  out.sigma_pfh = ap.sd();
+  out.sigma_sda = as.sd();
+  return out;
+}
+
+void TemplateStore::serialise(std::vector<uint8_t>& out) const {
+  bin::put<int32_t>(out, width_);
+  bin::put<int32_t>(out, height_);
+  bin::put_vec(out, visual_);
+  bin::put_vec(out, visual_mean_);
+  bin::put_vec(out, has_visual_);
+  bin::put_vec(out, pfh_);
+  bin::put_vec(out, sda_);
+  bin::put_vec(out, has_tactile_);
+  bin::put_vec(out, num_contacts_);
+  bin::put_vec(out, pc_);
+  bin::put_vec(out, decay_);
+}
+
+TemplateStore TemplateStore::deserialise(const std::vector<uint8_t>& in, size_t& pos) {
+  TemplateStore s;
+  s.width_ = bin::get<int32_t>(in, pos);
+  s.height_ = bin::get<int32_t>(in, pos);
+  if (s.width_ <= 0 || s.height_ <= 0 || s.width_ > 4096 || s.height_ > 4096) {
+    throw std::runtime_error("checkpoint: bad template size");
+  }
+  s.visual_ = bin::get_vec<uint8_t>(in, pos);
+  s.visual_mean_ = bin::get_vec<float>(in, pos);
+  s.has_visual_ = bin::get_vec<uint8_t>(in, pos);
+  s.pfh_ = bin::get_vec<uint16_t>(in, pos);
+  s.sda_ = bin::get_vec<float>(in, pos);
+  s.has_tactile_ = bin::get_vec<uint8_t>(in, pos);
+  s.num_contacts_ = bin::get_vec<int32_t>(in, pos);
+  s.pc_ = bin::get_vec<double>(in, pos);
+  s.decay_ = bin::get_vec<double>(in, pos);
+  const size_t n = s.has_visual_.size();
+  if (s.visual_.size() != n * s.pixels() || s.visual_mean_.size() != n || s.pfh_.size() != n * kPfhBins ||
+      s.sda_.size() != n * kSdaSize || s.has_tactile_.size() != n || s.num_contacts_.size() != n ||
+      s.pc_.size() != 3 * n || s.decay_.size() != n) {
+    throw std::runtime_error("checkpoint: template arrays disagree in length");
+  }
+  return s;
+}
+
+}  // namespace whiskeye::slam

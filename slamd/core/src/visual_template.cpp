@@ -1,0 +1,167 @@
+// Visual template: every pixel format ends as a float greyscale image in [0, 1], which is cropped,
+// block-averaged (OpenCV INTER_AREA = exact area averaging, also for non-integer ratios) and
+// normalised. See visual_template.h.
+#include "whiskeye/slam/visual_template.h"
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+namespace whiskeye::slam {
+
+void load(const ParamNode& n, VisualParams& p) {
+  n.get("crop_x", p.crop_x, 0, 100000);
+  n.get("crop_y", p.crop_y, 0, 100000);
+  n.get("crop_width", p.crop_width, 0, 100000);
+  n.get("crop_height", p.crop_height, 0, 100000);
+  n.get("template_width", p.template_width, 4, 1024);
+  n.get("template_height", p.template_height, 1, 1024);
+  n.get("global_normalisation", p.global_normalisation, 0.0, 1.0);
+  n.get("patch_radius", p.patch_radius, 0, 32);
+}
+
+namespace {
+
+std::string fourcc_text(uint32_t f) {
+  std::string s;
+  for (int i = 0; i < 4; ++i) {
+    const char c = static_cast<char>((f >> (8 * i)) & 0xff);
+    s += (c >= 32 && c < 127) ? c : '?';
+  }
+  return s;
+}
+
+void check_raw(const ImageView& im, int bytes_per_pixel) {
+  if (im.width <= 0 || im.height <= 0) {
+    throw InputError("image: bad size " + std::to_string(im.width) + "x" + std::to_string(im.height));
+  }
+  const int64_t row_bytes = static_cast<int64_t>(im.width) * bytes_per_pixel;
+  if (im.row_stride < row_bytes) {
+    throw InputError("image: row_stride " + std::to_string(im.row_stride) + " < " + std::to_string(row_bytes) +
+                     " bytes for " + fourcc_text(im.pixelformat) + " width " + std::to_string(im.width));
+  }
+  const int64_t need = static_cast<int64_t>(im.row_stride) * (im.height - 1) + row_bytes;
+  if (static_cast<int64_t>(im.data.size()) < need) {
+    throw InputError("image: " + std::to_string(im.data.size()) + " bytes of data, " + std::to_string(need) +
+                     " needed for " + std::to_string(im.width) + "x" + std::to_string(im.height) + " " +
+                     fourcc_text(im.pixelformat));
+  }
+}
+
+cv::Mat to_grey8(const ImageView& im) {
+  // OpenCV wants a non-const pointer for a header over foreign data; it is only read.
+  auto* data = const_cast<uint8_t*>(im.data.data());
+  const auto stride = static_cast<size_t>(im.row_stride);
+  cv::Mat grey;
+  switch (im.pixelformat) {
+    case kPixGrey:
+      check_raw(im, 1);
+      return cv::Mat(im.height, im.width, CV_8UC1, data, stride);
+    case kPixYuyv:
+      check_raw(im, 2);
+      cv::cvtColor(cv::Mat(im.height, im.width, CV_8UC2, data, stride), grey, cv::COLOR_YUV2GRAY_YUYV);
+      return grey;
+    case kPixRgb24:
+      check_raw(im, 3);
+      cv::cvtColor(cv::Mat(im.height, im.width, CV_8UC3, data, stride), grey, cv::COLOR_RGB2GRAY);
+      return grey;
+    case kPixBgr24:
+      check_raw(im, 3);
+      cv::cvtColor(cv::Mat(im.height, im.width, CV_8UC3, data, stride), grey, cv::COLOR_BGR2GRAY);
+      return grey;
+    case kPixMjpeg: {
+      if (im.data.empty()) throw InputError("image: empty MJPEG frame");
+      const cv::Mat buf(1, static_cast<int>(im.data.size()), CV_8UC1, data);
+      try {
+        grey = cv::imdecode(buf, cv::IMREAD_GRAYSCALE);
+      } catch (const cv::Exception&) {
+        grey.release();
+      }
+      if (grey.empty()) throw InputError("image: MJPEG frame does not decode");
+      return grey;
+    }
+    default:
+      throw InputError("image: unsupported pixel format '" + fourcc_text(im.pixelformat) + "'");
+  }
+}
+
+}  // namespace
+
+VisualTemplate make_visual_template_from_grey(const float* grey, int width, int height, int stride_floats,
+                                              const VisualParams& p) {
+  const int x0 = std::min(p.crop_x, width);
+  const int y0 = std::min(p.crop_y, height);
+  const int cw = p.crop_width == 0 ? width - x0 : std::min(p.crop_width, width - x0);
+  const int ch = p.crop_height == 0 ? height - y0 : std::min(p.crop_height, height - y0);
+  if (cw <= 0 || ch <= 0) {
+    throw InputError("image: crop (" + std::to_string(p.crop_x) + ", " + std::to_string(p.crop_y) +
+                     ") lies outside the " + std::to_string(width) + "x" + std::to_string(height) + " image");
+  }
+  const cv::Mat src(height, width, CV_32FC1, const_cast<float*>(grey), static_cast<size_t>(stride_floats) * 4);
+  cv::Mat small;
+  cv::resize(src(cv::Rect(x0, y0, cw, ch)), small, cv::Size(p.template_width, p.template_height), 0, 0,
+             cv::INTER_AREA);
+
+  const int n = p.template_width * p.template_height;
+  std::vector<float> v(small.begin<float>(), small.end<float>());
+  if (p.global_normalisation > 0.0) {
+    double sum = 0.0;
+    for (float x : v) sum += x;
+    const double mean = sum / n;
+    if (mean > 1e-6) {
+      const float k = static_cast<float>(p.global_normalisation / mean);
+      for (float& x : v) x = std::clamp(x * k, 0.0f, 1.0f);
+    }
+  }
+  if (p.patch_radius > 0) {
+    // Local contrast: removes illumination gradients the global factor cannot.
+    std::vector<float> out(v.size());
+    const int r = p.patch_radius;
+    for (int y = 0; y < p.template_height; ++y) {
+      for (int x = 0; x < p.template_width; ++x) {
+        double s = 0.0, s2 = 0.0;
+        int cnt = 0;
+        for (int yy = std::max(0, y - r); yy <= std::min(p.template_height - 1, y + r); ++yy) {
+          for (int xx = std::max(0, x - r); xx <= std::min(p.template_width - 1, x + r); ++xx) {
+            const double q = v[static_cast<size_t>(yy * p.template_width + xx)];
+            s += q;
+            s2 += q * q;
+            ++cnt;
+          }
+        }
+        const double m = s / cnt;
+        const double sd = std::sqrt(std::max(0.0, s2 / cnt - m * m));
+        const double z = sd > 1e-6 ? (v[static_cast<size_t>(y * p.template_width + x)] - m) / sd : 0.0;
+        out[static_cast<size_t>(y * p.template_width + x)] = static_cast<float>(std::clamp(0.5 + z / 6.0, 0.0, 1.0));
+      }
+    }
+    v.swap(out);
+  }
+
+  VisualTemplate t;
+  t.width = p.template_width;
+  t.height = p.template_height;
+  t.pixels.resize(static_cast<size_t>(n));
+  double sum = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const auto q = static_cast<uint8_t>(std::lround(std::clamp(v[static_cast<size_t>(i)], 0.0f, 1.0f) * 255.0f));
+    t.pixels[static_cast<size_t>(i)] = q;
+    sum += q;
+  }
+  t.mean = static_cast<float>(sum / n / 255.0);
+  return t;
+}
+
+VisualTemplate make_visual_template(const ImageView& image, const VisualParams& params) {
+  const cv::Mat grey8 = to_grey8(image);
+  cv::Mat grey;
+  grey8.convertTo(grey, CV_32F, 1.0 / 255.0);
+  return make_visual_template_from_grey(grey.ptr<float>(), grey.cols, grey.rows, static_cast<int>(grey.step1()),
+                                        params);
+}
+
+}  // namespace whiskeye::slam

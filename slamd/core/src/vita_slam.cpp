@@ -1,0 +1,200 @@
+// ViTa-SLAM cycle (Algorithm 1) and checkpoints. See vita_slam.h.
+#include "whiskeye/slam/vita_slam.h"
+
+#include "binary_io.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <optional>
+#include <stdexcept>
+
+namespace whiskeye::slam {
+
+namespace {
+
+constexpr char kMagic[8] = {'V', 'I', 'T', 'A', 'S', 'L', 'A', 'M'};
+constexpr uint32_t kVersion = 1;
+
+uint32_t fnv1a(const uint8_t* data, size_t n) {
+  uint32_t h = 2166136261u;
+  for (size_t i = 0; i < n; ++i) {
+    h ^= data[i];
+    h *= 16777619u;
+  }
+  return h;
+}
+
+}  // namespace
+
+VitaSlam::VitaSlam(const SlamParams& params, const RobotGeometry& geometry)
+    : params_(params),
+      geometry_(geometry),
+      store_(params.visual.template_width, params.visual.template_height),
+      cells_(params.pose_cells),
+      map_(params.experience_map) {}
+
+CycleResult VitaSlam::process_cycle(const CycleInput& in) {
+  CycleResult out;
+  ++stats_.cycles;
+
+  // 1. Path integration.
+  for (const OdometrySample& o : in.odometry) {
+    double dt = 0.0;
+    if (have_odometry_time_) {
+      if (o.utime < last_odometry_utime_) {
+        ++stats_.odometry_out_of_order;
+        continue;
+      }
+      dt = static_cast<double>(o.utime - last_odometry_utime_) * 1e-6;
+      if (dt > params_.max_odometry_dt) {
+        ++stats_.odometry_gaps;
+        dt = params_.max_odometry_dt;
+      }
+    }
+    have_odometry_time_ = true;
+    last_odometry_utime_ = o.utime;
+    if (!std::isfinite(o.vx) || !std::isfinite(o.vy) || !std::isfinite(o.omega)) {
+      ++stats_.odometry_out_of_order;
+      continue;
+    }
+    cells_.step(o.vx, o.vy, o.omega, dt);
+    map_.integrate(o.vx, o.vy, o.omega, dt);
+  }
+
+  // 2. Templates of this cycle.
+  std::optional<VisualTemplate> vt;
+  std::optional<TactileTemplate> tt;
+  if (uses_visual(params_.mode) && in.image != nullptr) {
+    try {
+      vt = make_visual_template(*in.image, params_.visual);
+    } catch (const InputError& e) {
+      ++stats_.bad_images;
+      out.input_warning = e.what();
+    }
+  }
+  if (uses_tactile(params_.mode) && in.whisk != nullptr) {
+    const bool any_valid =
+        std::any_of(in.whisk->samples.begin(), in.whisk->samples.end(), [](const WhiskSample& s) { return s.valid; });
+    if (any_valid) {
+      tt = make_tactile_template(*in.whisk, geometry_, params_.tactile);
+    } else {
+      ++stats_.empty_whisk_cycles;
+      if (!out.input_warning.empty()) out.input_warning += "; ";
+      out.input_warning += "whisk cycle " + std::to_string(in.whisk->cycle) + " has no valid sample";
+    }
+  }
+  Terms terms{vt.has_value(), tt.has_value()};
+  // No contact this cycle: touch says nothing about the place, so vision decides alone.
+  if (terms.visual && terms.tactile && !tt->has_contact()) terms.tactile = false;
+  const Query q{vt ? &*vt : nullptr, tt ? &*tt : nullptr};
+  out.dense = tt.has_value() && tt->has_contact();
+
+  // 3. Match or create.
+  double pcx = 0.0, pcy = 0.0, pct = 0.0;
+  cells_.best(pcx, pcy, pct);
+  store_.restore_decay(params_.pose_cells.vt_restore, 0.0);
+  MatchResult& m = out.match;
+  m.visual_used = terms.visual;
+  m.tactile_used = terms.tactile;
+  if (terms.visual || terms.tactile) {
+    const BestMatch b = store_.match(q, terms, params_.match);
+    const double tau = terms.visual && terms.tactile ? params_.match.threshold_vita
+                       : terms.visual               ? params_.match.threshold_visual
+                                                    : params_.match.threshold_tactile;
+    if (b.id >= 0) {
+      m.error = b.error;
+      m.visual_error = b.visual;
+      m.pfh_error = b.pfh;
+      m.sda_error = b.sda;
+      m.visual_shift = b.shift;
+    }
+    if (b.id >= 0 && b.error <= tau) {
+      m.template_id = b.id;
+      m.is_new = false;
+      store_.bump_decay(b.id, params_.pose_cells.vt_active_decay);
+      if (b.id < store_.size() - params_.pose_cells.inject_exclude_newest) {
+        const double energy = params_.pose_cells.inject_energy *
+                              std::max(0.0, 30.0 - std::exp(1.2 * store_.decay(b.id))) / 30.0;
+        cells_.inject(store_.pc_x(b.id), store_.pc_y(b.id), store_.pc_theta(b.id), energy);
+        for (int i = 0; i < params_.pose_cells.settle_steps; ++i) cells_.settle();
+        cells_.best(pcx, pcy, pct);
+      }
+    } else {
+      m.template_id = store_.add(q, pcx, pcy, pct);
+      m.is_new = true;
+    }
+  }
+
+  // 4. Experience map.
+  const int tid = m.template_id;
+  out.event = map_.on_cycle(tid, tid >= 0 && store_.has_visual(tid) ? tid : -1,
+                            tid >= 0 && store_.has_tactile(tid) ? tid : -1, out.dense, pcx, pcy, pct, cells_, in.utime);
+  out.experience_id = map_.current_id();
+  out.pose = map_.current_pose();
+  out.pc_x = pcx;
+  out.pc_y = pcy;
+  out.pc_theta = pct;
+  out.num_templates = store_.size();
+  return out;
+}
+
+Pose2 VitaSlam::dead_reckon(const Pose2& offset) const { return compose(map_.current_pose(), offset); }
+
+std::vector<uint8_t> VitaSlam::serialise() const {
+  std::vector<uint8_t> out(kMagic, kMagic + 8);
+  bin::put<uint32_t>(out, kVersion);
+  bin::put<uint8_t>(out, static_cast<uint8_t>(params_.mode));
+  bin::put<int64_t>(out, last_odometry_utime_);
+  bin::put<uint8_t>(out, have_odometry_time_ ? 1 : 0);
+  bin::put<int64_t>(out, stats_.cycles);
+  bin::put<int64_t>(out, stats_.bad_images);
+  bin::put<int64_t>(out, stats_.empty_whisk_cycles);
+  bin::put<int64_t>(out, stats_.odometry_out_of_order);
+  bin::put<int64_t>(out, stats_.odometry_gaps);
+  store_.serialise(out);
+  cells_.serialise(out);
+  map_.serialise(out);
+  bin::put<uint32_t>(out, fnv1a(out.data(), out.size()));
+  return out;
+}
+
+VitaSlam VitaSlam::deserialise(std::span<const uint8_t> data, const SlamParams& params,
+                               const RobotGeometry& geometry) {
+  const std::vector<uint8_t> in(data.begin(), data.end());
+  if (in.size() < 8 + 4 + 4 || std::memcmp(in.data(), kMagic, 8) != 0) {
+    throw std::runtime_error("checkpoint: not a ViTa-SLAM checkpoint (bad magic)");
+  }
+  size_t end = in.size() - 4;
+  size_t tail = end;
+  if (bin::get<uint32_t>(in, tail) != fnv1a(in.data(), end)) throw std::runtime_error("checkpoint: checksum mismatch");
+  size_t pos = 8;
+  const auto version = bin::get<uint32_t>(in, pos);
+  if (version != kVersion) throw std::runtime_error("checkpoint: version " + std::to_string(version) + " unsupported");
+  const auto mode = bin::get<uint8_t>(in, pos);
+  if (mode != static_cast<uint8_t>(params.mode)) {
+    throw std::runtime_error("checkpoint: written in another mode than '" + to_string(params.mode) + "'");
+  }
+  VitaSlam s(params, geometry);
+  s.last_odometry_utime_ = bin::get<int64_t>(in, pos);
+  s.have_odometry_time_ = bin::get<uint8_t>(in, pos) != 0;
+  s.stats_.cycles = bin::get<int64_t>(in, pos);
+  s.stats_.bad_images = bin::get<int64_t>(in, pos);
+  s.stats_.empty_whisk_cycles = bin::get<int64_t>(in, pos);
+  s.stats_.odometry_out_of_order = bin::get<int64_t>(in, pos);
+  s.stats_.odometry_gaps = bin::get<int64_t>(in, pos);
+  s.store_ = TemplateStore::deserialise(in, pos);
+  if (s.store_.visual_width() != params.visual.template_width ||
+      s.store_.visual_height() != params.visual.template_height) {
+    throw std::runtime_error("checkpoint: templates are " + std::to_string(s.store_.visual_width()) + "x" +
+                             std::to_string(s.store_.visual_height()) + ", the parameters say " +
+                             std::to_string(params.visual.template_width) + "x" +
+                             std::to_string(params.visual.template_height));
+  }
+  s.cells_.deserialise(in, pos);
+  s.map_.deserialise(in, pos);
+  if (pos != end) throw std::runtime_error("checkpoint: " + std::to_string(end - pos) + " unexpected trailing bytes");
+  return s;
+}
+
+}  // namespace whiskeye::slam

@@ -1,0 +1,137 @@
+// Experience map: relaxation of a drifting loop, the action rule, checkpoints.
+#include "whiskeye/slam/experience_map.h"
+
+#include "whiskeye/slam/pose_cells.h"
+
+#include <gtest/gtest.h>
+
+namespace whiskeye::slam {
+namespace {
+
+double link_residual_pos(const ExperienceMap& m, const Link& l) {
+  const auto& e = m.experiences();
+  const Pose2 pred = compose(e[static_cast<size_t>(l.from)].pose, l.delta);
+  return std::hypot(pred.x - e[static_cast<size_t>(l.to)].pose.x, pred.y - e[static_cast<size_t>(l.to)].pose.y);
+}
+
+TEST(ExperienceMap, RelaxationTurnsADriftingSquareLoopIntoASquare) {
+  // A 2 m square driven in 40 steps of 0.2 m, turning 90° at each corner. Odometry turns 0.012 rad
+  // too much per step and overestimates distance by 3 %.
+  ExperienceMap m;
+  std::vector<Pose2> truth_steps;
+  Pose2 dr;  // dead reckoning
+  const int per_side = 10;
+  m.add_experience(dr, Experience{});
+  for (int i = 1; i < 4 * per_side; ++i) {
+    const bool corner = i % per_side == 0;
+    const Pose2 truth{0.2, 0.0, corner ? kPi / 2 : 0.0};
+    const Pose2 measured{0.2 * 1.03, 0.0, truth.theta + 0.012};
+    dr = compose(dr, measured);
+    m.add_experience(dr, Experience{});
+    m.add_link(i - 1, i, measured, i);
+  }
+  // Back at the start: the loop closure link carries the true relative pose (last → first).
+  m.add_link(4 * per_side - 1, 0, Pose2{0.2, 0.0, kPi / 2}, 99);
+  const Link closure = m.links().back();
+  const double before = link_residual_pos(m, closure);
+  ASSERT_GT(before, 0.5);  // the drift is real
+
+  m.relax(3000);
+  EXPECT_LT(link_residual_pos(m, closure), 0.1 * before);
+  double worst = 0.0;
+  for (const Link& l : m.links()) worst = std::max(worst, link_residual_pos(m, l));
+  EXPECT_LT(worst, 0.05);
+
+  const auto& e = m.experiences();
+  const Pose2 c[4] = {e[0].pose, e[10].pose, e[20].pose, e[30].pose};
+  auto d = [](const Pose2& a, const Pose2& b) { return std::hypot(a.x - b.x, a.y - b.y); };
+  const double sides[4] = {d(c[0], c[1]), d(c[1], c[2]), d(c[2], c[3]), d(c[3], c[0])};
+  for (double s : sides) EXPECT_NEAR(s, 2.0 * 1.03, 0.15);
+  EXPECT_NEAR(d(c[0], c[2]), d(c[1], c[3]), 0.1);  // equal diagonals: a square, not a rhombus
+  EXPECT_NEAR(d(c[0], c[2]), 2.0 * 1.03 * std::sqrt(2.0), 0.2);
+}
+
+TEST(ExperienceMap, RelaxationKeepsAConsistentMapUnchanged) {
+  ExperienceMap m;
+  m.add_experience({0, 0, 0}, Experience{});
+  m.add_experience({1, 0, kPi / 2}, Experience{});
+  m.add_experience({1, 1, kPi}, Experience{});
+  m.add_link(0, 1, {1, 0, kPi / 2}, 0);
+  m.add_link(1, 2, {1, 0, kPi / 2}, 0);
+  m.relax(50);
+  EXPECT_NEAR(m.experiences()[2].pose.x, 1.0, 1e-9);
+  EXPECT_NEAR(m.experiences()[2].pose.y, 1.0, 1e-9);
+  EXPECT_NEAR(std::abs(m.experiences()[2].pose.theta), kPi, 1e-9);
+}
+
+TEST(ExperienceMap, ActionRuleCreatesLinksAndRelocalises) {
+  const PoseCells cells{PoseCellParams{}};
+  ExperienceMap m;
+  // Cycle 1: template 0 at pc (10, 10, 0) → first experience.
+  Event e = m.on_cycle(0, 0, -1, false, 10, 10, 0, cells, 1000);
+  EXPECT_EQ(e.type, EventType::NewExperience);
+  EXPECT_EQ(e.from_id, -1);
+  EXPECT_EQ(e.to_id, 0);
+  EXPECT_EQ(m.experiences()[0].utime_created, 1000);
+  EXPECT_EQ(m.experiences()[0].visual_template_id, 0);
+  EXPECT_EQ(m.experiences()[0].tactile_template_id, -1);
+  // Move 1 m; a new template → new experience linked from the first.
+  m.integrate(1.0, 0.0, 0.0, 1.0);
+  e = m.on_cycle(1, 1, 1, true, 15, 10, 0, cells, 2000);
+  EXPECT_EQ(e.type, EventType::NewExperience);
+  EXPECT_EQ(e.from_id, 0);
+  EXPECT_EQ(e.to_id, 1);
+  EXPECT_NEAR(m.experiences()[1].pose.x, 1.0, 1e-12);
+  EXPECT_TRUE(m.experiences()[1].dense);
+  // The same template with the pose cells still there: nothing changes.
+  m.integrate(0.1, 0.0, 0.0, 1.0);
+  e = m.on_cycle(1, 1, 1, true, 15.5, 10, 0, cells, 2500);
+  EXPECT_EQ(e.type, EventType::SameExperience);
+  // A third place.
+  m.integrate(1.0, 0.0, 0.0, 1.0);
+  e = m.on_cycle(2, 2, 2, true, 20, 10, 0, cells, 2800);
+  EXPECT_EQ(e.type, EventType::NewExperience);
+  // Template 0 seen again with the pose cells back near its cells → re-localise onto experience 0
+  // with a new link carrying the odometry.
+  m.integrate(-2.0, 0.0, 0.0, 1.0);
+  e = m.on_cycle(0, 0, -1, false, 10.5, 10, 0, cells, 3000);
+  EXPECT_EQ(e.type, EventType::Relocalise);
+  EXPECT_EQ(e.from_id, 2);
+  EXPECT_EQ(e.to_id, 0);
+  EXPECT_EQ(m.current_id(), 0);
+  ASSERT_EQ(m.links().size(), 3u);
+  EXPECT_EQ(m.links()[2].from, 2);
+  EXPECT_EQ(m.links()[2].to, 0);
+  EXPECT_NEAR(m.links()[2].delta.x, -2.0, 1e-12);
+  EXPECT_EQ(m.offset(), Pose2{});
+  // Template 0 seen where the pose cells are far from its experience → a new experience.
+  e = m.on_cycle(0, 0, -1, false, 2, 3, 18, cells, 4000);
+  EXPECT_EQ(e.type, EventType::NewExperience);
+  EXPECT_EQ(m.size(), 4);
+}
+
+TEST(ExperienceMap, SerialisationRoundTripsExactly) {
+  const PoseCells cells{PoseCellParams{}};
+  ExperienceMap m;
+  m.on_cycle(0, 0, 0, true, 10, 10, 0, cells, 1);
+  m.integrate(0.3, 0.1, 0.2, 1.0);
+  m.on_cycle(1, 1, 1, false, 13, 11, 2, cells, 2);
+  m.integrate(0.05, 0.0, 0.0, 1.0);
+  std::vector<uint8_t> a, b;
+  m.serialise(a);
+  ExperienceMap r;
+  size_t pos = 0;
+  r.deserialise(a, pos);
+  EXPECT_EQ(pos, a.size());
+  r.serialise(b);
+  EXPECT_EQ(a, b);
+  EXPECT_EQ(r.current_id(), 1);
+  EXPECT_EQ(r.offset(), m.offset());
+  a[7] = 0xff;  // corrupt the experience count (its most significant byte)
+  pos = 0;
+  ExperienceMap bad;
+  EXPECT_THROW(bad.deserialise(a, pos), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace whiskeye::slam

@@ -1,0 +1,144 @@
+// Pose cells: path integration in every direction, rotation, wrap-around, stability, injection.
+#include "whiskeye/slam/pose_cells.h"
+
+#include "whiskeye/common/se2.h"
+
+#include <gtest/gtest.h>
+
+namespace whiskeye::slam {
+namespace {
+
+double wrapped(double d, int n) {
+  d = std::fmod(d, static_cast<double>(n));
+  if (d > n / 2.0) d -= n;
+  if (d < -n / 2.0) d += n;
+  return d;
+}
+
+struct Best {
+  double x, y, t;
+};
+Best best(const PoseCells& pc) {
+  Best b{};
+  pc.best(b.x, b.y, b.t);
+  return b;
+}
+
+PoseCells settled() {
+  PoseCells pc{PoseCellParams{}};
+  for (int i = 0; i < 20; ++i) pc.step(0, 0, 0, 0.1);
+  return pc;
+}
+
+// Moves for `seconds` with body velocity (vx, vy) and checks the packet moved by R(heading)·v·t.
+void expect_moves(PoseCells pc, double vx, double vy, double seconds, double dt, double min_fraction = 0.9) {
+  const Best b0 = best(pc);
+  const double heading = b0.t * kTwoPi / pc.params().dim_theta;
+  const int steps = static_cast<int>(std::lround(seconds / dt));
+  for (int i = 0; i < steps; ++i) pc.step(vx, vy, 0.0, dt);
+  const Best b1 = best(pc);
+  const double cs = pc.params().cell_size;
+  const double ex = (std::cos(heading) * vx - std::sin(heading) * vy) * seconds / cs;
+  const double ey = (std::sin(heading) * vx + std::cos(heading) * vy) * seconds / cs;
+  const double tol = 0.08 * std::hypot(ex, ey) + 0.15;
+  EXPECT_NEAR(wrapped(b1.x - b0.x, pc.params().dim_xy), wrapped(ex, pc.params().dim_xy), tol);
+  EXPECT_NEAR(wrapped(b1.y - b0.y, pc.params().dim_xy), wrapped(ey, pc.params().dim_xy), tol);
+  EXPECT_NEAR(wrapped(b1.t - b0.t, pc.params().dim_theta), 0.0, 0.2);
+  EXPECT_GT(pc.packet_fraction(), min_fraction);
+}
+
+TEST(PoseCells, StartsAsOnePacketAtTheCentre) {
+  const PoseCells pc = settled();
+  const Best b = best(pc);
+  EXPECT_NEAR(b.x, 10.0, 1e-6);
+  EXPECT_NEAR(b.y, 10.0, 1e-6);
+  EXPECT_NEAR(wrapped(b.t, 36), 0.0, 1e-6);
+  EXPECT_GT(pc.packet_fraction(), 0.95);
+}
+
+TEST(PoseCells, ForwardMotionMovesThePacketAlongTheHeading) { expect_moves(settled(), 0.1, 0.0, 5.0, 0.1); }
+TEST(PoseCells, SidewaysMotionMovesThePacketToTheLeft) { expect_moves(settled(), 0.0, 0.1, 5.0, 0.1); }
+TEST(PoseCells, BackwardsAndRightMotionMovesThePacketBothWays) { expect_moves(settled(), -0.08, -0.06, 5.0, 0.1); }
+TEST(PoseCells, DiagonalMotionMovesThePacketDiagonally) { expect_moves(settled(), 0.1, 0.1, 4.0, 0.1); }
+
+TEST(PoseCells, RotationTurnsThePacketAndThenForwardFollowsTheNewHeading) {
+  PoseCells pc = settled();
+  for (int i = 0; i < 50; ++i) pc.step(0, 0, kPi / 2 / 5.0, 0.1);  // 90° in 5 s
+  const Best b = best(pc);
+  EXPECT_NEAR(wrapped(b.t, 36), 9.0, 0.3);
+  EXPECT_NEAR(b.x, 10.0, 0.2);
+  EXPECT_NEAR(b.y, 10.0, 0.2);
+  expect_moves(pc, 0.1, 0.0, 5.0, 0.1);  // now along +y
+  expect_moves(pc, 0.0, 0.1, 5.0, 0.1);  // left of +y is −x
+}
+
+TEST(PoseCells, ThePacketWrapsAroundTheEdges) {
+  PoseCells pc = settled();
+  for (int i = 0; i < 300; ++i) pc.step(0.1, 0.0, 0.0, 0.1);  // 30 cells on a 21-cell ring
+  const Best b = best(pc);
+  EXPECT_NEAR(wrapped(b.x - (10.0 + 30.0), 21), 0.0, 0.08 * 30);
+  EXPECT_GT(pc.packet_fraction(), 0.9);
+  for (int i = 0; i < 100; ++i) pc.step(0, 0, -kPi / 5.0, 0.1);  // two full turns clockwise
+  EXPECT_NEAR(wrapped(best(pc).t, 36), 0.0, 0.4);
+}
+
+TEST(PoseCells, FastMotionIsIntegratedCorrectly) {
+  // 3.5 cells per step: OpenRatSLAM's one-cell assumption would break; here it is exact. The θ
+  // layers of the packet (±20°) fan out by 3.5·sin 20° ≈ 1.2 cells in one step, so right after the
+  // step a little less of the activity sits in the best-estimate box.
+  expect_moves(settled(), 3.5, 0.0, 0.5, 0.1, 0.75);
+  expect_moves(settled(), 0.0, -2.2, 0.5, 0.1, 0.75);
+}
+
+TEST(PoseCells, StaysASinglePacketOverTenThousandSteps) {
+  PoseCells pc = settled();
+  for (int i = 0; i < 10000; ++i) {
+    // A wandering trajectory: forward, sideways and turning, changing every few seconds.
+    const double ph = i * 0.01;
+    pc.step(0.15 * std::cos(0.3 * ph), 0.1 * std::sin(0.7 * ph), 0.4 * std::sin(0.2 * ph), 0.1);
+    if (i % 1000 == 999) {
+      ASSERT_GT(pc.packet_fraction(), 0.9) << "step " << i;
+    }
+  }
+  double total = 0.0;
+  for (float v : pc.activity()) total += v;
+  EXPECT_NEAR(total, 1.0, 1e-4);
+}
+
+TEST(PoseCells, RepeatedInjectionMovesTheBestEstimate) {
+  PoseCells pc = settled();
+  for (int i = 0; i < 30; ++i) {
+    pc.inject(3, 15, 20, 0.1);
+    pc.step(0, 0, 0, 0.1);
+  }
+  const Best b = best(pc);
+  EXPECT_NEAR(b.x, 3.0, 0.5);
+  EXPECT_NEAR(b.y, 15.0, 0.5);
+  EXPECT_NEAR(b.t, 20.0, 0.5);
+}
+
+TEST(PoseCells, DistanceWrapsOnEveryAxis) {
+  const PoseCells pc{PoseCellParams{}};
+  EXPECT_NEAR(pc.distance(0.5, 0, 0, 20.5, 0, 0), 1.0, 1e-12);
+  EXPECT_NEAR(pc.distance(0, 0, 35, 0, 0, 1), 2.0, 1e-12);
+  EXPECT_NEAR(pc.distance(1, 2, 3, 4, 6, 3), 5.0, 1e-12);
+}
+
+TEST(PoseCells, SerialisationRestoresTheActivityExactly) {
+  PoseCells a = settled();
+  a.step(0.1, 0.05, 0.1, 0.1);
+  std::vector<uint8_t> blob;
+  a.serialise(blob);
+  PoseCells b{PoseCellParams{}};
+  size_t pos = 0;
+  b.deserialise(blob, pos);
+  EXPECT_EQ(a.activity(), b.activity());
+  PoseCellParams other;
+  other.dim_xy = 30;
+  PoseCells c{other};
+  pos = 0;
+  EXPECT_THROW(c.deserialise(blob, pos), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace whiskeye::slam

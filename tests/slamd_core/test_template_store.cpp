@@ -1,0 +1,203 @@
+// Template matching: self-match, shifts, per-template minima, terms per mode, σ estimation, size.
+#include "whiskeye/slam/template_store.h"
+
+#include "synthetic.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace whiskeye::slam {
+namespace {
+
+VisualTemplate random_template(uint32_t seed, int w = 64, int h = 40) {
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> u(0, 255);
+  VisualTemplate t;
+  t.width = w;
+  t.height = h;
+  t.pixels.resize(static_cast<size_t>(w * h));
+  double sum = 0;
+  for (auto& p : t.pixels) {
+    p = static_cast<uint8_t>(u(rng));
+    sum += p;
+  }
+  t.mean = static_cast<float>(sum / (w * h) / 255.0);
+  return t;
+}
+
+// The scene moved right by k columns: current column c shows what stored column c − k showed.
+VisualTemplate shifted(const VisualTemplate& a, int k, uint32_t seed) {
+  VisualTemplate b = random_template(seed);  // fresh content where nothing overlaps
+  for (int y = 0; y < a.height; ++y)
+    for (int x = 0; x < a.width; ++x) {
+      const int src = x - k;
+      if (src >= 0 && src < a.width) b.pixels[static_cast<size_t>(y * a.width + x)] = a.pixels[static_cast<size_t>(y * a.width + src)];
+    }
+  return b;
+}
+
+TactileTemplate random_tactile(uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  TactileTemplate t;
+  std::array<double, kPfhBins> h{};
+  double s = 0;
+  for (auto& v : h) s += (v = u(rng) < 0.2 ? u(rng) : 0.0);
+  for (int i = 0; i < kPfhBins; ++i) t.pfh[static_cast<size_t>(i)] = static_cast<uint16_t>(std::lround(h[static_cast<size_t>(i)] / s * 65535));
+  for (auto& v : t.sda) v = u(rng) < 0.5 ? static_cast<float>(2.0 * u(rng)) : 0.0f;
+  t.num_contacts = 12;
+  return t;
+}
+
+TEST(TemplateMatch, ATemplateMatchesItselfWithErrorZero) {
+  TemplateStore s(64, 40);
+  const VisualTemplate v = random_template(1);
+  const TactileTemplate t = random_tactile(2);
+  s.add({&v, &t}, 0, 0, 0);
+  for (const Terms terms : {Terms{true, false}, Terms{false, true}, Terms{true, true}}) {
+    const BestMatch m = s.match({&v, &t}, terms, MatchParams{});
+    EXPECT_EQ(m.id, 0);
+    EXPECT_EQ(m.error, 0.0);
+    EXPECT_EQ(m.shift, 0);
+  }
+}
+
+TEST(TemplateMatch, AColumnShiftedImageMatchesAtTheRightShift) {
+  TemplateStore s(64, 40);
+  const VisualTemplate a = random_template(4);
+  s.add({&a, nullptr}, 0, 0, 0);
+  for (int k = -5; k <= 5; ++k) {
+    const VisualTemplate b = shifted(a, k, 100 + static_cast<uint32_t>(k + 5));
+    const BestMatch m = s.match({&b, nullptr}, {true, false}, MatchParams{});
+    EXPECT_EQ(m.shift, k);
+    EXPECT_EQ(m.error, 0.0) << k;  // the overlap is identical
+  }
+  // Beyond the allowed shift no overlap is identical.
+  const VisualTemplate far = shifted(a, 8, 7);
+  EXPECT_GT(s.match({&far, nullptr}, {true, false}, MatchParams{}).error, 0.1);
+}
+
+TEST(TemplateMatch, ShiftStepSkipsOddShifts) {
+  TemplateStore s(64, 40);
+  const VisualTemplate a = random_template(5);
+  s.add({&a, nullptr}, 0, 0, 0);
+  MatchParams p;
+  p.shift_step = 2;
+  const VisualTemplate b4 = shifted(a, 4, 8), b3 = shifted(a, 3, 9);
+  EXPECT_EQ(s.match({&b4, nullptr}, {true, false}, p).shift, 4);
+  EXPECT_GT(s.match({&b3, nullptr}, {true, false}, p).error, 0.1);
+}
+
+// The original code never reset the visual minimum between templates, so a template's visual error
+// could be that of an earlier, visually better template. Here: template 0 looks the same but feels
+// different; template 1 feels the same but looks very different. With the defect template 1 would
+// inherit template 0's zero visual error and win; correctly, template 0 wins.
+TEST(TemplateMatch, EveryTemplateGetsItsOwnVisualMinimum) {
+  TemplateStore s(64, 40);
+  const VisualTemplate v = random_template(10);
+  const VisualTemplate other = random_template(11);
+  const TactileTemplate t = random_tactile(12);
+  TactileTemplate t_other = t;  // feels a little different
+  t_other.sda[0] += 1.0f;
+  s.add({&v, &t_other}, 0, 0, 0);
+  s.add({&other, &t}, 0, 0, 0);
+  const MatchParams p;
+  const BestMatch m = s.match({&v, &t}, {true, true}, p);
+  EXPECT_EQ(m.id, 0);
+  EXPECT_EQ(m.visual, 0.0);
+  // And template 1 on its own reports its own (large) visual term.
+  TemplateStore only1(64, 40);
+  only1.add({&other, &t}, 0, 0, 0);
+  const BestMatch m1 = only1.match({&v, &t}, {true, true}, p);
+  EXPECT_GT(m1.visual, m.pfh + m.sda);
+  EXPECT_EQ(m1.pfh + m1.sda, 0.0);
+}
+
+TEST(TemplateMatch, OnlyTheTermsInUseCount) {
+  TemplateStore s(64, 40);
+  const VisualTemplate v = random_template(20), v2 = random_template(21);
+  const TactileTemplate t = random_tactile(22), t2 = random_tactile(23);
+  s.add({&v, &t2}, 0, 0, 0);   // same look, other feel
+  s.add({&v2, &t}, 0, 0, 0);   // other look, same feel
+  EXPECT_EQ(s.match({&v, &t}, {true, false}, MatchParams{}).id, 0);
+  EXPECT_EQ(s.match({&v, &t}, {false, true}, MatchParams{}).id, 1);
+  const BestMatch vis = s.match({&v, &t}, {true, false}, MatchParams{});
+  EXPECT_EQ(vis.pfh, 0.0);
+  EXPECT_EQ(vis.sda, 0.0);
+}
+
+TEST(TemplateMatch, TemplatesLackingAPartInUseAreNotCandidates) {
+  TemplateStore s(64, 40);
+  const VisualTemplate v = random_template(30);
+  const TactileTemplate t = random_tactile(31);
+  s.add({nullptr, &t}, 0, 0, 0);
+  EXPECT_EQ(s.match({&v, &t}, {true, true}, MatchParams{}).id, -1);
+  EXPECT_EQ(s.match({&v, &t}, {false, true}, MatchParams{}).id, 0);
+}
+
+TEST(TemplateMatch, ErrorTermsAreDividedByTheirSigmas) {
+  TemplateStore s(64, 40);
+  const VisualTemplate v = random_template(40), v2 = random_template(41);
+  const TactileTemplate t = random_tactile(42), t2 = random_tactile(43);
+  s.add({&v2, &t2}, 0, 0, 0);
+  MatchParams p;
+  const BestMatch a = s.match({&v, &t}, {true, true}, p);
+  p.sigma_visual *= 2;
+  p.sigma_pfh *= 4;
+  p.sigma_sda *= 8;
+  const BestMatch b = s.match({&v, &t}, {true, true}, p);
+  EXPECT_NEAR(b.visual, a.visual / 2, 1e-12);
+  EXPECT_NEAR(b.pfh, a.pfh / 4, 1e-12);
+  EXPECT_NEAR(b.sda, a.sda / 8, 1e-12);
+  EXPECT_NEAR(a.error, a.visual + a.pfh + a.sda, 1e-12);
+}
+
+TEST(TemplateMatch, SigmaEstimateIsTheSpreadOfPairwiseDistances) {
+  TemplateStore s(64, 40);
+  // Three templates differing only in SDA: pairwise SDA distances 1, 3, 2 → sd = 1.
+  VisualTemplate v = random_template(50);
+  TactileTemplate t0{}, t1{}, t2{};
+  t1.sda[0] = 1.0f;
+  t2.sda[0] = 3.0f;
+  s.add({&v, &t0}, 0, 0, 0);
+  s.add({&v, &t1}, 0, 0, 0);
+  s.add({&v, &t2}, 0, 0, 0);
+  const SigmaEstimate e = s.estimate_sigmas(MatchParams{});
+  EXPECT_EQ(e.pairs, 3);
+  EXPECT_NEAR(e.sigma_sda, 1.0, 1e-12);
+  EXPECT_EQ(e.sigma_visual, 0.0);
+  EXPECT_EQ(e.sigma_pfh, 0.0);
+}
+
+TEST(TemplateMatch, StoresATemplateInAtMostThreeKilobytes) {
+  TemplateStore s(64, 40);
+  std::vector<uint8_t> empty, full;
+  s.serialise(empty);
+  const VisualTemplate v = random_template(60);
+  const TactileTemplate t = random_tactile(61);
+  for (int i = 0; i < 100; ++i) s.add({&v, &t}, 1, 2, 3);
+  s.serialise(full);
+  EXPECT_LE(static_cast<double>(full.size() - empty.size()) / 100.0, 3072.0);
+}
+
+TEST(TemplateMatch, SerialisationRoundTripsExactly) {
+  TemplateStore s(64, 40);
+  const VisualTemplate v = random_template(70);
+  const TactileTemplate t = random_tactile(71);
+  s.add({&v, &t}, 1.5, 2.5, 3.5);
+  s.add({nullptr, &t}, 4, 5, 6);
+  s.bump_decay(0, 0.5);
+  std::vector<uint8_t> blob;
+  s.serialise(blob);
+  size_t pos = 0;
+  const TemplateStore r = TemplateStore::deserialise(blob, pos);
+  EXPECT_EQ(pos, blob.size());
+  EXPECT_TRUE(r == s);
+  blob.resize(blob.size() - 3);
+  pos = 0;
+  EXPECT_THROW(TemplateStore::deserialise(blob, pos), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace whiskeye::slam

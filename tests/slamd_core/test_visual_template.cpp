@@ -1,0 +1,140 @@
+// Visual template: formats, crop/subsample/normalise, and refusal of bad frames.
+#include "whiskeye/slam/visual_template.h"
+
+#include "synthetic.h"
+
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+namespace whiskeye::slam {
+namespace {
+
+VisualParams plain_params() {
+  VisualParams p;
+  p.crop_x = p.crop_y = 0;
+  p.crop_width = p.crop_height = 0;
+  p.global_normalisation = 0.0;
+  return p;
+}
+
+ImageView view(const std::vector<uint8_t>& d, int w, int h, int stride, uint32_t fmt) {
+  ImageView v;
+  v.width = w;
+  v.height = h;
+  v.row_stride = stride;
+  v.pixelformat = fmt;
+  v.data = d;
+  return v;
+}
+
+TEST(VisualTemplate, BlockAveragesToTemplateSize) {
+  // 640×400 image: left half black, right half white → 64×40 template, left 32 columns 0, right 255.
+  std::vector<uint8_t> img(640 * 400, 0);
+  for (int y = 0; y < 400; ++y)
+    for (int x = 320; x < 640; ++x) img[static_cast<size_t>(y * 640 + x)] = 255;
+  const VisualTemplate t = make_visual_template(view(img, 640, 400, 640, kPixGrey), plain_params());
+  ASSERT_EQ(t.width, 64);
+  ASSERT_EQ(t.height, 40);
+  EXPECT_EQ(t.pixels[0], 0);
+  EXPECT_EQ(t.pixels[31], 0);
+  EXPECT_EQ(t.pixels[32], 255);
+  EXPECT_EQ(t.pixels[39 * 64 + 63], 255);
+  EXPECT_NEAR(t.mean, 0.5, 1e-6);
+}
+
+TEST(VisualTemplate, CropKeepsOnlyTheRequestedRectangle) {
+  std::vector<uint8_t> img(640 * 480, 0);
+  for (int y = 300; y < 480; ++y)
+    for (int x = 0; x < 640; ++x) img[static_cast<size_t>(y * 640 + x)] = 255;  // the "floor"
+  VisualParams p = plain_params();
+  p.crop_width = 640;
+  p.crop_height = 300;
+  const VisualTemplate t = make_visual_template(view(img, 640, 480, 640, kPixGrey), p);
+  EXPECT_EQ(t.mean, 0.0f);
+}
+
+TEST(VisualTemplate, GlobalNormalisationSetsTheMean) {
+  const std::vector<uint8_t> img = test::random_image(640, 400, 3);
+  std::vector<uint8_t> dark(img.size());
+  for (size_t i = 0; i < img.size(); ++i) dark[i] = static_cast<uint8_t>(img[i] / 2);
+  VisualParams p = plain_params();
+  p.global_normalisation = 0.4;
+  const VisualTemplate a = make_visual_template(view(img, 640, 400, 640, kPixGrey), p);
+  const VisualTemplate b = make_visual_template(view(dark, 640, 400, 640, kPixGrey), p);
+  EXPECT_NEAR(a.mean, 0.4, 0.02);
+  // Halving the brightness changes the template by at most rounding.
+  double diff = 0;
+  for (size_t i = 0; i < a.pixels.size(); ++i) diff += std::abs(a.pixels[i] - b.pixels[i]);
+  EXPECT_LT(diff / static_cast<double>(a.pixels.size()), 2.0);
+}
+
+TEST(VisualTemplate, AllPixelFormatsGiveTheSameTemplate) {
+  const int w = 640, h = 400;
+  const std::vector<uint8_t> grey = test::random_image(w, h, 5);
+  std::vector<uint8_t> rgb(static_cast<size_t>(w * h * 3)), yuyv(static_cast<size_t>(w * h * 2));
+  for (int i = 0; i < w * h; ++i) {
+    for (int c = 0; c < 3; ++c) rgb[static_cast<size_t>(i * 3 + c)] = grey[static_cast<size_t>(i)];
+    yuyv[static_cast<size_t>(i * 2)] = grey[static_cast<size_t>(i)];
+    yuyv[static_cast<size_t>(i * 2 + 1)] = 128;
+  }
+  // Padded rows: the stride is honoured.
+  std::vector<uint8_t> padded(static_cast<size_t>((w + 16) * h), 77);
+  for (int y = 0; y < h; ++y)
+    std::copy_n(&grey[static_cast<size_t>(y * w)], w, &padded[static_cast<size_t>(y * (w + 16))]);
+  std::vector<uint8_t> jpeg;
+  cv::imencode(".jpg", cv::Mat(h, w, CV_8UC1, const_cast<uint8_t*>(grey.data())), jpeg, {cv::IMWRITE_JPEG_QUALITY, 98});
+
+  const VisualParams p = plain_params();
+  const VisualTemplate ref = make_visual_template(view(grey, w, h, w, kPixGrey), p);
+  for (const auto& [name, t] : {std::pair{"padded", make_visual_template(view(padded, w, h, w + 16, kPixGrey), p)},
+                               std::pair{"rgb", make_visual_template(view(rgb, w, h, w * 3, kPixRgb24), p)},
+                               std::pair{"bgr", make_visual_template(view(rgb, w, h, w * 3, kPixBgr24), p)},
+                               std::pair{"yuyv", make_visual_template(view(yuyv, w, h, w * 2, kPixYuyv), p)},
+                               std::pair{"mjpeg", make_visual_template(view(jpeg, w, h, 0, kPixMjpeg), p)}}) {
+    ASSERT_EQ(t.pixels.size(), ref.pixels.size()) << name;
+    int worst = 0;
+    for (size_t i = 0; i < ref.pixels.size(); ++i) worst = std::max(worst, std::abs(t.pixels[i] - ref.pixels[i]));
+    EXPECT_LE(worst, 3) << name;
+  }
+}
+
+TEST(VisualTemplate, RefusesBadFramesWithAReason) {
+  const std::vector<uint8_t> small(100, 0);
+  const VisualParams p = plain_params();
+  EXPECT_THROW(make_visual_template(view(small, 640, 480, 640, kPixGrey), p), InputError);
+  EXPECT_THROW(make_visual_template(view(small, 10, 10, 5, kPixGrey), p), InputError);
+  EXPECT_THROW(make_visual_template(view(small, 10, 10, 10, fourcc('H', '2', '6', '4')), p), InputError);
+  EXPECT_THROW(make_visual_template(view(small, 10, 10, 0, kPixMjpeg), p), InputError);
+  EXPECT_THROW(make_visual_template(view(small, 0, 10, 10, kPixGrey), p), InputError);
+  try {
+    make_visual_template(view(small, 10, 10, 10, fourcc('H', '2', '6', '4')), p);
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("H264"), std::string::npos) << e.what();
+  }
+}
+
+TEST(VisualTemplate, PatchNormalisationRemovesAnIlluminationGradient) {
+  const int w = 640, h = 400;
+  const std::vector<uint8_t> img = test::random_image(w, h, 9);
+  std::vector<uint8_t> lit(img.size());
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const double g = 0.6 + 0.4 * x / w;  // brighter to the right
+      lit[static_cast<size_t>(y * w + x)] = static_cast<uint8_t>(img[static_cast<size_t>(y * w + x)] * g);
+    }
+  VisualParams p = plain_params();
+  auto mean_diff = [&](const VisualParams& q) {
+    const VisualTemplate a = make_visual_template(view(img, w, h, w, kPixGrey), q);
+    const VisualTemplate b = make_visual_template(view(lit, w, h, w, kPixGrey), q);
+    double d = 0;
+    for (size_t i = 0; i < a.pixels.size(); ++i) d += std::abs(a.pixels[i] - b.pixels[i]);
+    return d / static_cast<double>(a.pixels.size());
+  };
+  const double plain = mean_diff(p);
+  p.patch_radius = 3;
+  EXPECT_LT(mean_diff(p), 0.5 * plain);
+}
+
+}  // namespace
+}  // namespace whiskeye::slam

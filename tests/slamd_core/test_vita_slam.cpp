@@ -1,0 +1,230 @@
+// The ViTa-SLAM cycle: modes, degraded senses, loop closure, parameters and exact checkpoints.
+#include "whiskeye/slam/vita_slam.h"
+
+#include "synthetic.h"
+
+#include <gtest/gtest.h>
+
+#include <map>
+
+namespace whiskeye::slam {
+namespace {
+
+// A place = an image and a whisk cycle, both generated from its number.
+struct Place {
+  std::vector<uint8_t> pixels;
+  ImageView image;
+  WhiskCycleInput whisk;
+};
+
+class World {
+ public:
+  const Place& place(int k) {
+    auto it = places_.find(k);
+    if (it == places_.end()) {
+      Place p;
+      p.pixels = test::random_image(640, 480, static_cast<uint32_t>(1000 + k));
+      p.whisk = test::whisk_cycle(geometry, test::random_contacts(static_cast<uint32_t>(k + 1), 8 + k % 5), 0.003,
+                                  static_cast<uint32_t>(k));
+      it = places_.emplace(k, std::move(p)).first;
+      it->second.image = ImageView{0, 640, 480, 640, kPixGrey, it->second.pixels};
+    }
+    return it->second;
+  }
+  const RobotGeometry geometry = default_robot_geometry();
+
+ private:
+  std::map<int, Place> places_;
+};
+
+CycleInput input(const Place& p, int64_t cycle, std::vector<OdometrySample> odo = {}) {
+  CycleInput in;
+  in.cycle = cycle;
+  in.utime = cycle * 1000000;
+  in.image = &p.image;
+  in.whisk = &p.whisk;
+  in.odometry = std::move(odo);
+  return in;
+}
+
+// Odometry for one 1 s cycle: 10 samples of constant body velocity.
+std::vector<OdometrySample> odometry(int64_t cycle, double vx, double vy, double omega) {
+  std::vector<OdometrySample> out;
+  for (int i = 1; i <= 10; ++i) out.push_back({cycle * 1000000 - 1000000 + i * 100000, vx, vy, omega});
+  return out;
+}
+
+TEST(VitaSlam, EachModeMakesANewTemplateForANovelViewAndMatchesARepeatedOne) {
+  World w;
+  for (Mode mode : {Mode::Visual, Mode::Tactile, Mode::Vita}) {
+    SCOPED_TRACE(to_string(mode));
+    SlamParams p;
+    p.mode = mode;
+    VitaSlam slam(p, w.geometry);
+    const CycleResult a = slam.process_cycle(input(w.place(0), 1));
+    EXPECT_TRUE(a.match.is_new);
+    EXPECT_EQ(a.match.template_id, 0);
+    const CycleResult b = slam.process_cycle(input(w.place(1), 2));
+    EXPECT_TRUE(b.match.is_new);
+    EXPECT_EQ(b.match.template_id, 1);
+    const CycleResult c = slam.process_cycle(input(w.place(0), 3));
+    EXPECT_FALSE(c.match.is_new);
+    EXPECT_EQ(c.match.template_id, 0);
+    EXPECT_EQ(c.match.error, 0.0);
+    EXPECT_EQ(c.match.visual_used, mode != Mode::Tactile);
+    EXPECT_EQ(c.match.tactile_used, mode != Mode::Visual);
+    EXPECT_EQ(c.num_templates, 2);
+    EXPECT_EQ(slam.map().size(), 2);
+    // Templates hold only the parts their mode uses.
+    EXPECT_EQ(slam.templates().has_visual(0), mode != Mode::Tactile);
+    EXPECT_EQ(slam.templates().has_tactile(0), mode != Mode::Visual);
+  }
+}
+
+TEST(VitaSlam, AMissingSenseDegradesToTheOtherAndNeverStops) {
+  World w;
+  SlamParams p;
+  VitaSlam slam(p, w.geometry);
+  slam.process_cycle(input(w.place(0), 1));
+  // No camera frame: tactile terms only, and the touch alone recognises the place.
+  CycleInput no_image = input(w.place(0), 2);
+  no_image.image = nullptr;
+  const CycleResult r1 = slam.process_cycle(no_image);
+  EXPECT_FALSE(r1.match.visual_used);
+  EXPECT_TRUE(r1.match.tactile_used);
+  EXPECT_EQ(r1.match.template_id, 0);
+  // A whisk cycle without contact: vision alone.
+  const WhiskCycleInput nothing = test::whisk_cycle(w.geometry, {}, 0.003, 5);
+  CycleInput no_touch = input(w.place(0), 3);
+  no_touch.whisk = &nothing;
+  const CycleResult r2 = slam.process_cycle(no_touch);
+  EXPECT_TRUE(r2.match.visual_used);
+  EXPECT_FALSE(r2.match.tactile_used);
+  EXPECT_EQ(r2.match.template_id, 0);
+  EXPECT_FALSE(r2.dense);
+  // Neither: no template, the map stays where it is, the pose still follows odometry.
+  CycleInput none;
+  none.utime = 4000000;
+  none.odometry = odometry(4, 0.1, 0.0, 0.0);
+  const CycleResult r3 = slam.process_cycle(none);
+  EXPECT_EQ(r3.match.template_id, -1);
+  EXPECT_EQ(r3.event.type, EventType::SameExperience);
+  EXPECT_EQ(r3.experience_id, 0);
+  EXPECT_NEAR(r3.pose.x, 0.09, 1e-9);  // 9 of the 10 samples have a previous sample to integrate from
+}
+
+TEST(VitaSlam, ABadFrameIsCountedAndTheCycleGoesOn) {
+  World w;
+  VitaSlam slam(SlamParams{}, w.geometry);
+  const std::vector<uint8_t> junk(10, 0);
+  const ImageView bad{0, 640, 480, 640, kPixMjpeg, junk};
+  CycleInput in = input(w.place(0), 1);
+  in.image = &bad;
+  const CycleResult r = slam.process_cycle(in);
+  EXPECT_NE(r.input_warning.find("MJPEG"), std::string::npos) << r.input_warning;
+  EXPECT_EQ(slam.stats().bad_images, 1);
+  EXPECT_TRUE(r.match.tactile_used);
+  EXPECT_EQ(r.match.template_id, 0);
+}
+
+TEST(VitaSlam, RevisitingPlacesAroundALoopRelocalises) {
+  World w;
+  SlamParams p;
+  p.mode = Mode::Visual;
+  VitaSlam slam(p, w.geometry);
+  // 12 places on a circle of radius 1 m, 1 s apart; the robot faces outwards and moves sideways
+  // (the paper's trajectory): vy = ω·r, ω = 2π/12 per second.
+  const double omega = kTwoPi / 12.0;
+  int relocalisations = 0;
+  for (int c = 1; c <= 36; ++c) {
+    const CycleResult r = slam.process_cycle(input(w.place((c - 1) % 12), c, odometry(c, 0.0, omega * 1.0, omega)));
+    if (c > 12) {
+      EXPECT_FALSE(r.match.is_new) << c;
+      relocalisations += r.event.type == EventType::Relocalise;
+    }
+  }
+  EXPECT_EQ(slam.templates().size(), 12);
+  EXPECT_GE(relocalisations, 1);
+  EXPECT_LE(slam.map().size(), 14);
+}
+
+TEST(VitaSlam, ARestoredCheckpointProducesByteIdenticalResults) {
+  World w;
+  const SlamParams p;
+  VitaSlam a(p, w.geometry);
+  auto run = [&](VitaSlam& s, int c) {
+    return s.process_cycle(input(w.place((c * 5) % 7), c, odometry(c, 0.1, 0.05, 0.3)));
+  };
+  for (int c = 1; c <= 10; ++c) run(a, c);
+  const std::vector<uint8_t> blob = a.serialise();
+  VitaSlam b = VitaSlam::deserialise(blob, p, w.geometry);
+  EXPECT_EQ(b.serialise(), blob);
+  for (int c = 11; c <= 20; ++c) {
+    const CycleResult ra = run(a, c), rb = run(b, c);
+    EXPECT_EQ(ra.match.template_id, rb.match.template_id);
+    EXPECT_EQ(ra.match.error, rb.match.error);
+    EXPECT_EQ(ra.event.type, rb.event.type);
+    EXPECT_EQ(ra.event.to_id, rb.event.to_id);
+    EXPECT_EQ(ra.pose, rb.pose);
+    EXPECT_EQ(ra.pc_x, rb.pc_x);
+    EXPECT_EQ(ra.pc_theta, rb.pc_theta);
+  }
+  EXPECT_EQ(a.serialise(), b.serialise());
+  EXPECT_EQ(a.dead_reckon({0.1, 0, 0}), b.dead_reckon({0.1, 0, 0}));
+}
+
+TEST(VitaSlam, RefusesABadCheckpoint) {
+  World w;
+  const SlamParams p;
+  VitaSlam a(p, w.geometry);
+  a.process_cycle(input(w.place(0), 1));
+  std::vector<uint8_t> blob = a.serialise();
+  std::vector<uint8_t> flipped = blob;
+  flipped[flipped.size() / 2] ^= 0x01;
+  EXPECT_THROW(VitaSlam::deserialise(flipped, p, w.geometry), std::runtime_error);
+  EXPECT_THROW(VitaSlam::deserialise(std::span(blob).first(blob.size() - 10), p, w.geometry), std::runtime_error);
+  SlamParams visual = p;
+  visual.mode = Mode::Visual;
+  EXPECT_THROW(VitaSlam::deserialise(blob, visual, w.geometry), std::runtime_error);
+  SlamParams bigger = p;
+  bigger.pose_cells.dim_xy = 30;
+  EXPECT_THROW(VitaSlam::deserialise(blob, bigger, w.geometry), std::runtime_error);
+}
+
+TEST(VitaSlam, DeadReckoningComposesTheCurrentExperienceAndOffsets) {
+  World w;
+  VitaSlam slam(SlamParams{}, w.geometry);
+  slam.process_cycle(input(w.place(0), 1));
+  const Pose2 p = slam.dead_reckon({0.5, 0.0, kPi / 2});
+  EXPECT_NEAR(p.x, 0.5, 1e-12);
+  EXPECT_NEAR(p.theta, kPi / 2, 1e-12);
+}
+
+TEST(SlamParams, LoadFromTheShippedConfigAndRejectUnknownKeys) {
+  const ParamNode root = ParamNode::from_file(std::string(WHISKEYE_SOURCE_DIR) + "/config/slam.yaml");
+  SlamParams p;
+  load(root.section("slam"), p);
+  root.check_no_unknown_keys();
+  EXPECT_EQ(p.mode, Mode::Vita);
+  EXPECT_EQ(p.visual.template_width, 64);
+  EXPECT_EQ(p.pose_cells.dim_xy, 21);
+
+  const ParamNode typo = ParamNode::from_string("slam:\n  match:\n    threshhold_vita: 0.2\n");
+  SlamParams q;
+  load(typo.section("slam"), q);
+  try {
+    typo.check_no_unknown_keys();
+    FAIL() << "unknown key accepted";
+  } catch (const ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("threshhold_vita"), std::string::npos) << e.what();
+  }
+  const ParamNode bad_mode = ParamNode::from_string("slam:\n  mode: sonar\n");
+  EXPECT_THROW(load(bad_mode.section("slam"), q), ParamError);
+  const ParamNode out_of_range = ParamNode::from_string("slam:\n  pose_cells:\n    dim_xy: 2\n");
+  EXPECT_THROW(load(out_of_range.section("slam"), q), ParamError);
+  EXPECT_EQ(parse_mode("tactile"), Mode::Tactile);
+  EXPECT_THROW(parse_mode("Vita"), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace whiskeye::slam
