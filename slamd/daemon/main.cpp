@@ -9,6 +9,7 @@
 #include "whiskeye/common/clock.h"
 #include "whiskeye/common/params.h"
 #include "whiskeye/common/robot_geometry.h"
+#include "whiskeye/common/utime.h"
 #include "whiskeye/slam/vita_slam.h"
 
 #include <CLI/CLI.hpp>

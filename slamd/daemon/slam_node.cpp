@@ -175,10 +175,7 @@ void SlamNode::on_odometry(const odometry_t& msg) {
   out.experience_id = slam_->map().current_id();
   out.template_id = last_template_id_;
   out.mode = mode_code(slam_->params().mode);
-  const auto pc = slam_->pose_cell_peak();
-  out.pose_cell_x = pc[0];
-  out.pose_cell_y = pc[1];
-  out.pose_cell_theta = pc[2];
+  slam_->pose_cells().best(out.pose_cell_x, out.pose_cell_y, out.pose_cell_theta);
   publish(out_, "VITA_POSE", out);
 }
 
@@ -275,8 +272,8 @@ void SlamNode::publish_map(int64_t utime) {
   msg.num_experiences = static_cast<int32_t>(msg.experiences.size());
   for (const auto& l : map.links()) {
     link_t x{};
-    x.from_id = l.from_id;
-    x.to_id = l.to_id;
+    x.from_id = l.from;
+    x.to_id = l.to;
     x.dx = l.delta.x;
     x.dy = l.delta.y;
     x.dtheta = l.delta.theta;
@@ -299,7 +296,7 @@ slam_status_t SlamNode::status(int64_t utime) const {
   s.utime = utime;
   s.mode = mode_code(slam_->params().mode);
   s.cycles = counters_.cycles;
-  s.num_templates = slam_->num_templates();
+  s.num_templates = slam_->templates().size();
   s.num_experiences = static_cast<int32_t>(slam_->map().experiences().size());
   s.num_links = static_cast<int32_t>(slam_->map().links().size());
   if (!latencies_ms_.empty()) {
