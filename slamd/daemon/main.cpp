@@ -133,18 +133,20 @@ int run_replay(const Loaded& cfg, const Options& o) {
     });
   }
   Progress progress;
-  LogEvent ev;
+  LogReader::EventView ev;
   int64_t next_status = INT64_MIN;
   int64_t last_utime = 0;
   int64_t first_utime = INT64_MIN;
   const int64_t t0 = monotonic_us();
+  std::string channel;
   while (reader.next(ev)) {
     if (first_utime == INT64_MIN) first_utime = ev.utime;
     last_utime = ev.utime;
     out.set_time(ev.utime);
     in.set_time(ev.utime);
-    if (ev.channel == "GROUND_TRUTH" || ev.channel == "SIM_CONTACT_TRUTH") out.publish_raw(ev.channel, ev.data);
-    in.publish_raw(ev.channel, ev.data);
+    channel.assign(ev.channel);
+    if (channel == "GROUND_TRUTH" || channel == "SIM_CONTACT_TRUTH") out.publish_raw(channel, ev.data);
+    in.publish_raw(channel, ev.data);
     if (next_status == INT64_MIN) next_status = ev.utime + kUtimePerSecond;
     if (ev.utime >= next_status) {
       node.publish_status(ev.utime);
