@@ -205,7 +205,7 @@ int run_live(const Loaded& cfg, const Options& o) {
   log_line("running in " + slam::to_string(cfg.slam.mode) + " mode, state in " + state_dir);
   int64_t next_tick = monotonic_us();
   while (!g_stop) {
-    if (bus.handle_timeout(100) < 0) {
+    if (bus.handle_timeout(100) < 0 && !g_stop) {  // a signal interrupting the wait is not a failure
       log_line("LCM receive failed");
       break;
     }
