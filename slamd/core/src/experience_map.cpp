@@ -198,6 +198,7 @@ Event ExperienceMap::on_cycle(int template_id, int visual_template_id, int tacti
   const std::vector<int>* candidates =
       static_cast<size_t>(template_id) < by_template_.size() ? &by_template_[static_cast<size_t>(template_id)] : nullptr;
   if (candidates == nullptr || candidates->empty()) {
+    if (frozen_) return ev;
     create();
   } else {
     int nearest = -1;
@@ -210,11 +211,11 @@ Event ExperienceMap::on_cycle(int template_id, int visual_template_id, int tacti
         dmin = d;
       }
     }
-    if (dmin > params_.delta_pc_threshold) {
+    if (dmin > params_.delta_pc_threshold && !frozen_) {
       create();
     } else if (nearest != current_) {
       const int from = current_;
-      if (from >= 0) {
+      if (from >= 0 && !frozen_) {
         bool linked = false;
         for (size_t l = 0; l < lfrom_.size() && !linked; ++l) {
           linked = (lfrom_[l] == from && lto_[l] == nearest) || (lfrom_[l] == nearest && lto_[l] == from);
@@ -225,7 +226,7 @@ Event ExperienceMap::on_cycle(int template_id, int visual_template_id, int tacti
       ev = {EventType::Relocalise, from, nearest};
     }
   }
-  relax(params_.loops);
+  if (!frozen_) relax(params_.loops);
   return ev;
 }
 

@@ -120,7 +120,7 @@ CycleResult VitaSlam::process_cycle(const CycleInput& in) {
         for (int i = 0; i < params_.pose_cells.settle_steps; ++i) cells_.settle();
         cells_.best(pcx, pcy, pct);
       }
-    } else {
+    } else if (!localise_only_) {
       m.template_id = store_.add(q, pcx, pcy, pct);
       m.is_new = true;
     }

@@ -71,6 +71,9 @@ class ExperienceMap {
   void add_link(int from, int to, const Pose2& delta, int64_t utime);
   void set_current(int id, const Pose2& offset = {});
   void relax(int loops);
+  // Frozen: on_cycle never creates experiences or links; a matched template moves the current
+  // experience to its nearest (in pose cells) experience, whatever the distance.
+  void set_frozen(bool frozen) { frozen_ = frozen; }
 
   const ExperienceMapParams& params() const { return params_; }
   void set_params(const ExperienceMapParams& p) { params_ = p; }
@@ -95,6 +98,7 @@ class ExperienceMap {
   std::vector<double> ax_, ay_, as_;  // scratch: per-loop sums of position errors and sin(heading error)
   int current_ = -1;
   Pose2 offset_;
+  bool frozen_ = false;
 };
 
 }  // namespace whiskeye::slam

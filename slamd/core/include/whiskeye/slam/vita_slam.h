@@ -73,6 +73,14 @@ class VitaSlam {
   // Current experience ∘ its odometry offset ∘ the odometry since the last cycle.
   Pose2 dead_reckon(const Pose2& odometry_offset_since_last_cycle) const;
 
+  // Localise in the existing map without growing it (a saved map reused across runs): no new
+  // templates, experiences or links; a matched template re-localises to its nearest experience.
+  void set_localise_only(bool on) {
+    localise_only_ = on;
+    map_.set_frozen(on);
+  }
+  bool localise_only() const { return localise_only_; }
+
   std::vector<uint8_t> serialise() const;
   // Throws std::runtime_error naming the problem: bad magic/version/checksum, truncated data, or
   // dimensions (mode, template size, pose-cell grid) that differ from `params`.
@@ -87,6 +95,7 @@ class VitaSlam {
   SlamStats stats_;
   int64_t last_odometry_utime_ = 0;
   bool have_odometry_time_ = false;
+  bool localise_only_ = false;  // not serialised: a property of the run, not of the map
 };
 
 }  // namespace whiskeye::slam

@@ -1,0 +1,57 @@
+// The simulator's outputs as the real drivers publish them: converts SimSink calls into the LCM
+// messages (WHISKER_SAMPLE, RCP_STATE, WHISK_CYCLE, ODOMETRY, CAMERA) plus the simulator-only
+// GROUND_TRUTH and SIM_CONTACT_TRUTH, and publishes them on a Bus stamped with the sample utime
+// (for a LogWriterBus: the log event time). Not part of the pure library (it knows LCM).
+#pragma once
+
+#include "whiskeye/common/bus.h"
+#include "whiskeye/sim/simulator.h"
+
+#include <whiskeye/image_t.hpp>
+#include <whiskeye/rcp_state_t.hpp>
+#include <whiskeye/whisk_cycle_t.hpp>
+#include <whiskeye/whisker_sample_t.hpp>
+
+#include <functional>
+#include <map>
+#include <string>
+
+namespace whiskeye::sim {
+
+// Nominal raw scales of the simulated sensors (documented in docs/simulator.md):
+constexpr double kRawHallPerUnit = 2000.0;    // raw_x/raw_y = round(deflection · 2000)
+constexpr double kRawThetaPerRad = 10000.0;   // raw_theta = round(θ · 10000), 0.1 mrad counts
+
+whisker_sample_t to_lcm(const rcp::WhiskerSample& s, double saturation);
+rcp_state_t to_lcm(const rcp::ControlOutput& out);
+whisk_cycle_t to_lcm(const rcp::WhiskCycle& c);
+
+class LcmSink : public SimSink {
+ public:
+  // `set_time` stamps the following publications (LogWriterBus::set_time; may be empty).
+  LcmSink(Bus& bus, std::function<void(int64_t)> set_time, bool yuyv, double saturation);
+
+  void whisker_sample(const rcp::WhiskerSample& sample) override;
+  void rcp_state(const rcp::ControlOutput& out) override;
+  void whisk_cycle(const rcp::WhiskCycle& cycle) override;
+  void contact_truth(const ContactTruth& truth) override;
+  void odometry(int64_t utime, int64_t seq, const OdometrySample& odom) override;
+  void ground_truth(int64_t utime, const Pose2& T_world_base) override;
+  void camera(int64_t utime, int64_t seq, const std::vector<uint8_t>& grey, int width, int height) override;
+
+  // Messages published per channel.
+  const std::map<std::string, int64_t>& counts() const { return counts_; }
+
+ private:
+  template <typename T>
+  void put(const std::string& channel, int64_t utime, const T& msg);
+
+  Bus& bus_;
+  std::function<void(int64_t)> set_time_;
+  bool yuyv_;
+  double saturation_;
+  std::map<std::string, int64_t> counts_;
+  image_t image_;
+};
+
+}  // namespace whiskeye::sim

@@ -1,0 +1,103 @@
+// The closed-loop WhiskEye simulation: the robot follows the world's trajectory; every 500 Hz
+// control period the whisker/world geometry gives each whisker its obstacle (first-touch angle and
+// radial distance), the rcp_whisking plant produces θ and deflections, and the real RCP controller
+// commands the next period (closed loop); odometry and ground truth come at 50 Hz and camera frames
+// at the robot's frame rate. Outputs go to a SimSink as plain structs, in time order; vita-sim turns
+// them into LCM messages. Pure: time is the simulated utime, randomness is seeded, no I/O.
+#pragma once
+
+#include "whiskeye/common/robot_geometry.h"
+#include "whiskeye/sim/odometry.h"
+#include "whiskeye/sim/renderer.h"
+#include "whiskeye/sim/whisker_contact.h"
+#include "whiskeye/sim/world.h"
+
+#include <whiskeye/rcp/controller.h>
+#include <whiskeye/rcp/plant.h>
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <vector>
+
+namespace whiskeye::sim {
+
+struct SimParams {
+  int64_t start_utime = 1'700'000'000'000'000;  // fixed default: runs are reproducible
+  double duration = 0.0;          // s; 0 = world.trajectory.laps laps
+  uint64_t seed = 1;
+  int64_t period_us = 2000;       // control period (500 Hz)
+  int odometry_divider = 10;      // ODOMETRY and GROUND_TRUTH every 10 periods (50 Hz)
+  int contact_update_divider = 5; // obstacles recomputed every 5 periods (the head moves < 1 mm)
+  SweepParams sweep;
+};
+
+// The true contacts of one whisk cycle: one point per contact onset, head frame at onset time.
+struct ContactTruth {
+  int64_t utime = 0;  // end of the cycle
+  int64_t cycle = 0;
+  struct Point {
+    int whisker = 0;
+    int64_t utime = 0;
+    Vec3 p_in_head;
+  };
+  std::vector<Point> points;
+};
+
+// Receives the simulation's outputs. Calls come in non-decreasing time order.
+class SimSink {
+ public:
+  virtual ~SimSink() = default;
+  virtual void whisker_sample(const rcp::WhiskerSample& sample) = 0;
+  virtual void rcp_state(const rcp::ControlOutput& out) = 0;
+  virtual void whisk_cycle(const rcp::WhiskCycle& cycle) = 0;
+  virtual void contact_truth(const ContactTruth& truth) = 0;
+  virtual void odometry(int64_t utime, int64_t seq, const OdometrySample& odom) = 0;
+  virtual void ground_truth(int64_t utime, const Pose2& T_world_base) = 0;
+  // 8-bit grey, row-major.
+  virtual void camera(int64_t utime, int64_t seq, const std::vector<uint8_t>& grey, int width, int height) = 0;
+};
+
+// Plant parameters consistent with the robot geometry: lengths from it, and the deflection gain that
+// the per-obstacle stiffness scale maps onto each whisker's bend_gain (see Simulator).
+rcp::PlantParams plant_params_for(const RobotGeometry& robot, rcp::PlantParams base = {});
+
+class Simulator {
+ public:
+  Simulator(const World& world, const RobotGeometry& robot, const rcp::ControllerParams& controller,
+            const rcp::PlantParams& plant, const SimParams& params);
+
+  int64_t total_steps() const { return total_steps_; }
+  int64_t steps_done() const { return step_; }
+  double duration() const;  // s
+  // Advances one control period, delivering its outputs; false once the run is complete.
+  bool step(SimSink& sink);
+
+  const rcp::Controller& controller() const { return controller_; }
+  const rcp::WhiskerPlant& plant() const { return plant_; }
+
+ private:
+  void update_obstacles(const Pose2& T_world_head);
+
+  World world_;
+  RobotGeometry robot_;
+  SimParams params_;
+  rcp::Controller controller_;
+  rcp::WhiskerPlant plant_;
+  Renderer renderer_;
+  FastRng camera_rng_;
+  OdometryModel odometry_;
+  int64_t total_steps_ = 0;
+  int64_t step_ = 0;
+  int64_t camera_period_us_ = 200000;
+  int64_t next_camera_us_ = 0;
+  int64_t camera_seq_ = 0;
+  int64_t odometry_seq_ = 0;
+  rcp::PerWhisker<double> command_{};
+  rcp::PerWhisker<std::optional<WhiskerContact>> contacts_{};
+  rcp::PerWhisker<bool> was_in_contact_{};
+  std::map<int64_t, ContactTruth> truth_;  // by cycle, until the cycle completes
+  std::vector<uint8_t> image_;
+};
+
+}  // namespace whiskeye::sim

@@ -1,0 +1,167 @@
+// The simulated world of vita-sim: a planar arena with heights (2.5-D). Walls and wall-mounted
+// visual landmarks are vertical rectangles over floor segments; tactile landmarks are extruded 2-D
+// shapes (polygons or circles with a height range) within whisker reach; surfaces carry procedural
+// grey-level patterns; lighting has a base brightness and timed sudden changes; the trajectory is a
+// revolution around a centre. Loaded strictly from YAML (config/worlds/*.yaml, format in
+// docs/simulator.md). Pure data + geometry: no I/O besides the loader, no clocks.
+#pragma once
+
+#include "whiskeye/common/params.h"
+#include "whiskeye/common/se2.h"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace whiskeye::sim {
+
+struct Point2 {
+  double x = 0.0;
+  double y = 0.0;
+};
+
+// A procedural grey-level texture over surface coordinates (s along the surface, z height), values
+// 0..1 before lighting.
+struct Pattern {
+  enum class Type { Solid, Stripes, Checker, Blobs };
+  std::string name;
+  Type type = Type::Solid;
+  double low = 0.2;        // dark value
+  double high = 0.8;       // light value (Solid uses high)
+  double period = 0.2;     // m, Stripes: one dark + one light band
+  double duty = 0.5;       // Stripes: dark fraction of a period
+  bool vertical = true;    // Stripes: vertical bands (vary along s) or horizontal (vary along z)
+  double cell = 0.15;      // m, Checker cell size
+  // Blobs: `count` dark discs on a light ground in a square tile of side `period`, repeated;
+  // positions drawn from `seed` at load.
+  int count = 8;
+  double radius = 0.08;    // m
+  uint64_t seed = 1;
+  std::vector<Point2> blob_centres;  // (s, z) within the tile
+
+  // Value at surface coordinates (s, z), 0..1.
+  double value(double s, double z) const;
+  // True when value() does not depend on z (solid, vertical stripes): one value per image column.
+  bool constant_in_z() const { return type == Type::Solid || (type == Type::Stripes && vertical); }
+};
+
+// A vertical rectangle over the floor segment from -> to, z in [z0, z1] (walls and wall landmarks).
+struct Panel {
+  std::string name;
+  Point2 from;
+  Point2 to;
+  double z0 = 0.0;
+  double z1 = 1.0;
+  int pattern = 0;  // index into World::patterns
+};
+
+// An extruded 2-D shape standing on (or above) the floor: a tactile landmark.
+struct Solid {
+  enum class Shape { Polygon, Circle };
+  std::string name;
+  Shape shape = Shape::Polygon;
+  std::vector<Point2> vertices;  // world frame, counter-clockwise (Polygon)
+  Point2 centre;                 // world frame (Circle; bounding centre for polygons)
+  double radius = 0.05;          // m (Circle; bounding radius for polygons)
+  double z0 = 0.0;
+  double z1 = 0.3;
+  int pattern = 0;               // side faces
+  double top_value = 0.6;        // grey level of the top face
+  double stiffness = 1.0;        // scales the whisker deflection (soft < 1)
+  // Perimeter arc length at each vertex (filled by finalize(); ray_solid computes it if empty).
+  std::vector<double> perimeter_at;
+
+  // Sets centre, radius (polygons: bounding circle) and perimeter_at from the vertices.
+  void finalize();
+};
+
+struct LightChange {
+  double start = 0.0;     // s since the simulation start
+  double duration = 0.5;  // s
+  double gain = 2.0;      // brightness multiplier while active
+};
+
+struct Lighting {
+  double brightness = 1.0;  // multiplier on every surface value
+  double ambient = 0.6;     // share of a surface's value independent of the viewing angle
+  double attenuation = 0.05;  // brightness / (1 + attenuation * distance)
+  std::vector<LightChange> changes;
+
+  // Brightness multiplier at time t (s since the start).
+  double gain_at(double t) const;
+};
+
+// The robot revolves around `centre` at `radius` (base origin), heading outwards or inwards, moving
+// counter-clockwise (or clockwise) at `speed` tangentially: a sideways motion for the facing robot.
+struct Trajectory {
+  Point2 centre;
+  double radius = 1.0;          // m
+  double speed = 0.1;           // m/s, tangential
+  double start_angle = 0.0;     // rad, polar angle of the start position around the centre
+  bool outwards = true;         // heading = polar angle (outwards) or polar angle + pi (inwards)
+  bool counter_clockwise = true;
+  int laps = 4;                 // default number of revolutions
+
+  // True base pose at time t (s since the start).
+  Pose2 pose_at(double t) const;
+  // True body-frame velocity (vx, vy, omega), constant along the circle.
+  void body_velocity(double& vx, double& vy, double& omega) const;
+  double lap_time() const;
+};
+
+struct CameraNoise {
+  double sigma = 2.0;     // grey levels (0..255), per-pixel Gaussian-like noise, 1 sigma
+  bool yuyv = true;       // V4L2 format: YUYV (default, neutral chroma) or GREY
+};
+
+struct OdometryNoise {
+  double sigma_v = 0.005;       // m/s, white noise on vx and vy per 50 Hz sample
+  double sigma_omega = 0.003;   // rad/s, white noise on omega
+  double bias_vx = 0.0;         // m/s
+  double bias_vy = 0.002;       // m/s
+  double bias_omega = 0.002;    // rad/s
+  double scale_v = 1.0;         // multiplies the true linear speeds (wheel radius error)
+  bool start_at_truth = false;  // odometry frame = world frame (else it starts at the origin)
+};
+
+struct World {
+  std::string name = "world";
+  std::vector<Pattern> patterns;
+  std::vector<Panel> walls;
+  std::vector<Panel> landmarks;   // wall-mounted visual landmarks, drawn in front of the walls
+  std::vector<Solid> solids;      // tactile landmarks
+  double floor_value = 0.3;
+  double sky_value = 0.85;        // above the walls (an open arena seen from inside)
+  Lighting lighting;
+  Trajectory trajectory;
+  CameraNoise camera;
+  OdometryNoise odometry;
+
+  int pattern_index(const std::string& name) const;  // -1 if absent
+};
+
+// Loads `world:` from a parsed document; strict (unknown keys, unknown pattern names, degenerate
+// shapes are ParamErrors naming the key).
+void load(const ParamNode& node, World& world);
+// Reads a world file and checks it has no unknown keys.
+World load_world_file(const std::string& path);
+
+// ---- 2-D ray geometry shared by the renderer and the whisker contact model ----
+
+// Where a horizontal ray (origin o, unit direction d) crosses a panel: distance t >= 0 and the
+// surface coordinate s (m from `from`). False if it misses.
+bool ray_panel(const Point2& o, const Point2& d, const Panel& p, double& t, double& s);
+
+// One passage of a horizontal ray through a solid's footprint.
+struct SolidHit {
+  double t_in = 0.0;    // distance at entry (< 0 when the origin is inside)
+  double t_out = 0.0;   // distance at exit
+  double s_in = 0.0;    // surface coordinate at entry (perimeter arc length from the first vertex)
+  double cos_in = 1.0;  // |cos| of the angle between the ray and the surface normal at entry
+};
+
+// Every passage of a horizontal ray (origin o, unit direction d) through a solid's footprint that
+// ends ahead of the origin (t_out >= 0), nearest first. Appends to `out`; returns how many.
+int ray_solid(const Point2& o, const Point2& d, const Solid& solid, std::vector<SolidHit>& out);
+
+}  // namespace whiskeye::sim

@@ -1,0 +1,174 @@
+// Column ray-casting renderer (see renderer.h).
+#include "whiskeye/sim/renderer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace whiskeye::sim {
+
+namespace {
+
+// Landmarks are mounted on walls (same distance): they must win the depth order.
+constexpr double kLandmarkBias = 1e-4;
+
+// Φ⁻¹(p) by Newton's method on the normal CDF (table set-up only).
+double normal_quantile(double p) {
+  double x = 0.0;
+  for (int i = 0; i < 60; ++i) {
+    const double cdf = 0.5 * std::erfc(-x / std::sqrt(2.0));
+    const double pdf = std::exp(-0.5 * x * x) / std::sqrt(2.0 * kPi);
+    const double step = (cdf - p) / std::max(pdf, 1e-300);
+    x -= std::clamp(step, -1.0, 1.0);
+    if (std::abs(step) < 1e-12) break;
+  }
+  return x;
+}
+
+}  // namespace
+
+Renderer::Renderer(const World& world, const RobotGeometry& robot)
+    : world_(world),
+      width_(robot.camera.width),
+      height_(robot.camera.height),
+      f_(0.5 * robot.camera.width / std::tan(0.5 * robot.camera.hfov)),
+      cam_z_(robot.head_height + robot.camera.p_camera_in_head.z),
+      p_camera_in_head_(robot.camera.p_camera_in_head),
+      T_base_head_(robot.T_base_head) {
+  if (width_ % 2 != 0) throw std::invalid_argument("camera width must be even (YUYV pairs)");
+  column_.resize(static_cast<std::size_t>(height_));
+  image_.resize(static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_));
+  // 12 random bits per pixel pick one of 4096 quantiles: Gaussian marginals at the cost of an L1
+  // table look-up (the table is 16 KB).
+  noise_.resize(4096);
+  for (std::size_t k = 0; k < noise_.size(); ++k) {
+    noise_[k] = static_cast<float>(world_.camera.sigma * normal_quantile((static_cast<double>(k) + 0.5) / 4096.0));
+  }
+  auto add = [&](const std::vector<Panel>& panels, double bias) {
+    for (const Panel& p : panels) {
+      const double ex = p.to.x - p.from.x;
+      const double ey = p.to.y - p.from.y;
+      panels_.push_back({p.from, ex, ey, std::hypot(ex, ey), p.z0, p.z1, bias,
+                         &world_.patterns.at(static_cast<std::size_t>(p.pattern))});
+    }
+  };
+  add(world_.walls, 0.0);
+  add(world_.landmarks, kLandmarkBias);
+}
+
+double Renderer::column_bearing(int u) const { return std::atan((0.5 * width_ - (u + 0.5)) / f_); }
+
+double Renderer::bearing_column(double bearing) const { return 0.5 * width_ - f_ * std::tan(bearing); }
+
+void Renderer::render_column(const Point2& cam, double heading, int u) {
+  float* column = column_.data();
+  const double a = (0.5 * width_ - (u + 0.5)) / f_;
+  const double k = std::sqrt(1.0 + a * a);  // horizontal ray distance per unit of forward depth
+  const double bearing = heading + std::atan(a);
+  const Point2 d{std::cos(bearing), std::sin(bearing)};
+  const Lighting& light = world_.lighting;
+
+  hits_.clear();
+  for (const FlatPanel& p : panels_) {
+    const double den = d.x * p.ey - d.y * p.ex;  // cross(d, e)
+    if (std::abs(den) < 1e-12) continue;
+    const double wx = p.from.x - cam.x;
+    const double wy = p.from.y - cam.y;
+    const double t = (wx * p.ey - wy * p.ex) / den;
+    const double u01 = (wx * d.y - wy * d.x) / den;
+    if (t < 1e-6 || u01 < 0.0 || u01 > 1.0) continue;
+    const double cos_in = std::abs(den) / p.length;
+    const double shade = (light.ambient + (1.0 - light.ambient) * cos_in) / (1.0 + light.attenuation * t);
+    hits_.push_back({t - p.bias, t, u01 * p.length, shade, p.z0, p.z1, p.pattern, -1.0});
+  }
+  for (const Solid& solid : world_.solids) {
+    solid_hits_.clear();
+    ray_solid(cam, d, solid, solid_hits_);
+    for (const SolidHit& h : solid_hits_) {
+      if (h.t_in < 1e-6) continue;  // the camera inside a solid sees nothing of it
+      const double shade = (light.ambient + (1.0 - light.ambient) * h.cos_in) / (1.0 + light.attenuation * h.t_in);
+      hits_.push_back({h.t_in, h.t_out, h.s_in, shade, solid.z0, solid.z1,
+                       &world_.patterns[static_cast<std::size_t>(solid.pattern)], solid.top_value});
+    }
+  }
+  std::sort(hits_.begin(), hits_.end(), [](const Hit& p, const Hit& q) { return p.t < q.t; });
+
+  std::fill(column, column + height_, -1.0f);
+  const double cy = 0.5 * height_;
+  const double fk = f_ * k;
+  auto row_of = [&](double z, double t) { return cy + (cam_z_ - z) * fk / t - 0.5; };  // fractional row
+  auto clamp_row = [&](double v) {
+    return static_cast<int>(std::clamp(v, -1.0, static_cast<double>(height_)));
+  };
+  for (const Hit& h : hits_) {
+    const double t = std::max(h.t, 1e-6);
+    const int v0 = std::max(0, clamp_row(std::ceil(row_of(h.z1, t))));
+    const int v1 = std::min(height_ - 1, clamp_row(std::floor(row_of(h.z0, t))));
+    if (h.pattern->constant_in_z()) {
+      const float value = static_cast<float>(h.pattern->value(h.s, 0.0) * h.shade);
+      for (int v = v0; v <= v1; ++v) {
+        if (column[v] < 0.0f) column[v] = value;
+      }
+    } else {
+      for (int v = v0; v <= v1; ++v) {
+        if (column[v] >= 0.0f) continue;
+        const double z = cam_z_ - ((v + 0.5) - cy) * t / fk;
+        column[v] = static_cast<float>(h.pattern->value(h.s, z) * h.shade);
+      }
+    }
+    // The top face of a solid below the camera, seen between its entry and exit distances.
+    if (h.top_value >= 0.0 && h.z1 < cam_z_ && h.t_out > t) {
+      const int w0 = std::max(0, clamp_row(std::ceil(row_of(h.z1, h.t_out))));
+      const int w1 = std::min(height_ - 1, clamp_row(std::floor(row_of(h.z1, t))));
+      const float top = static_cast<float>(h.top_value * light.ambient / (1.0 + light.attenuation * t));
+      for (int v = w0; v <= w1; ++v) {
+        if (column[v] < 0.0f) column[v] = top;
+      }
+    }
+  }
+  // What no surface covers: the sky above the horizon, the floor below.
+  for (int v = 0; v < height_; ++v) {
+    if (column[v] >= 0.0f) continue;
+    const double dv = (v + 0.5) - cy;
+    if (dv <= 0.0) {
+      column[v] = static_cast<float>(world_.sky_value);
+    } else {
+      const double t = cam_z_ * fk / dv;
+      column[v] = static_cast<float>(world_.floor_value * light.ambient / (1.0 + light.attenuation * t));
+    }
+  }
+  for (int v = 0; v < height_; ++v) image_[static_cast<std::size_t>(v) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(u)] = column[v];
+}
+
+void Renderer::render(const Pose2& T_world_base, double t, FastRng& rng, std::vector<uint8_t>& grey) {
+  const Pose2 head = compose(T_world_base, T_base_head_);
+  Point2 cam;
+  transform_point(head, p_camera_in_head_.x, p_camera_in_head_.y, cam.x, cam.y);
+  for (int u = 0; u < width_; ++u) render_column(cam, head.theta, u);
+  const float gain = static_cast<float>(255.0 * world_.lighting.gain_at(t));
+  const bool noisy = world_.camera.sigma > 0.0;
+  const std::size_t n = image_.size();
+  grey.resize(n);
+  auto to_byte = [](float p) { return static_cast<uint8_t>(std::min(std::max(p, 0.0f), 255.0f) + 0.5f); };
+  std::size_t i = 0;
+  if (noisy) {
+    for (; i + 5 <= n; i += 5) {
+      uint64_t r = rng.next();  // five pixels per draw, 12 bits each
+      for (std::size_t j = 0; j < 5; ++j, r >>= 12) grey[i + j] = to_byte(image_[i + j] * gain + noise_[r & 0xFFF]);
+    }
+  }
+  for (; i < n; ++i) grey[i] = to_byte(image_[i] * gain + (noisy ? noise_[rng.next() & 0xFFF] : 0.0f));
+}
+
+void grey_to_yuyv(const std::vector<uint8_t>& grey, int width, int height, std::vector<uint8_t>& yuyv) {
+  const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+  yuyv.resize(2 * n);
+  for (std::size_t i = 0; i < n; i += 2) {
+    yuyv[2 * i] = grey[i];
+    yuyv[2 * i + 1] = 128;
+    yuyv[2 * i + 2] = grey[i + 1];
+    yuyv[2 * i + 3] = 128;
+  }
+}
+
+}  // namespace whiskeye::sim

@@ -1,0 +1,219 @@
+// vita-sim: a simulated WhiskEye in a YAML world, written as an LCM log with the drivers' channels
+// (WHISKER_SAMPLE, RCP_STATE, WHISK_CYCLE, CAMERA, ODOMETRY) plus GROUND_TRUTH and SIM_CONTACT_TRUTH.
+// Also draws a world's top-down map (--plot-world) and can save camera frames as PNG (--frames-dir).
+#include "whiskeye/common/bus.h"
+#include "whiskeye/sim/lcm_sink.h"
+#include "whiskeye/sim/simulator.h"
+
+#include <CLI/CLI.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <limits>
+#include <string>
+
+namespace {
+
+using namespace whiskeye;
+using namespace whiskeye::sim;
+
+// Top-down map: walls, visual landmarks (with their pattern names), tactile solids, the trajectory
+// and the start pose. 100 px per metre.
+void plot_world(const World& world, const RobotGeometry& robot, const std::string& path) {
+  double x0 = std::numeric_limits<double>::infinity();
+  double y0 = x0;
+  double x1 = -x0;
+  double y1 = -x0;
+  for (const Panel& p : world.walls) {
+    for (const Point2& q : {p.from, p.to}) {
+      x0 = std::min(x0, q.x);
+      y0 = std::min(y0, q.y);
+      x1 = std::max(x1, q.x);
+      y1 = std::max(y1, q.y);
+    }
+  }
+  if (!std::isfinite(x0)) {
+    const Trajectory& t = world.trajectory;
+    x0 = t.centre.x - t.radius - 1.0;
+    x1 = t.centre.x + t.radius + 1.0;
+    y0 = t.centre.y - t.radius - 1.0;
+    y1 = t.centre.y + t.radius + 1.0;
+  }
+  const double scale = 100.0;
+  const int margin = 60;
+  const int W = static_cast<int>((x1 - x0) * scale) + 2 * margin;
+  const int H = static_cast<int>((y1 - y0) * scale) + 2 * margin;
+  cv::Mat img(H, W, CV_8UC3, cv::Scalar(255, 255, 255));
+  auto px = [&](double x, double y) {
+    return cv::Point(static_cast<int>(std::lround(margin + (x - x0) * scale)),
+                     static_cast<int>(std::lround(H - margin - (y - y0) * scale)));
+  };
+  const cv::Scalar black(0, 0, 0);
+  const cv::Scalar colours[] = {{200, 60, 20}, {20, 140, 20}, {20, 20, 200}, {160, 20, 160}, {0, 140, 200}};
+  for (const Panel& p : world.walls) cv::line(img, px(p.from.x, p.from.y), px(p.to.x, p.to.y), cv::Scalar(120, 120, 120), 6);
+  for (const Panel& p : world.landmarks) {
+    const cv::Scalar c = colours[static_cast<std::size_t>(p.pattern) % 5];
+    cv::line(img, px(p.from.x, p.from.y), px(p.to.x, p.to.y), c, 12);
+    const Point2 mid{0.5 * (p.from.x + p.to.x), 0.5 * (p.from.y + p.to.y)};
+    const double dx = world.trajectory.centre.x - mid.x;
+    const double dy = world.trajectory.centre.y - mid.y;
+    const double n = std::hypot(dx, dy);
+    const cv::Point at = px(mid.x + 0.35 * dx / n, mid.y + 0.35 * dy / n);
+    const std::string label = p.name + " (" + world.patterns[static_cast<std::size_t>(p.pattern)].name + ")";
+    cv::putText(img, label, at - cv::Point(static_cast<int>(label.size()) * 5, 0), cv::FONT_HERSHEY_SIMPLEX, 0.45, c, 1, cv::LINE_AA);
+  }
+  const Trajectory& t = world.trajectory;
+  cv::circle(img, px(t.centre.x, t.centre.y), static_cast<int>(t.radius * scale), cv::Scalar(200, 0, 200), 2, cv::LINE_AA);
+  // The head's path (the head is mounted ahead of the base, outwards).
+  const double head_r = std::hypot(t.radius + robot.T_base_head.x, robot.T_base_head.y);
+  cv::circle(img, px(t.centre.x, t.centre.y), static_cast<int>(head_r * scale), cv::Scalar(230, 160, 230), 1, cv::LINE_AA);
+  for (const Solid& s : world.solids) {
+    const cv::Scalar c(40, 40, 40);
+    if (s.shape == Solid::Shape::Circle) {
+      cv::circle(img, px(s.centre.x, s.centre.y), std::max(2, static_cast<int>(s.radius * scale)), c, cv::FILLED, cv::LINE_AA);
+    } else {
+      std::vector<cv::Point> poly;
+      for (const Point2& q : s.vertices) poly.push_back(px(q.x, q.y));
+      cv::fillPoly(img, std::vector<std::vector<cv::Point>>{poly}, c, cv::LINE_AA);
+    }
+    const double dx = s.centre.x - t.centre.x;
+    const double dy = s.centre.y - t.centre.y;
+    const double n = std::max(1e-9, std::hypot(dx, dy));
+    cv::putText(img, s.name, px(s.centre.x + 0.25 * dx / n, s.centre.y + 0.25 * dy / n) - cv::Point(30, 0),
+                cv::FONT_HERSHEY_SIMPLEX, 0.45, black, 1, cv::LINE_AA);
+  }
+  // Start pose: base position and heading.
+  const Pose2 start = t.pose_at(0.0);
+  const cv::Point a = px(start.x, start.y);
+  const cv::Point b = px(start.x + 0.4 * std::cos(start.theta), start.y + 0.4 * std::sin(start.theta));
+  cv::arrowedLine(img, a, b, cv::Scalar(0, 0, 255), 2, cv::LINE_AA, 0, 0.3);
+  cv::circle(img, a, 6, cv::Scalar(0, 0, 255), cv::FILLED, cv::LINE_AA);
+  double vx;
+  double vy;
+  double om;
+  t.body_velocity(vx, vy, om);
+  const std::string title = world.name + ": " + std::to_string(t.laps) + " laps, r = " +
+                            std::to_string(t.radius).substr(0, 4) + " m, " + std::to_string(t.speed).substr(0, 4) +
+                            " m/s " + (t.counter_clockwise ? "ccw" : "cw") + ", facing " +
+                            (t.outwards ? "outwards" : "inwards") + "; red: start";
+  cv::putText(img, title, cv::Point(10, 25), cv::FONT_HERSHEY_SIMPLEX, 0.5, black, 1, cv::LINE_AA);
+  if (!cv::imwrite(path, img)) throw std::runtime_error(path + ": cannot write the PNG");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"vita-sim: simulated WhiskEye in a YAML world -> LCM log (drivers' channels + GROUND_TRUTH)"};
+  std::string world_path;
+  std::string output;
+  std::string robot_path = "config/robot.yaml";
+  std::string plot_path;
+  std::string frames_dir;
+  int frames_every = 1;
+  uint64_t seed = 1;
+  double duration = 0.0;
+  int laps = 0;
+  int64_t start_utime = SimParams{}.start_utime;
+  bool quiet = false;
+  app.add_option("--world", world_path, "World YAML file (e.g. config/worlds/aliased_arena.yaml)")->required()->check(CLI::ExistingFile);
+  app.add_option("--output,-o", output, "LCM log to write");
+  app.add_option("--robot", robot_path, "Robot geometry YAML")->capture_default_str();
+  app.add_option("--seed", seed, "Seed of every noise source (same seed -> byte-identical log)")->capture_default_str();
+  app.add_option("--duration", duration, "Simulated seconds (overrides --laps)")->check(CLI::PositiveNumber);
+  app.add_option("--laps", laps, "Revolutions (default: the world's trajectory.laps)")->check(CLI::PositiveNumber);
+  app.add_option("--start-utime", start_utime, "utime of the first sample")->capture_default_str();
+  app.add_option("--plot-world", plot_path, "Write a top-down PNG of the world (alone: no simulation)");
+  app.add_option("--frames-dir", frames_dir, "Also save camera frames as PNG in this directory");
+  app.add_option("--frames-every", frames_every, "Save every N-th camera frame")->check(CLI::PositiveNumber);
+  app.add_flag("--quiet,-q", quiet, "No progress output");
+  CLI11_PARSE(app, argc, argv);
+
+  try {
+    World world = load_world_file(world_path);
+    RobotGeometry robot = default_robot_geometry();
+    {
+      const ParamNode root = ParamNode::from_file(robot_path);
+      load(root.section("robot"), robot);
+      root.check_no_unknown_keys();
+    }
+    if (laps > 0) world.trajectory.laps = laps;
+    if (!plot_path.empty()) {
+      plot_world(world, robot, plot_path);
+      std::cerr << "vita-sim: wrote " << plot_path << "\n";
+      if (output.empty()) return 0;
+    }
+    if (output.empty()) {
+      std::cerr << "vita-sim: --output is required (or --plot-world alone)\n";
+      return 2;
+    }
+    if (!frames_dir.empty()) std::filesystem::create_directories(frames_dir);
+
+    SimParams params;
+    params.seed = seed;
+    params.duration = duration;
+    params.start_utime = start_utime;
+    const rcp::ControllerParams controller;
+    const rcp::PlantParams plant;
+    Simulator sim(world, robot, controller, plant, params);
+
+    LogWriterBus bus(output);
+    LcmSink lcm(bus, [&bus](int64_t t) { bus.set_time(t); }, world.camera.yuyv, plant.saturation);
+    // Saving frames is a side channel: a thin sink that forwards everything and writes PNGs.
+    struct FrameTap : SimSink {
+      SimSink& next;
+      std::string dir;
+      int every;
+      FrameTap(SimSink& n, std::string d, int e) : next(n), dir(std::move(d)), every(e) {}
+      void whisker_sample(const rcp::WhiskerSample& s) override { next.whisker_sample(s); }
+      void rcp_state(const rcp::ControlOutput& o) override { next.rcp_state(o); }
+      void whisk_cycle(const rcp::WhiskCycle& c) override { next.whisk_cycle(c); }
+      void contact_truth(const ContactTruth& t) override { next.contact_truth(t); }
+      void odometry(int64_t u, int64_t s, const OdometrySample& o) override { next.odometry(u, s, o); }
+      void ground_truth(int64_t u, const Pose2& p) override { next.ground_truth(u, p); }
+      void camera(int64_t u, int64_t s, const std::vector<uint8_t>& g, int w, int h) override {
+        next.camera(u, s, g, w, h);
+        if (dir.empty() || s % every != 0) return;
+        const cv::Mat m(h, w, CV_8UC1, const_cast<uint8_t*>(g.data()));
+        char name[64];
+        std::snprintf(name, sizeof name, "/frame_%06lld.png", static_cast<long long>(s));
+        if (!cv::imwrite(dir + name, m)) throw std::runtime_error(dir + name + ": cannot write the PNG");
+      }
+    } tap(lcm, frames_dir, frames_every);
+
+    const bool tty = isatty(STDERR_FILENO) != 0;
+    const int64_t total = sim.total_steps();
+    int last_shown = -1;
+    while (sim.step(tap)) {
+      if (quiet) continue;
+      if (tty) {
+        const int permille = static_cast<int>(1000 * sim.steps_done() / total);
+        if (permille != last_shown) {
+          last_shown = permille;
+          const int bar = permille * 40 / 1000;
+          std::fprintf(stderr, "\rvita-sim [%.*s%*s] %5.1f%%", bar, "########################################",
+                       40 - bar, "", permille / 10.0);
+        }
+      } else {
+        const int decile = static_cast<int>(10 * sim.steps_done() / total);
+        if (decile != last_shown) {
+          last_shown = decile;
+          std::fprintf(stderr, "vita-sim: %d%%\n", decile * 10);
+        }
+      }
+    }
+    if (!quiet && tty) std::fprintf(stderr, "\n");
+    std::cerr << "vita-sim: " << sim.duration() << " s simulated, " << bus.events_written() << " events -> " << output
+              << "\n";
+    for (const auto& [channel, n] : lcm.counts()) std::cerr << "  " << channel << ": " << n << "\n";
+  } catch (const std::exception& e) {
+    std::cerr << "vita-sim: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}

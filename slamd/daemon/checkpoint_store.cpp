@@ -1,0 +1,180 @@
+#include "checkpoint_store.h"
+
+#include <zlib.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <fcntl.h>
+#include <filesystem>
+#include <fstream>
+#include <unistd.h>
+
+namespace whiskeye::slamd {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr char kMagic[8] = {'W', 'K', 'S', 'L', 'A', 'M', 'C', 'P'};
+constexpr std::size_t kHeaderSize = 32;
+
+template <typename T>
+void put(std::vector<uint8_t>& out, T value) {
+  for (std::size_t i = 0; i < sizeof(T); ++i) out.push_back(static_cast<uint8_t>(value >> (8 * i)));
+}
+
+template <typename T>
+T get(const uint8_t* p) {
+  T v = 0;
+  for (std::size_t i = 0; i < sizeof(T); ++i) v |= static_cast<T>(static_cast<T>(p[i]) << (8 * i));
+  return v;
+}
+
+uint32_t crc_of(std::span<const uint8_t> data) {
+  uLong crc = crc32(0L, Z_NULL, 0);
+  // zlib takes uInt lengths: feed in chunks.
+  std::size_t pos = 0;
+  while (pos < data.size()) {
+    const std::size_t n = std::min<std::size_t>(data.size() - pos, 1u << 30);
+    crc = crc32(crc, data.data() + pos, static_cast<uInt>(n));
+    pos += n;
+  }
+  return static_cast<uint32_t>(crc);
+}
+
+[[noreturn]] void fail(const std::string& path, const std::string& what) {
+  throw CheckpointError(path + ": " + what);
+}
+
+void write_all(int fd, const uint8_t* data, std::size_t size, const std::string& path) {
+  while (size > 0) {
+    const ssize_t n = ::write(fd, data, size);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      fail(path, std::string("write failed: ") + std::strerror(errno));
+    }
+    data += n;
+    size -= static_cast<std::size_t>(n);
+  }
+}
+
+void fsync_directory(const std::string& dir) {
+  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY);
+  if (fd < 0) fail(dir, std::string("cannot open directory to sync: ") + std::strerror(errno));
+  const int rc = ::fsync(fd);
+  ::close(fd);
+  if (rc != 0) fail(dir, std::string("directory fsync failed: ") + std::strerror(errno));
+}
+
+std::string file_name(uint64_t sequence) {
+  char name[64];
+  std::snprintf(name, sizeof name, "checkpoint-%012llu.vslam", static_cast<unsigned long long>(sequence));
+  return name;
+}
+
+}  // namespace
+
+Checkpoint read_checkpoint(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail(path, "cannot open");
+  std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (bytes.size() < kHeaderSize) fail(path, "truncated header (" + std::to_string(bytes.size()) + " bytes)");
+  if (std::memcmp(bytes.data(), kMagic, sizeof kMagic) != 0) fail(path, "not a slamd checkpoint (bad magic)");
+  const uint32_t version = get<uint32_t>(bytes.data() + 8);
+  if (version != kCheckpointFormatVersion) {
+    fail(path, "unsupported checkpoint format version " + std::to_string(version) + " (this slamd reads " +
+                   std::to_string(kCheckpointFormatVersion) + ")");
+  }
+  const uint32_t crc = get<uint32_t>(bytes.data() + 12);
+  Checkpoint cp;
+  cp.path = path;
+  cp.sequence = get<uint64_t>(bytes.data() + 16);
+  const uint64_t size = get<uint64_t>(bytes.data() + 24);
+  if (size != bytes.size() - kHeaderSize) {
+    fail(path, "payload size " + std::to_string(bytes.size() - kHeaderSize) + " differs from the header's " +
+                   std::to_string(size) + " (truncated or appended)");
+  }
+  cp.payload.assign(bytes.begin() + kHeaderSize, bytes.end());
+  if (crc_of(cp.payload) != crc) fail(path, "checksum mismatch (corrupt data)");
+  return cp;
+}
+
+void write_checkpoint_file(const std::string& path, uint64_t sequence, std::span<const uint8_t> payload) {
+  std::vector<uint8_t> header(kMagic, kMagic + sizeof kMagic);
+  put<uint32_t>(header, kCheckpointFormatVersion);
+  put<uint32_t>(header, crc_of(payload));
+  put<uint64_t>(header, sequence);
+  put<uint64_t>(header, payload.size());
+
+  const fs::path final_path(path);
+  const fs::path dir = final_path.has_parent_path() ? final_path.parent_path() : fs::path(".");
+  const std::string tmp = (dir / ("." + final_path.filename().string() + ".tmp")).string();
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) fail(tmp, std::string("cannot create: ") + std::strerror(errno));
+  try {
+    write_all(fd, header.data(), header.size(), tmp);
+    write_all(fd, payload.data(), payload.size(), tmp);
+    if (::fsync(fd) != 0) fail(tmp, std::string("fsync failed: ") + std::strerror(errno));
+  } catch (...) {
+    ::close(fd);
+    ::unlink(tmp.c_str());
+    throw;
+  }
+  ::close(fd);
+  if (::rename(tmp.c_str(), path.c_str()) != 0) {
+    const std::string err = std::strerror(errno);
+    ::unlink(tmp.c_str());
+    fail(path, "rename failed: " + err);
+  }
+  fsync_directory(dir.string());
+}
+
+CheckpointStore::CheckpointStore(std::string directory, int keep) : directory_(std::move(directory)), keep_(std::max(1, keep)) {
+  std::error_code ec;
+  fs::create_directories(directory_, ec);
+  if (ec || !fs::is_directory(directory_)) {
+    throw CheckpointError(directory_ + ": cannot create the checkpoint directory" + (ec ? ": " + ec.message() : ""));
+  }
+}
+
+std::vector<std::string> CheckpointStore::list() const {
+  std::vector<std::string> files;
+  for (const auto& entry : fs::directory_iterator(directory_)) {
+    const std::string name = entry.path().filename().string();
+    if (entry.is_regular_file() && name.rfind("checkpoint-", 0) == 0 && entry.path().extension() == ".vslam") {
+      files.push_back(entry.path().string());
+    }
+  }
+  std::sort(files.begin(), files.end());  // zero-padded sequence numbers sort by name
+  return files;
+}
+
+std::string CheckpointStore::write(uint64_t sequence, std::span<const uint8_t> payload) {
+  const std::string path = (fs::path(directory_) / file_name(sequence)).string();
+  write_checkpoint_file(path, sequence, payload);
+  auto files = list();
+  while (static_cast<int>(files.size()) > keep_) {
+    std::error_code ec;
+    fs::remove(files.front(), ec);
+    files.erase(files.begin());
+  }
+  return path;
+}
+
+std::optional<Checkpoint> CheckpointStore::load_newest(std::vector<std::string>* problems) {
+  auto files = list();
+  for (auto it = files.rbegin(); it != files.rend(); ++it) {
+    try {
+      return read_checkpoint(*it);
+    } catch (const CheckpointError& e) {
+      if (problems) problems->push_back(e.what());
+      std::error_code ec;
+      fs::rename(*it, *it + ".corrupt", ec);  // keep it for inspection, out of the rotation
+    }
+  }
+  return std::nullopt;
+}
+
+}  // namespace whiskeye::slamd

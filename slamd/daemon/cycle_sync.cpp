@@ -1,0 +1,97 @@
+#include "cycle_sync.h"
+
+#include "whiskeye/common/utime.h"
+
+#include <algorithm>
+#include <cstdlib>
+
+namespace whiskeye::slamd {
+
+CycleSynchroniser::CycleSynchroniser(const SyncParams& params) : params_(params) {}
+
+void CycleSynchroniser::advance_data_time(int64_t utime) { data_time_ = std::max(data_time_, utime); }
+
+void CycleSynchroniser::add_camera(const image_t& image) {
+  if (image.utime < newest_camera_) {
+    ++counters_.out_of_order;
+    return;
+  }
+  newest_camera_ = image.utime;
+  advance_data_time(image.utime);
+  frames_.push_back(image);
+  while (static_cast<int>(frames_.size()) > params_.camera_buffer) frames_.pop_front();
+}
+
+void CycleSynchroniser::add_odometry(const odometry_t& odometry) {
+  if (odometry.utime <= newest_odometry_ || odometry.utime <= consumed_until_) {
+    ++counters_.out_of_order;
+    return;
+  }
+  newest_odometry_ = odometry.utime;
+  advance_data_time(odometry.utime);
+  odometry_.push_back(odometry);
+}
+
+void CycleSynchroniser::add_whisk_cycle(const whisk_cycle_t& cycle) {
+  const int64_t last_pending = pending_.empty() ? consumed_until_ : pending_.back().utime_end;
+  if (cycle.utime_end <= last_pending) {
+    ++counters_.out_of_order;
+    return;
+  }
+  advance_data_time(cycle.utime_end);
+  pending_.push_back(cycle);
+}
+
+bool CycleSynchroniser::ready(const whisk_cycle_t& cycle) const {
+  const int64_t end = cycle.utime_end;
+  if (data_time_ >= end + seconds_to_utime(params_.max_wait_s)) return true;
+  const bool camera_settled = newest_camera_ >= end + seconds_to_utime(params_.camera_tolerance_s);
+  const bool odometry_settled = newest_odometry_ >= end;
+  return camera_settled && odometry_settled;
+}
+
+SyncedCycle CycleSynchroniser::assemble(const whisk_cycle_t& cycle) {
+  SyncedCycle out;
+  out.whisk = cycle;
+  const int64_t end = cycle.utime_end;
+  const int64_t tolerance = seconds_to_utime(params_.camera_tolerance_s);
+  const image_t* best = nullptr;
+  for (const auto& f : frames_) {
+    const int64_t d = std::llabs(f.utime - end);
+    if (d <= tolerance && (best == nullptr || d < std::llabs(best->utime - end))) best = &f;
+  }
+  if (best != nullptr) {
+    out.image = *best;
+  } else {
+    ++counters_.cycles_without_camera;
+  }
+  while (!odometry_.empty() && odometry_.front().utime <= end) {
+    out.odometry.push_back(odometry_.front());
+    odometry_.pop_front();
+  }
+  // Frames at or before this cycle's end cannot be nearest to a later cycle's end than a newer one
+  // unless no newer frame exists; keep the newest of them for that case.
+  while (frames_.size() > 1 && frames_[1].utime <= end) frames_.pop_front();
+  consumed_until_ = end;
+  return out;
+}
+
+std::vector<SyncedCycle> CycleSynchroniser::take_ready() {
+  std::vector<SyncedCycle> out;
+  while (!pending_.empty() && ready(pending_.front())) {
+    out.push_back(assemble(pending_.front()));
+    pending_.pop_front();
+  }
+  return out;
+}
+
+std::vector<SyncedCycle> CycleSynchroniser::flush() {
+  std::vector<SyncedCycle> out;
+  while (!pending_.empty()) {
+    out.push_back(assemble(pending_.front()));
+    pending_.pop_front();
+  }
+  return out;
+}
+
+}  // namespace whiskeye::slamd

@@ -1,0 +1,75 @@
+// Gathers what one SLAM cycle needs: a completed whisk cycle, the camera frame nearest its end
+// (within a tolerance), and the odometry since the previous cycle.
+//
+// Decisions depend only on the messages' own sample times, never on the wall clock, so a live run
+// (lcm-logplayer into slamd) and `slamd --replay` of the same log take the same decisions:
+//   - a cycle ending at E waits until a camera frame at or after E + tolerance has arrived (no
+//     closer frame can still come), or until data time reaches E + max_wait (camera missing);
+//   - and until odometry has reached E (or data time E + max_wait).
+// Data time = the newest sample time seen on any input channel.
+#pragma once
+
+#include <whiskeye/image_t.hpp>
+#include <whiskeye/odometry_t.hpp>
+#include <whiskeye/whisk_cycle_t.hpp>
+
+#include <cstdint>
+#include <deque>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace whiskeye::slamd {
+
+struct SyncParams {
+  double camera_tolerance_s = 0.15;  // a frame farther than this from the cycle's end is not used
+  double max_wait_s = 1.0;           // data time to wait for a late or missing camera / odometry
+  int camera_buffer = 16;            // frames kept
+  bool operator==(const SyncParams&) const = default;
+};
+
+struct SyncedCycle {
+  whisk_cycle_t whisk;
+  std::optional<image_t> image;        // nearest frame within tolerance, if any
+  std::vector<odometry_t> odometry;    // samples with previous end < utime <= this end, time order
+};
+
+struct SyncCounters {
+  int64_t cycles_without_camera = 0;
+  int64_t out_of_order = 0;            // messages older than what was already consumed: dropped
+  bool operator==(const SyncCounters&) const = default;
+};
+
+class CycleSynchroniser {
+ public:
+  explicit CycleSynchroniser(const SyncParams& params);
+
+  void add_camera(const image_t& image);
+  void add_odometry(const odometry_t& odometry);
+  void add_whisk_cycle(const whisk_cycle_t& cycle);
+
+  // Cycles whose inputs are complete, oldest first.
+  std::vector<SyncedCycle> take_ready();
+  // Everything pending, as complete as it can be (end of a log).
+  std::vector<SyncedCycle> flush();
+
+  const SyncCounters& counters() const { return counters_; }
+  int64_t data_time() const { return data_time_; }
+
+ private:
+  bool ready(const whisk_cycle_t& cycle) const;
+  SyncedCycle assemble(const whisk_cycle_t& cycle);
+  void advance_data_time(int64_t utime);
+
+  SyncParams params_;
+  std::deque<image_t> frames_;
+  std::deque<odometry_t> odometry_;
+  std::deque<whisk_cycle_t> pending_;
+  int64_t data_time_ = INT64_MIN;
+  int64_t newest_camera_ = INT64_MIN;
+  int64_t newest_odometry_ = INT64_MIN;
+  int64_t consumed_until_ = INT64_MIN;  // end of the last cycle handed out
+  SyncCounters counters_;
+};
+
+}  // namespace whiskeye::slamd

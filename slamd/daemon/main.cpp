@@ -1,0 +1,265 @@
+// slamd: the ViTa-SLAM daemon.
+//   live:    slamd [--mode M] [--config FILE] [--state-dir DIR]       (LCM in and out)
+//   offline: slamd --replay IN.lcmlog --output OUT.lcmlog [--mode M]  (reads the log directly)
+// See docs/slamd.md.
+#include "checkpoint_store.h"
+#include "slam_node.h"
+
+#include "whiskeye/common/bus.h"
+#include "whiskeye/common/clock.h"
+#include "whiskeye/common/params.h"
+#include "whiskeye/common/robot_geometry.h"
+#include "whiskeye/common/utime.h"
+#include "whiskeye/slam/vita_slam.h"
+
+#include <CLI/CLI.hpp>
+#include <systemd/sd-daemon.h>
+
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <optional>
+#include <unistd.h>
+
+namespace {
+
+using namespace whiskeye;
+
+std::atomic<bool> g_stop{false};
+void on_signal(int) { g_stop = true; }
+
+void log_line(const std::string& line) { std::fprintf(stderr, "slamd: %s\n", line.c_str()); }
+
+struct Options {
+  std::string config;
+  std::string robot;
+  std::string mode;
+  std::string lcm_url;
+  std::string state_dir;
+  int checkpoint_every = 1;
+  int checkpoint_keep = 3;
+  bool fresh = false;
+  std::string map_file;
+  bool localise = false;
+  std::string replay_in;
+  std::string replay_out;
+  bool timing = false;
+  bool print_config = false;
+};
+
+struct Loaded {
+  slam::SlamParams slam;
+  slamd::NodeParams node;
+  RobotGeometry robot = default_robot_geometry();
+  std::string dump;
+};
+
+Loaded load_config(const Options& o) {
+  Loaded l;
+  ParamNode root = o.config.empty() ? ParamNode::empty() : ParamNode::from_file(o.config);
+  slam::load(root.section("slam"), l.slam);
+  slamd::load(root.section("slamd"), l.node);
+  root.check_no_unknown_keys();
+  ParamNode robot = o.robot.empty() ? ParamNode::empty() : ParamNode::from_file(o.robot);
+  load(robot.section("robot"), l.robot);
+  robot.check_no_unknown_keys();
+  if (!o.mode.empty()) l.slam.mode = slam::parse_mode(o.mode);  // throws naming the bad value
+  l.dump = root.dump() + robot.dump() + "mode: " + slam::to_string(l.slam.mode) + "\n";
+  return l;
+}
+
+// A progress bar on stderr: redrawn in place on a terminal, a line every 10 % otherwise.
+class Progress {
+ public:
+  void update(double fraction) {
+    const int pct = static_cast<int>(fraction * 100.0);
+    if (pct == last_) return;
+    if (tty_) {
+      const int width = 40;
+      const int filled = pct * width / 100;
+      std::fprintf(stderr, "\rslamd: replay [%s%s] %3d%%", std::string(static_cast<std::size_t>(filled), '#').c_str(),
+                   std::string(static_cast<std::size_t>(width - filled), '.').c_str(), pct);
+    } else if (pct / 10 != last_ / 10) {
+      std::fprintf(stderr, "slamd: replay %d%%\n", pct);
+    }
+    last_ = pct;
+  }
+  void done() {
+    if (tty_) std::fprintf(stderr, "\n");
+  }
+
+ private:
+  bool tty_ = ::isatty(2) != 0;
+  int last_ = -1;
+};
+
+std::unique_ptr<slam::VitaSlam> make_slam(const Loaded& cfg, const Options& o, slamd::CheckpointStore* store) {
+  if (!o.map_file.empty()) {
+    const slamd::Checkpoint cp = slamd::read_checkpoint(o.map_file);
+    auto s = std::make_unique<slam::VitaSlam>(slam::VitaSlam::deserialise(cp.payload, cfg.slam, cfg.robot));
+    if (o.localise) s->set_localise_only(true);
+    log_line("loaded map " + o.map_file + " (" + std::to_string(s->map().experiences().size()) + " experiences)" +
+             (o.localise ? ", localising without growing it" : ""));
+    return s;
+  }
+  if (store != nullptr && !o.fresh) {
+    std::vector<std::string> problems;
+    const auto cp = store->load_newest(&problems);
+    for (const auto& p : problems) log_line("skipped unusable checkpoint " + p);
+    if (cp) {
+      log_line("resuming from " + cp->path + " (after cycle " + std::to_string(cp->sequence) + ")");
+      return std::make_unique<slam::VitaSlam>(slam::VitaSlam::deserialise(cp->payload, cfg.slam, cfg.robot));
+    }
+  }
+  return std::make_unique<slam::VitaSlam>(cfg.slam, cfg.robot);
+}
+
+int run_replay(const Loaded& cfg, const Options& o) {
+  LogReader reader(o.replay_in);
+  LogWriterBus out(o.replay_out);
+  MemoryBus in;
+  DecodeErrors errors;
+  errors.set_callback([](const std::string& ch, const std::string& why) { log_line(ch + ": " + why); });
+  std::optional<slamd::CheckpointStore> store;
+  if (!o.state_dir.empty()) store.emplace(o.state_dir, o.checkpoint_keep);
+  slamd::SlamNode node(in, out, make_slam(cfg, o, store ? &*store : nullptr), cfg.node, errors);
+  node.set_logger(log_line);
+  if (o.timing) node.set_latency_clock(monotonic_us);
+  if (store && o.checkpoint_every > 0) {
+    node.set_cycle_hook([&](const slam::CycleResult&) {
+      if (node.counters().cycles % o.checkpoint_every == 0) store->write(static_cast<uint64_t>(node.counters().cycles), node.slam().serialise());
+    });
+  }
+  Progress progress;
+  LogReader::EventView ev;
+  int64_t next_status = INT64_MIN;
+  int64_t last_utime = 0;
+  int64_t first_utime = INT64_MIN;
+  const int64_t t0 = monotonic_us();
+  std::string channel;
+  while (reader.next(ev)) {
+    if (first_utime == INT64_MIN) first_utime = ev.utime;
+    last_utime = ev.utime;
+    out.set_time(ev.utime);
+    in.set_time(ev.utime);
+    channel.assign(ev.channel);
+    if (channel == "GROUND_TRUTH" || channel == "SIM_CONTACT_TRUTH") out.publish_raw(channel, ev.data);
+    in.publish_raw(channel, ev.data);
+    if (next_status == INT64_MIN) next_status = ev.utime + kUtimePerSecond;
+    if (ev.utime >= next_status) {
+      node.publish_status(ev.utime);
+      next_status += kUtimePerSecond;
+    }
+    progress.update(reader.progress());
+  }
+  node.flush();
+  node.publish_status(last_utime);
+  progress.done();
+  const double wall = static_cast<double>(monotonic_us() - t0) * 1e-6;
+  const double data = first_utime == INT64_MIN ? 0.0 : static_cast<double>(last_utime - first_utime) * 1e-6;
+  const auto st = node.status(last_utime);
+  std::fprintf(stderr,
+               "slamd: replayed %.1f s of data in %.2f s (%.0fx real time): %lld cycles, %d templates, %d experiences, "
+               "%lld rejected, %lld undecodable\n",
+               data, wall, wall > 0 ? data / wall : 0.0, static_cast<long long>(st.cycles), st.num_templates,
+               st.num_experiences, static_cast<long long>(st.validation_errors), static_cast<long long>(st.decode_errors));
+  return 0;
+}
+
+int run_live(const Loaded& cfg, const Options& o) {
+  std::string state_dir = o.state_dir;
+  if (state_dir.empty()) {
+    const char* sd = std::getenv("STATE_DIRECTORY");  // systemd StateDirectory=
+    state_dir = sd ? sd : "/var/lib/slamd";
+  }
+  slamd::CheckpointStore store(state_dir, o.checkpoint_keep);
+  LcmBus bus(o.lcm_url);
+  DecodeErrors errors;
+  errors.set_callback([](const std::string& ch, const std::string& why) { log_line(ch + ": " + why); });
+  slamd::SlamNode node(bus, bus, make_slam(cfg, o, &store), cfg.node, errors);
+  node.set_logger(log_line);
+  node.set_latency_clock(monotonic_us);
+  int64_t checkpoints = 0;
+  int64_t checkpoint_errors = 0;
+  auto checkpoint = [&] {
+    try {
+      store.write(static_cast<uint64_t>(node.counters().cycles), node.slam().serialise());
+      ++checkpoints;
+    } catch (const std::exception& e) {
+      ++checkpoint_errors;
+      log_line(std::string("checkpoint failed: ") + e.what());
+    }
+  };
+  if (o.checkpoint_every > 0 && !o.localise) {
+    node.set_cycle_hook([&](const slam::CycleResult&) {
+      if (node.counters().cycles % o.checkpoint_every == 0) checkpoint();
+    });
+  }
+  std::signal(SIGTERM, on_signal);
+  std::signal(SIGINT, on_signal);
+  uint64_t watchdog_usec = 0;
+  const bool watchdog = sd_watchdog_enabled(0, &watchdog_usec) > 0;
+  sd_notify(0, "READY=1\nSTATUS=running");
+  log_line("running in " + slam::to_string(cfg.slam.mode) + " mode, state in " + state_dir);
+  int64_t next_tick = monotonic_us();
+  while (!g_stop) {
+    if (bus.handle_timeout(100) < 0 && !g_stop) {  // a signal interrupting the wait is not a failure
+      log_line("LCM receive failed");
+      break;
+    }
+    const int64_t now = monotonic_us();
+    if (now >= next_tick) {
+      auto st = node.status(now_utime());
+      st.checkpoints_written = checkpoints;
+      st.checkpoint_errors = checkpoint_errors;
+      publish(bus, "SLAM_STATUS", st);
+      if (watchdog) sd_notify(0, "WATCHDOG=1");
+      next_tick = now + std::min<int64_t>(1'000'000, watchdog ? static_cast<int64_t>(watchdog_usec / 2) : 1'000'000);
+    }
+  }
+  sd_notify(0, "STOPPING=1");
+  if (!o.localise) checkpoint();
+  log_line("stopped after " + std::to_string(node.counters().cycles) + " cycles");
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"slamd: ViTa-SLAM daemon (visuo-tactile SLAM for the WhiskEye robot)"};
+  Options o;
+  app.add_option("--config", o.config, "SLAM parameters (YAML: slam:, slamd: sections)")->check(CLI::ExistingFile);
+  app.add_option("--robot", o.robot, "robot geometry (YAML: robot: section)")->check(CLI::ExistingFile);
+  app.add_option("--mode", o.mode, "visual | tactile | vita (overrides the config)");
+  app.add_option("--lcm-url", o.lcm_url, "LCM URL (default: $LCM_DEFAULT_URL)");
+  app.add_option("--state-dir", o.state_dir, "checkpoint directory (live default: $STATE_DIRECTORY or /var/lib/slamd)");
+  app.add_option("--checkpoint-every", o.checkpoint_every, "checkpoint every N cycles (0: only on exit)")->check(CLI::NonNegativeNumber);
+  app.add_option("--checkpoint-keep", o.checkpoint_keep, "checkpoints kept")->check(CLI::PositiveNumber);
+  app.add_flag("--fresh", o.fresh, "ignore existing checkpoints and start a new map");
+  app.add_option("--map", o.map_file, "start from this saved map (a checkpoint file)")->check(CLI::ExistingFile);
+  app.add_flag("--localise", o.localise, "with --map: localise in the map without growing it");
+  auto* replay = app.add_option("--replay", o.replay_in, "process this LCM log offline")->check(CLI::ExistingFile);
+  app.add_option("--output", o.replay_out, "with --replay: output LCM log")->needs(replay);
+  app.add_flag("--timing", o.timing, "with --replay: measure latencies into SLAM_STATUS (output no longer byte-identical)");
+  app.add_flag("--print-config", o.print_config, "print every parameter in use and exit");
+  try {
+    app.parse(argc, argv);
+    if (o.localise && o.map_file.empty()) throw CLI::ValidationError("--localise", "needs --map FILE");
+    if (!o.replay_in.empty() && o.replay_out.empty()) throw CLI::ValidationError("--replay", "needs --output FILE");
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  try {
+    const Loaded cfg = load_config(o);
+    if (o.print_config) {
+      std::cout << cfg.dump;
+      return 0;
+    }
+    return o.replay_in.empty() ? run_live(cfg, o) : run_replay(cfg, o);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "slamd: %s\n", e.what());
+    return 1;
+  }
+}

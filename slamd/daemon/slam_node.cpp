@@ -1,0 +1,323 @@
+#include "slam_node.h"
+
+#include "whiskeye/common/robot_geometry.h"
+#include "whiskeye/common/utime.h"
+
+#include <whiskeye/template_match_t.hpp>
+#include <whiskeye/vita_event_t.hpp>
+#include <whiskeye/vita_map_t.hpp>
+#include <whiskeye/vita_pose_t.hpp>
+#include <whiskeye/driver_status_t.hpp>
+
+#include <algorithm>
+#include <cmath>
+
+namespace whiskeye::slamd {
+
+void load(const ParamNode& node, NodeParams& p) {
+  node.get("camera_tolerance_s", p.sync.camera_tolerance_s, 0.0, 2.0);
+  node.get("max_wait_s", p.sync.max_wait_s, 0.05, 30.0);
+  node.get("camera_buffer", p.sync.camera_buffer, 1, 1000);
+  node.get("map_period_s", p.map_period_s, 0.0, 3600.0);
+}
+
+namespace {
+
+constexpr int kMaxSamplesPerCycle = 20000;  // 40 s at 500 Hz: far beyond any whisk cycle
+
+int8_t mode_code(slam::Mode mode) {
+  switch (mode) {
+    case slam::Mode::Visual: return vita_pose_t::MODE_VISUAL;
+    case slam::Mode::Tactile: return vita_pose_t::MODE_TACTILE;
+    case slam::Mode::Vita: return vita_pose_t::MODE_VITA;
+  }
+  return vita_pose_t::MODE_VITA;
+}
+
+int8_t event_code(slam::EventType type) {
+  switch (type) {
+    case slam::EventType::SameExperience: return vita_event_t::SAME_EXPERIENCE;
+    case slam::EventType::NewExperience: return vita_event_t::NEW_EXPERIENCE;
+    case slam::EventType::Relocalise: return vita_event_t::RELOCALISE;
+  }
+  return vita_event_t::SAME_EXPERIENCE;
+}
+
+bool finite(double v) { return std::isfinite(v); }
+
+// Bytes per pixel of the uncompressed formats we accept; 0 for compressed, -1 for unknown.
+int bytes_per_pixel(int32_t fourcc) {
+  if (fourcc == image_t::PIXEL_FORMAT_GREY) return 1;
+  if (fourcc == image_t::PIXEL_FORMAT_YUYV) return 2;
+  if (fourcc == image_t::PIXEL_FORMAT_RGB24 || fourcc == image_t::PIXEL_FORMAT_BGR24) return 3;
+  if (fourcc == image_t::PIXEL_FORMAT_MJPEG) return 0;
+  return -1;
+}
+
+std::string check_image(const image_t& m) {
+  if (m.width <= 0 || m.height <= 0 || m.width > 10000 || m.height > 10000) {
+    return "CAMERA: bad size " + std::to_string(m.width) + "x" + std::to_string(m.height);
+  }
+  const int bpp = bytes_per_pixel(m.pixelformat);
+  if (bpp < 0) return "CAMERA: unsupported pixel format " + std::to_string(m.pixelformat);
+  if (bpp == 0) return m.size > 0 ? "" : "CAMERA: empty compressed frame";
+  if (m.row_stride < m.width * bpp) return "CAMERA: row_stride " + std::to_string(m.row_stride) + " < width × bytes per pixel";
+  if (static_cast<int64_t>(m.size) < static_cast<int64_t>(m.row_stride) * m.height) {
+    return "CAMERA: " + std::to_string(m.size) + " bytes < row_stride × height";
+  }
+  return "";
+}
+
+std::string check_whisk_cycle(const whisk_cycle_t& m) {
+  if (m.num_whiskers != kNumWhiskers) return "WHISK_CYCLE: num_whiskers " + std::to_string(m.num_whiskers) + " (expected 24)";
+  if (m.num_samples <= 0 || m.num_samples > kMaxSamplesPerCycle) {
+    return "WHISK_CYCLE: num_samples " + std::to_string(m.num_samples) + " out of range";
+  }
+  if (m.utime_end < m.utime_start) return "WHISK_CYCLE: utime_end before utime_start";
+  for (int s = 0; s < m.num_samples; ++s) {
+    if (s > 0 && m.sample_utime[s] < m.sample_utime[s - 1]) return "WHISK_CYCLE: sample times go backwards";
+    if (!m.sample_valid[s]) continue;
+    for (int w = 0; w < kNumWhiskers; ++w) {
+      if (!finite(m.theta[s][w]) || !finite(m.deflection_x[s][w]) || !finite(m.deflection_y[s][w])) {
+        return "WHISK_CYCLE: non-finite value at sample " + std::to_string(s) + ", whisker " + std::to_string(w);
+      }
+    }
+  }
+  return "";
+}
+
+std::string check_odometry(const odometry_t& m) {
+  for (double v : {m.x, m.y, m.theta, m.vx, m.vy, m.omega}) {
+    if (!finite(v)) return "ODOMETRY: non-finite value";
+  }
+  return "";
+}
+
+slam::WhiskCycleInput to_core(const whisk_cycle_t& m) {
+  slam::WhiskCycleInput in;
+  in.cycle = m.cycle;
+  in.utime_start = m.utime_start;
+  in.utime_end = m.utime_end;
+  in.samples.resize(static_cast<std::size_t>(m.num_samples));
+  for (int s = 0; s < m.num_samples; ++s) {
+    slam::WhiskSample& out = in.samples[static_cast<std::size_t>(s)];
+    out.utime = m.sample_utime[s];
+    out.valid = m.sample_valid[s] != 0;
+    for (int w = 0; w < kNumWhiskers; ++w) {
+      out.theta[w] = m.theta[s][w];
+      out.deflection_x[w] = m.deflection_x[s][w];
+      out.deflection_y[w] = m.deflection_y[s][w];
+      out.contact[w] = m.contact[s][w] != 0;
+    }
+  }
+  return in;
+}
+
+bool has_contact(const whisk_cycle_t& m) {
+  for (const auto& row : m.contact) {
+    for (int8_t c : row) {
+      if (c) return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
+SlamNode::SlamNode(Bus& in, Bus& out, std::unique_ptr<slam::VitaSlam> slam, const NodeParams& params,
+                   DecodeErrors& decode_errors)
+    : out_(out), slam_(std::move(slam)), params_(params), decode_errors_(decode_errors), sync_(params.sync) {
+  subscribe<image_t>(in, "CAMERA", [this](const image_t& m) { on_camera(m); }, decode_errors_);
+  subscribe<odometry_t>(in, "ODOMETRY", [this](const odometry_t& m) { on_odometry(m); }, decode_errors_);
+  subscribe<whisk_cycle_t>(in, "WHISK_CYCLE", [this](const whisk_cycle_t& m) { on_whisk_cycle(m); }, decode_errors_);
+}
+
+void SlamNode::reject(const std::string& what) {
+  ++counters_.validation_errors;
+  // Log the first of a burst and then every 100th, so a broken sender cannot flood the journal.
+  if (logger_ && (rejects_in_burst_ % 100) == 0) {
+    logger_("rejected " + what + " (" + std::to_string(counters_.validation_errors) + " rejected so far)");
+  }
+  ++rejects_in_burst_;
+}
+
+void SlamNode::on_camera(const image_t& msg) {
+  const std::string err = check_image(msg);
+  if (!err.empty()) return reject(err);
+  rejects_in_burst_ = 0;
+  sync_.add_camera(msg);
+  process(sync_.take_ready());
+}
+
+void SlamNode::on_whisk_cycle(const whisk_cycle_t& msg) {
+  const std::string err = check_whisk_cycle(msg);
+  if (!err.empty()) return reject(err);
+  rejects_in_burst_ = 0;
+  sync_.add_whisk_cycle(msg);
+  process(sync_.take_ready());
+}
+
+void SlamNode::on_odometry(const odometry_t& msg) {
+  const std::string err = check_odometry(msg);
+  if (!err.empty()) return reject(err);
+  rejects_in_burst_ = 0;
+  sync_.add_odometry(msg);
+  process(sync_.take_ready());
+  if (!have_cycle_) return;
+  // Dead-reckon from the last cycle's end with the base's own odometry pose.
+  const Pose2 offset = between(odom_at_last_cycle_, Pose2{msg.x, msg.y, msg.theta});
+  const Pose2 pose = slam_->dead_reckon(offset);
+  vita_pose_t out{};
+  out.utime = msg.utime;
+  out.x = pose.x;
+  out.y = pose.y;
+  out.theta = pose.theta;
+  out.experience_id = slam_->map().current_id();
+  out.template_id = last_template_id_;
+  out.mode = mode_code(slam_->params().mode);
+  slam_->pose_cells().best(out.pose_cell_x, out.pose_cell_y, out.pose_cell_theta);
+  publish(out_, "VITA_POSE", out);
+}
+
+void SlamNode::process(std::vector<SyncedCycle> cycles) {
+  for (const auto& c : cycles) process_one(c);
+}
+
+void SlamNode::process_one(const SyncedCycle& cycle) {
+  const int64_t t0 = clock_ ? clock_() : 0;
+  const slam::WhiskCycleInput whisk = to_core(cycle.whisk);
+  const bool contact = has_contact(cycle.whisk);
+  slam::ImageView view{};
+  if (cycle.image) {
+    const image_t& im = *cycle.image;
+    view = slam::ImageView{im.utime, im.width, im.height, im.row_stride, static_cast<uint32_t>(im.pixelformat),
+                           std::span<const uint8_t>(im.data.data(), im.data.size())};
+  }
+  slam::CycleInput input;
+  input.utime = cycle.whisk.utime_end;
+  input.cycle = cycle.whisk.cycle;
+  input.image = cycle.image ? &view : nullptr;
+  input.whisk = &whisk;
+  input.odometry.reserve(cycle.odometry.size());
+  for (const auto& o : cycle.odometry) input.odometry.push_back({o.utime, o.vx, o.vy, o.omega});
+
+  const slam::CycleResult r = slam_->process_cycle(input);
+  ++counters_.cycles;
+  if (!cycle.image) ++counters_.cycles_without_camera;
+  if (!contact) ++counters_.cycles_without_contact;
+  if (!cycle.odometry.empty()) {
+    const odometry_t& last = cycle.odometry.back();
+    odom_at_last_cycle_ = Pose2{last.x, last.y, last.theta};
+  }
+  have_cycle_ = true;
+  last_template_id_ = r.match.template_id;
+  const int8_t mode = mode_code(slam_->params().mode);
+
+  vita_event_t ev{};
+  ev.utime = input.utime;
+  ev.cycle = input.cycle;
+  ev.type = event_code(r.event.type);
+  ev.from_id = r.event.from_id;
+  ev.to_id = r.event.to_id;
+  ev.template_id = r.match.template_id;
+  ev.mode = mode;
+  publish(out_, "VITA_EVENT", ev);
+
+  template_match_t m{};
+  m.utime = input.utime;
+  m.cycle = input.cycle;
+  m.template_id = r.match.template_id;
+  m.is_new = r.match.is_new;
+  m.error = r.match.error;
+  m.visual_error = r.match.visual_error;
+  m.pfh_error = r.match.pfh_error;
+  m.sda_error = r.match.sda_error;
+  m.visual_shift = r.match.visual_shift;
+  m.num_templates = r.num_templates;
+  m.mode = mode;
+  m.visual_used = r.match.visual_used;
+  m.tactile_used = r.match.tactile_used;
+  publish(out_, "VITA_MATCH", m);
+
+  if (r.event.type != slam::EventType::SameExperience || r.match.is_new) map_dirty_ = true;
+  if (map_dirty_ && (last_map_utime_ == INT64_MIN ||
+                     input.utime - last_map_utime_ >= seconds_to_utime(params_.map_period_s))) {
+    publish_map(input.utime);
+  }
+  if (clock_) {
+    latencies_ms_.push_back(static_cast<double>(clock_() - t0) / 1000.0);
+    if (latencies_ms_.size() > 1000) latencies_ms_.pop_front();
+  }
+  if (cycle_hook_) cycle_hook_(r);
+}
+
+void SlamNode::publish_map(int64_t utime) {
+  const auto& map = slam_->map();
+  vita_map_t msg{};
+  msg.utime = utime;
+  msg.mode = mode_code(slam_->params().mode);
+  msg.current_experience_id = map.current_id();
+  for (const auto& e : map.experiences()) {
+    experience_t x{};
+    x.id = e.id;
+    x.x = e.pose.x;
+    x.y = e.pose.y;
+    x.theta = e.pose.theta;
+    x.utime_created = e.utime_created;
+    x.visual_template_id = e.visual_template_id;
+    x.tactile_template_id = e.tactile_template_id;
+    x.dense = e.dense;
+    msg.experiences.push_back(x);
+  }
+  msg.num_experiences = static_cast<int32_t>(msg.experiences.size());
+  for (const auto& l : map.links()) {
+    link_t x{};
+    x.from_id = l.from;
+    x.to_id = l.to;
+    x.dx = l.delta.x;
+    x.dy = l.delta.y;
+    x.dtheta = l.delta.theta;
+    x.utime_created = l.utime_created;
+    msg.links.push_back(x);
+  }
+  msg.num_links = static_cast<int32_t>(msg.links.size());
+  publish(out_, "VITA_MAP", msg);
+  last_map_utime_ = utime;
+  map_dirty_ = false;
+}
+
+void SlamNode::flush() {
+  process(sync_.flush());
+  if (have_cycle_) publish_map(sync_.data_time());
+}
+
+slam_status_t SlamNode::status(int64_t utime) const {
+  slam_status_t s{};
+  s.utime = utime;
+  s.mode = mode_code(slam_->params().mode);
+  s.cycles = counters_.cycles;
+  s.num_templates = slam_->templates().size();
+  s.num_experiences = static_cast<int32_t>(slam_->map().experiences().size());
+  s.num_links = static_cast<int32_t>(slam_->map().links().size());
+  if (!latencies_ms_.empty()) {
+    std::vector<double> sorted(latencies_ms_.begin(), latencies_ms_.end());
+    std::sort(sorted.begin(), sorted.end());
+    const auto at = [&](double q) { return sorted[static_cast<std::size_t>(q * static_cast<double>(sorted.size() - 1))]; };
+    s.latency_last_ms = latencies_ms_.back();
+    s.latency_p50_ms = at(0.5);
+    s.latency_p99_ms = at(0.99);
+    s.latency_max_ms = sorted.back();
+  }
+  s.decode_errors = decode_errors_.total();
+  s.validation_errors = counters_.validation_errors;
+  s.cycles_without_camera = counters_.cycles_without_camera;
+  s.cycles_without_contact = counters_.cycles_without_contact;
+  const bool degraded = s.decode_errors > 0 || s.validation_errors > 0;
+  s.state = degraded ? driver_status_t::STATE_DEGRADED : driver_status_t::STATE_OK;
+  s.message = degraded ? "rejected input: see decode_errors / validation_errors" : "";
+  return s;
+}
+
+void SlamNode::publish_status(int64_t utime) { publish(out_, "SLAM_STATUS", status(utime)); }
+
+}  // namespace whiskeye::slamd

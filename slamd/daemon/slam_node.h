@@ -1,0 +1,94 @@
+// The slamd node: LCM messages in, ViTa-SLAM cycles, LCM messages out. It talks only to Bus
+// interfaces, so the same code runs live (LcmBus), on a log (`slamd --replay`) and in unit tests
+// (MemoryBus). All of its decisions follow the messages' own sample times, never the wall clock.
+//
+// In:  WHISK_CYCLE (whisk_cycle_t), CAMERA (image_t), ODOMETRY (odometry_t)
+// Out: VITA_POSE   per odometry sample once the first cycle is done (dead-reckoned between cycles)
+//      VITA_EVENT, VITA_MATCH  per processed whisk cycle
+//      VITA_MAP    when the map changed, at most every map_period_s of data time, and on flush()
+//      SLAM_STATUS from publish_status()
+#pragma once
+
+#include "cycle_sync.h"
+
+#include "whiskeye/common/bus.h"
+#include "whiskeye/common/params.h"
+#include "whiskeye/common/se2.h"
+#include "whiskeye/slam/vita_slam.h"
+
+#include <whiskeye/slam_status_t.hpp>
+
+#include <deque>
+#include <functional>
+#include <memory>
+#include <string>
+
+namespace whiskeye::slamd {
+
+struct NodeParams {
+  SyncParams sync;
+  double map_period_s = 1.0;  // VITA_MAP throttle, data time
+  bool operator==(const NodeParams&) const = default;
+};
+void load(const ParamNode& node, NodeParams& params);
+
+struct NodeCounters {
+  int64_t cycles = 0;
+  int64_t validation_errors = 0;
+  int64_t cycles_without_camera = 0;
+  int64_t cycles_without_contact = 0;
+  int64_t out_of_order = 0;
+};
+
+class SlamNode {
+ public:
+  // Called after each processed cycle (e.g. to checkpoint), and for log lines (level, text).
+  using CycleHook = std::function<void(const slam::CycleResult&)>;
+  using Logger = std::function<void(const std::string& line)>;
+
+  SlamNode(Bus& in, Bus& out, std::unique_ptr<slam::VitaSlam> slam, const NodeParams& params,
+           DecodeErrors& decode_errors);
+
+  void set_cycle_hook(CycleHook hook) { cycle_hook_ = std::move(hook); }
+  void set_logger(Logger logger) { logger_ = std::move(logger); }
+  // Wall-clock latency measurement of each cycle (live). Off: latencies stay 0 (deterministic output).
+  void set_latency_clock(std::function<int64_t()> monotonic_us) { clock_ = std::move(monotonic_us); }
+
+  // Processes every cycle still pending (end of a log) and publishes the final map.
+  void flush();
+  // Publishes SLAM_STATUS stamped `utime`.
+  void publish_status(int64_t utime);
+  slam_status_t status(int64_t utime) const;
+
+  const slam::VitaSlam& slam() const { return *slam_; }
+  const NodeCounters& counters() const { return counters_; }
+
+ private:
+  void on_camera(const image_t& msg);
+  void on_odometry(const odometry_t& msg);
+  void on_whisk_cycle(const whisk_cycle_t& msg);
+  void process(std::vector<SyncedCycle> cycles);
+  void process_one(const SyncedCycle& cycle);
+  void publish_map(int64_t utime);
+  void reject(const std::string& what);
+
+  Bus& out_;
+  std::unique_ptr<slam::VitaSlam> slam_;
+  NodeParams params_;
+  DecodeErrors& decode_errors_;
+  CycleSynchroniser sync_;
+  CycleHook cycle_hook_;
+  Logger logger_;
+  std::function<int64_t()> clock_;
+  NodeCounters counters_;
+
+  bool have_cycle_ = false;
+  Pose2 odom_at_last_cycle_;  // odometry-frame pose at the last processed cycle's end
+  int64_t last_map_utime_ = INT64_MIN;
+  bool map_dirty_ = false;
+  int last_template_id_ = -1;
+  std::deque<double> latencies_ms_;  // last 1000 cycles
+  int64_t rejects_in_burst_ = 0;
+};
+
+}  // namespace whiskeye::slamd

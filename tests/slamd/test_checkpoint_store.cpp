@@ -1,0 +1,142 @@
+#include "checkpoint_store.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+namespace whiskeye::slamd {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+class CheckpointStoreTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::path(::testing::TempDir()) /
+           ("cp_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  static std::vector<uint8_t> payload(int n, uint8_t seed) {
+    std::vector<uint8_t> p(static_cast<std::size_t>(n));
+    for (int i = 0; i < n; ++i) p[static_cast<std::size_t>(i)] = static_cast<uint8_t>(seed + i * 7);
+    return p;
+  }
+  static void corrupt_byte(const std::string& path, long offset) {
+    std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekg(offset);
+    char c = 0;
+    f.read(&c, 1);
+    c = static_cast<char>(c ^ 0x5a);
+    f.seekp(offset);
+    f.write(&c, 1);
+  }
+  fs::path dir_;
+};
+
+TEST_F(CheckpointStoreTest, WritesAndReadsBackExactly) {
+  CheckpointStore store(dir_.string(), 3);
+  const auto p = payload(10000, 3);
+  const std::string path = store.write(42, p);
+  const Checkpoint cp = read_checkpoint(path);
+  EXPECT_EQ(cp.sequence, 42u);
+  EXPECT_EQ(cp.payload, p);
+  std::vector<std::string> problems;
+  const auto newest = store.load_newest(&problems);
+  ASSERT_TRUE(newest);
+  EXPECT_EQ(newest->payload, p);
+  EXPECT_TRUE(problems.empty());
+}
+
+TEST_F(CheckpointStoreTest, KeepsOnlyTheNewestAndLeavesNoTempFiles) {
+  CheckpointStore store(dir_.string(), 2);
+  for (uint64_t s = 1; s <= 5; ++s) store.write(s, payload(100, static_cast<uint8_t>(s)));
+  const auto files = store.list();
+  ASSERT_EQ(files.size(), 2u);
+  EXPECT_THAT(files[0], HasSubstr("checkpoint-000000000004.vslam"));
+  EXPECT_THAT(files[1], HasSubstr("checkpoint-000000000005.vslam"));
+  int others = 0;
+  for (const auto& e : fs::directory_iterator(dir_)) others += e.path().extension() != ".vslam";
+  EXPECT_EQ(others, 0);
+}
+
+TEST_F(CheckpointStoreTest, CorruptNewestFallsBackToPreviousAndNamesTheFile) {
+  CheckpointStore store(dir_.string(), 3);
+  store.write(1, payload(500, 1));
+  const std::string newest = store.write(2, payload(500, 2));
+  corrupt_byte(newest, 100);  // inside the payload
+  std::vector<std::string> problems;
+  const auto cp = store.load_newest(&problems);
+  ASSERT_TRUE(cp);
+  EXPECT_EQ(cp->sequence, 1u);
+  EXPECT_EQ(cp->payload, payload(500, 1));
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_THAT(problems[0], HasSubstr(newest + ": checksum mismatch"));
+  EXPECT_TRUE(fs::exists(newest + ".corrupt")) << "the bad file is kept for inspection";
+}
+
+TEST_F(CheckpointStoreTest, RejectsTruncatedBadMagicAndFutureVersion) {
+  CheckpointStore store(dir_.string(), 3);
+  const std::string path = store.write(7, payload(64, 9));
+  fs::resize_file(path, fs::file_size(path) - 1);
+  EXPECT_THROW(
+      {
+        try {
+          read_checkpoint(path);
+        } catch (const CheckpointError& e) {
+          EXPECT_THAT(e.what(), HasSubstr("truncated or appended"));
+          throw;
+        }
+      },
+      CheckpointError);
+  const std::string p2 = store.write(8, payload(64, 9));
+  corrupt_byte(p2, 0);
+  try {
+    read_checkpoint(p2);
+    FAIL();
+  } catch (const CheckpointError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("bad magic"));
+  }
+  const std::string p3 = store.write(9, payload(64, 9));
+  corrupt_byte(p3, 8);  // version
+  try {
+    read_checkpoint(p3);
+    FAIL();
+  } catch (const CheckpointError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("unsupported checkpoint format version"));
+  }
+  std::ofstream(dir_ / "checkpoint-000000000010.vslam") << "short";
+  try {
+    read_checkpoint((dir_ / "checkpoint-000000000010.vslam").string());
+    FAIL();
+  } catch (const CheckpointError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("truncated header"));
+  }
+}
+
+TEST_F(CheckpointStoreTest, NothingValidMeansNoCheckpoint) {
+  CheckpointStore store(dir_.string(), 3);
+  std::vector<std::string> problems;
+  EXPECT_FALSE(store.load_newest(&problems));
+  const std::string path = store.write(1, payload(10, 1));
+  corrupt_byte(path, 40);
+  EXPECT_FALSE(store.load_newest(&problems));
+  EXPECT_EQ(problems.size(), 1u);
+}
+
+TEST_F(CheckpointStoreTest, UnwritableDirectoryIsAnErrorNamingIt) {
+  fs::create_directories(dir_);
+  std::ofstream(dir_ / "file") << "x";
+  try {
+    CheckpointStore store((dir_ / "file" / "sub").string(), 3);
+    FAIL();
+  } catch (const CheckpointError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("cannot create the checkpoint directory"));
+  }
+}
+
+}  // namespace
+}  // namespace whiskeye::slamd

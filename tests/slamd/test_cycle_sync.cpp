@@ -1,0 +1,107 @@
+#include "cycle_sync.h"
+
+#include <gtest/gtest.h>
+
+namespace whiskeye::slamd {
+namespace {
+
+constexpr int64_t kS = 1'000'000;
+
+image_t frame(int64_t utime) {
+  image_t f{};
+  f.utime = utime;
+  return f;
+}
+odometry_t odo(int64_t utime) {
+  odometry_t o{};
+  o.utime = utime;
+  return o;
+}
+whisk_cycle_t cycle(int64_t n, int64_t end) {
+  whisk_cycle_t c{};
+  c.cycle = n;
+  c.utime_start = end - kS;
+  c.utime_end = end;
+  return c;
+}
+
+// Feeds 50 Hz odometry and 5 Hz camera up to `until`.
+void feed(CycleSynchroniser& s, int64_t from, int64_t until, bool camera = true) {
+  for (int64_t t = from; t <= until; t += 20'000) {
+    s.add_odometry(odo(t));
+    if (camera && t % 200'000 == 0) s.add_camera(frame(t));
+  }
+}
+
+TEST(CycleSync, WaitsUntilNoCloserFrameCanArrive) {
+  CycleSynchroniser s(SyncParams{});
+  feed(s, 20'000, 10 * kS);
+  s.add_whisk_cycle(cycle(1, 10 * kS + 90'000));  // between frames at 10.0 and 10.2 s
+  EXPECT_TRUE(s.take_ready().empty());
+  feed(s, 10 * kS + 20'000, 10 * kS + 220'000);  // frame at 10.2 s: closer (0.11 s away)...
+  EXPECT_TRUE(s.take_ready().empty()) << "…but a frame up to end+tolerance could still come";
+  feed(s, 10 * kS + 240'000, 10 * kS + 400'000);  // 10.4 s ≥ end + 0.15 s
+  const auto ready = s.take_ready();
+  ASSERT_EQ(ready.size(), 1u);
+  ASSERT_TRUE(ready[0].image);
+  EXPECT_EQ(ready[0].image->utime, 10 * kS);  // 0.09 s away beats 0.11 s
+}
+
+TEST(CycleSync, HandsOutOdometryOncePerCycleInOrder) {
+  CycleSynchroniser s(SyncParams{});
+  feed(s, 20'000, 3 * kS);
+  s.add_whisk_cycle(cycle(1, kS));
+  s.add_whisk_cycle(cycle(2, 2 * kS));
+  const auto ready = s.take_ready();
+  ASSERT_EQ(ready.size(), 2u);
+  EXPECT_EQ(ready[0].odometry.size(), 50u);  // 0.02 .. 1.00 s
+  EXPECT_EQ(ready[0].odometry.back().utime, kS);
+  EXPECT_EQ(ready[1].odometry.size(), 50u);  // 1.02 .. 2.00 s
+  EXPECT_EQ(ready[1].odometry.front().utime, kS + 20'000);
+}
+
+TEST(CycleSync, MissingCameraDegradesAfterMaxWaitAndIsCounted) {
+  CycleSynchroniser s(SyncParams{});
+  feed(s, 20'000, kS + 900'000, /*camera=*/false);
+  s.add_whisk_cycle(cycle(1, kS));
+  EXPECT_TRUE(s.take_ready().empty()) << "data time 1.9 s < end + max_wait = 2.0 s";
+  feed(s, kS + 920'000, 2 * kS, /*camera=*/false);
+  const auto ready = s.take_ready();
+  ASSERT_EQ(ready.size(), 1u);
+  EXPECT_FALSE(ready[0].image);
+  EXPECT_EQ(s.counters().cycles_without_camera, 1);
+}
+
+TEST(CycleSync, FrameOutsideToleranceIsNotUsed) {
+  CycleSynchroniser s(SyncParams{});
+  s.add_camera(frame(kS - 500'000));
+  feed(s, 20'000, 3 * kS, false);
+  s.add_whisk_cycle(cycle(1, kS));
+  const auto ready = s.take_ready();
+  ASSERT_EQ(ready.size(), 1u);
+  EXPECT_FALSE(ready[0].image);
+}
+
+TEST(CycleSync, DropsOutOfOrderMessages) {
+  CycleSynchroniser s(SyncParams{});
+  feed(s, 20'000, 3 * kS);
+  s.add_whisk_cycle(cycle(1, 2 * kS));
+  s.add_whisk_cycle(cycle(0, kS));  // older than a pending cycle
+  s.add_odometry(odo(kS));          // older than the newest odometry
+  EXPECT_EQ(s.counters().out_of_order, 2);
+  EXPECT_EQ(s.take_ready().size(), 1u);
+}
+
+TEST(CycleSync, FlushHandsOutEverythingPending) {
+  CycleSynchroniser s(SyncParams{});
+  feed(s, 20'000, kS);
+  s.add_whisk_cycle(cycle(1, kS));
+  EXPECT_TRUE(s.take_ready().empty());  // camera at 1.0 s, not yet 1.15 s
+  const auto rest = s.flush();
+  ASSERT_EQ(rest.size(), 1u);
+  ASSERT_TRUE(rest[0].image);
+  EXPECT_EQ(rest[0].image->utime, kS);
+}
+
+}  // namespace
+}  // namespace whiskeye::slamd

@@ -1,0 +1,184 @@
+// The slamd node on an in-memory bus: what it publishes per cycle, and how it survives bad input.
+#include "slam_node.h"
+
+#include <whiskeye/driver_status_t.hpp>
+#include <whiskeye/slam_status_t.hpp>
+#include <whiskeye/template_match_t.hpp>
+#include <whiskeye/vita_event_t.hpp>
+#include <whiskeye/vita_map_t.hpp>
+#include <whiskeye/vita_pose_t.hpp>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace whiskeye::slamd {
+namespace {
+
+constexpr int64_t kT0 = 1'700'000'000'000'000;
+constexpr int64_t kS = 1'000'000;
+
+// A 640x480 GREY frame of vertical stripes; different periods look like different places.
+image_t stripes(int64_t utime, int period) {
+  image_t im{};
+  im.utime = utime;
+  im.width = 640;
+  im.height = 480;
+  im.row_stride = 640;
+  im.pixelformat = image_t::PIXEL_FORMAT_GREY;
+  im.size = 640 * 480;
+  im.data.resize(static_cast<std::size_t>(im.size));
+  for (int y = 0; y < 480; ++y) {
+    for (int x = 0; x < 640; ++x) {
+      im.data[static_cast<std::size_t>(y * 640 + x)] = static_cast<uint8_t>(((x / period) % 2) ? 220 : 30 + y / 8);
+    }
+  }
+  return im;
+}
+
+// A whisk cycle of 1 s at 500 Hz with no contact.
+whisk_cycle_t free_cycle(int64_t n, int64_t end, int whiskers = kNumWhiskers) {
+  whisk_cycle_t c{};
+  c.cycle = n;
+  c.utime = end;
+  c.utime_start = end - kS + 2000;
+  c.utime_end = end;
+  c.num_whiskers = whiskers;
+  c.num_samples = 500;
+  for (int s = 0; s < 500; ++s) {
+    c.sample_utime.push_back(c.utime_start + s * 2000);
+    c.sample_valid.push_back(1);
+    c.phase.push_back(s < 250 ? 0 : 1);
+    const float theta = static_cast<float>(0.6 * std::sin(kTwoPi * s / 500.0));
+    c.theta.push_back(std::vector<float>(static_cast<std::size_t>(whiskers), theta));
+    c.deflection_x.push_back(std::vector<float>(static_cast<std::size_t>(whiskers), 0.0f));
+    c.deflection_y.push_back(std::vector<float>(static_cast<std::size_t>(whiskers), 0.0f));
+    c.contact.push_back(std::vector<int8_t>(static_cast<std::size_t>(whiskers), 0));
+  }
+  return c;
+}
+
+class SlamNodeTest : public ::testing::Test {
+ protected:
+  SlamNodeTest() {
+    slam::SlamParams p;
+    node_ = std::make_unique<SlamNode>(in_, out_, std::make_unique<slam::VitaSlam>(p, default_robot_geometry()),
+                                       NodeParams{}, errors_);
+    subscribe<vita_event_t>(out_, "VITA_EVENT", [&](const vita_event_t& m) { events_.push_back(m); }, out_errors_);
+    subscribe<template_match_t>(out_, "VITA_MATCH", [&](const template_match_t& m) { matches_.push_back(m); },
+                                out_errors_);
+    subscribe<vita_pose_t>(out_, "VITA_POSE", [&](const vita_pose_t& m) { poses_.push_back(m); }, out_errors_);
+    subscribe<vita_map_t>(out_, "VITA_MAP", [&](const vita_map_t& m) { maps_.push_back(m); }, out_errors_);
+  }
+
+  // Streams 50 Hz odometry (still robot), 5 Hz frames of `periods[i]` during second i (0: no frame),
+  // and a whisk cycle at the end of every second, in time order.
+  void stream(const std::vector<int>& periods) {
+    for (std::size_t sec = 0; sec < periods.size(); ++sec) {
+      for (int k = 1; k <= 50; ++k) {
+        const int64_t t = kT0 + static_cast<int64_t>(sec) * kS + k * 20'000;
+        odometry_t o{};
+        o.utime = t;
+        publish(in_, "ODOMETRY", o);
+        if (periods[sec] > 0 && k % 10 == 0) publish(in_, "CAMERA", stripes(t, periods[sec]));
+        if (k == 50) publish(in_, "WHISK_CYCLE", free_cycle(static_cast<int64_t>(sec), t));
+      }
+    }
+  }
+
+  MemoryBus in_;
+  MemoryBus out_;
+  DecodeErrors errors_;
+  DecodeErrors out_errors_;
+  std::unique_ptr<SlamNode> node_;
+  std::vector<vita_event_t> events_;
+  std::vector<template_match_t> matches_;
+  std::vector<vita_pose_t> poses_;
+  std::vector<vita_map_t> maps_;
+};
+
+TEST_F(SlamNodeTest, PublishesOneEventAndMatchPerCycleAndPosesAfterTheFirst) {
+  stream({8, 40, 8, 8});
+  node_->flush();
+  ASSERT_EQ(events_.size(), 4u);
+  ASSERT_EQ(matches_.size(), 4u);
+  EXPECT_TRUE(matches_[0].is_new);
+  EXPECT_TRUE(matches_[1].is_new) << "a different view is a new template";
+  EXPECT_FALSE(matches_[2].is_new) << "the first view again matches its template";
+  EXPECT_EQ(matches_[2].template_id, matches_[0].template_id);
+  EXPECT_TRUE(matches_[0].visual_used);
+  EXPECT_EQ(events_[0].type, vita_event_t::NEW_EXPERIENCE);
+  EXPECT_EQ(events_[0].cycle, 0);
+  EXPECT_EQ(events_[0].utime, kT0 + kS);
+  // Poses only once there is a map frame (after the first cycle), one per odometry sample.
+  ASSERT_FALSE(poses_.empty());
+  EXPECT_GT(poses_.front().utime, kT0 + kS);
+  EXPECT_GE(poses_.front().experience_id, 0);
+  ASSERT_FALSE(maps_.empty());
+  EXPECT_EQ(maps_.back().num_experiences, static_cast<int32_t>(maps_.back().experiences.size()));
+  EXPECT_GE(maps_.back().num_experiences, 2);
+  EXPECT_EQ(node_->counters().cycles, 4);
+  EXPECT_EQ(node_->counters().cycles_without_contact, 4);
+}
+
+TEST_F(SlamNodeTest, RejectsBadMessagesCountsThemAndCarriesOn) {
+  stream({8});
+  // Undecodable bytes, then decodable but inconsistent messages.
+  const std::vector<uint8_t> garbage{0xde, 0xad, 0xbe, 0xef};
+  in_.publish_raw("WHISK_CYCLE", garbage);
+  publish(in_, "WHISK_CYCLE", free_cycle(7, kT0 + 5 * kS, /*whiskers=*/23));
+  odometry_t nan_odo{};
+  nan_odo.utime = kT0 + kS + 30'000;
+  nan_odo.vx = std::nan("");
+  publish(in_, "ODOMETRY", nan_odo);
+  image_t short_frame = stripes(kT0 + kS + 40'000, 8);
+  short_frame.data.resize(1000);
+  short_frame.size = 1000;
+  publish(in_, "CAMERA", short_frame);
+  image_t odd_format = stripes(kT0 + kS + 50'000, 8);
+  odd_format.pixelformat = 0x12345678;
+  publish(in_, "CAMERA", odd_format);
+
+  EXPECT_EQ(errors_.total(), 1);
+  EXPECT_EQ(node_->counters().validation_errors, 4);
+  const slam_status_t st = node_->status(kT0);
+  EXPECT_EQ(st.decode_errors, 1);
+  EXPECT_EQ(st.validation_errors, 4);
+  EXPECT_EQ(st.state, driver_status_t::STATE_DEGRADED);
+
+  // Still running: later valid input is processed normally.
+  const std::size_t before = events_.size();
+  for (int k = 1; k <= 50; ++k) {
+    const int64_t t = kT0 + kS + k * 20'000 + 40'000;
+    odometry_t o{};
+    o.utime = t;
+    publish(in_, "ODOMETRY", o);
+    if (k % 10 == 0) publish(in_, "CAMERA", stripes(t, 8));
+  }
+  publish(in_, "WHISK_CYCLE", free_cycle(1, kT0 + 2 * kS));
+  node_->flush();
+  EXPECT_EQ(events_.size(), before + 1 + 1) << "the first cycle (pending) and the new one";
+}
+
+TEST_F(SlamNodeTest, MissingCameraDegradesToTouchAndIsCounted) {
+  stream({0, 0, 0});
+  node_->flush();
+  ASSERT_EQ(matches_.size(), 3u);
+  for (const auto& m : matches_) EXPECT_FALSE(m.visual_used);
+  EXPECT_EQ(node_->counters().cycles_without_camera, 3);
+  EXPECT_EQ(node_->status(kT0).cycles_without_camera, 3);
+}
+
+TEST_F(SlamNodeTest, StatusReportsMapSizeAndOkState) {
+  stream({8, 40});
+  node_->flush();
+  const slam_status_t st = node_->status(kT0 + 10 * kS);
+  EXPECT_EQ(st.cycles, 2);
+  EXPECT_EQ(st.num_templates, 2);
+  EXPECT_EQ(st.num_experiences, 2);
+  EXPECT_EQ(st.state, driver_status_t::STATE_OK);
+  EXPECT_EQ(st.mode, vita_pose_t::MODE_VITA);
+}
+
+}  // namespace
+}  // namespace whiskeye::slamd

@@ -1,0 +1,227 @@
+// The real slamd binary on a short simulator run: deterministic replay, checkpoints and resume,
+// reuse of a saved map, bad configuration, and a live run fed by lcm-logplayer over udpm:// (inside
+// a private network namespace) that takes the same decisions as --replay.
+#include "subprocess.h"
+
+#include "whiskeye/common/bus.h"
+
+#include <whiskeye/vita_event_t.hpp>
+#include <whiskeye/vita_map_t.hpp>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <sstream>
+
+namespace whiskeye {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::Subprocess;
+using testing::wait_until;
+using ::testing::HasSubstr;
+
+const std::string kSlamd = SLAMD_EXE;
+const std::string kConfig = WHISKEYE_SOURCE_DIR "/config/slam.yaml";
+
+struct Output {
+  std::vector<vita_event_t> events;
+  std::vector<vita_map_t> maps;
+  int ground_truth = 0;
+};
+
+Output read_output(const std::string& path) {
+  Output o;
+  LogReader r(path);
+  LogEvent ev;
+  while (r.next(ev)) {
+    if (ev.channel == "VITA_EVENT") {
+      vita_event_t m;
+      EXPECT_TRUE(decode_message(ev.data, m));
+      o.events.push_back(m);
+    } else if (ev.channel == "VITA_MAP") {
+      vita_map_t m;
+      EXPECT_TRUE(decode_message(ev.data, m));
+      o.maps.push_back(m);
+    } else if (ev.channel == "GROUND_TRUTH") {
+      ++o.ground_truth;
+    }
+  }
+  return o;
+}
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+class SlamdBinary : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = fs::path(::testing::TempDir()) / "slamd_binary";
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    sim_log_ = (dir_ / "sim.lcmlog").string();
+    Subprocess sim({VITA_SIM_EXE, "--world", WHISKEYE_SOURCE_DIR "/config/worlds/aliased_arena.yaml", "--robot",
+                    WHISKEYE_SOURCE_DIR "/config/robot.yaml", "--duration", "14", "--seed", "5", "--quiet",
+                    "--output", sim_log_});
+    ASSERT_EQ(sim.wait(120), 0) << sim.output();
+  }
+  static void TearDownTestSuite() { fs::remove_all(dir_); }
+
+  static int replay(const std::string& out, std::vector<std::string> extra = {}, std::string* log = nullptr) {
+    std::vector<std::string> argv{kSlamd, "--replay", sim_log_, "--output", out, "--config", kConfig};
+    argv.insert(argv.end(), extra.begin(), extra.end());
+    Subprocess p(argv);
+    const int rc = p.wait(120);
+    if (log) *log = p.output();
+    return rc;
+  }
+
+  static fs::path dir_;
+  static std::string sim_log_;
+};
+fs::path SlamdBinary::dir_;
+std::string SlamdBinary::sim_log_;
+
+TEST_F(SlamdBinary, ReplayIsByteIdenticalAndCopiesGroundTruth) {
+  const std::string a = (dir_ / "a.lcmlog").string();
+  const std::string b = (dir_ / "b.lcmlog").string();
+  std::string log;
+  ASSERT_EQ(replay(a, {}, &log), 0) << log;
+  EXPECT_THAT(log, HasSubstr("replayed"));
+  ASSERT_EQ(replay(b), 0);
+  EXPECT_EQ(slurp(a), slurp(b));
+  const Output o = read_output(a);
+  EXPECT_GE(o.events.size(), 12u) << "one event per whisk cycle (14 s of whisking at 1 Hz)";
+  EXPECT_EQ(o.events.front().type, vita_event_t::NEW_EXPERIENCE);
+  EXPECT_GE(o.ground_truth, 14 * 50 - 5) << "GROUND_TRUTH (50 Hz) is copied through for vita-eval";
+  ASSERT_FALSE(o.maps.empty());
+  EXPECT_GE(o.maps.back().num_experiences, 2);
+}
+
+TEST_F(SlamdBinary, ModesDifferInWhatTheyCompare) {
+  for (const std::string mode : {"visual", "tactile"}) {
+    const std::string out = (dir_ / ("mode_" + mode + ".lcmlog")).string();
+    ASSERT_EQ(replay(out, {"--mode", mode}), 0);
+    const Output o = read_output(out);
+    ASSERT_FALSE(o.events.empty());
+    EXPECT_EQ(o.events.front().mode, mode == "visual" ? 0 : 1);
+  }
+}
+
+TEST_F(SlamdBinary, CheckpointsAndResumesSkippingACorruptOne) {
+  const fs::path state = dir_ / "state";
+  fs::remove_all(state);
+  ASSERT_EQ(replay((dir_ / "cp1.lcmlog").string(), {"--state-dir", state.string(), "--checkpoint-keep", "2"}), 0);
+  std::vector<fs::path> files;
+  for (const auto& e : fs::directory_iterator(state)) files.push_back(e.path());
+  std::sort(files.begin(), files.end());
+  ASSERT_EQ(files.size(), 2u) << "the newest two are kept";
+  // Corrupt the newest: the next start must name it and resume from the other.
+  {
+    std::fstream f(files.back(), std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(100);
+    f.put('\x7f');
+  }
+  std::string log;
+  ASSERT_EQ(replay((dir_ / "cp2.lcmlog").string(), {"--state-dir", state.string()}, &log), 0) << log;
+  EXPECT_THAT(log, HasSubstr("skipped unusable checkpoint " + files.back().string()));
+  EXPECT_THAT(log, HasSubstr("resuming from " + files.front().string()));
+  EXPECT_TRUE(fs::exists(files.back().string() + ".corrupt"));
+}
+
+TEST_F(SlamdBinary, LocalisesInASavedMapWithoutGrowingIt) {
+  const fs::path state = dir_ / "state_map";
+  fs::remove_all(state);
+  ASSERT_EQ(replay((dir_ / "map.lcmlog").string(), {"--state-dir", state.string(), "--checkpoint-keep", "1"}), 0);
+  const Output built = read_output((dir_ / "map.lcmlog").string());
+  fs::path map_file;
+  for (const auto& e : fs::directory_iterator(state)) map_file = e.path();
+  ASSERT_FALSE(map_file.empty());
+
+  const std::string out = (dir_ / "localise.lcmlog").string();
+  std::string log;
+  ASSERT_EQ(replay(out, {"--map", map_file.string(), "--localise"}, &log), 0) << log;
+  EXPECT_THAT(log, HasSubstr("localising without growing it"));
+  const Output o = read_output(out);
+  ASSERT_FALSE(o.events.empty());
+  int relocalisations = 0;
+  for (const auto& e : o.events) {
+    EXPECT_NE(e.type, vita_event_t::NEW_EXPERIENCE) << "cycle " << e.cycle;
+    relocalisations += e.type == vita_event_t::RELOCALISE;
+  }
+  EXPECT_GT(relocalisations, 0) << "the same route is recognised in the saved map";
+  ASSERT_FALSE(o.maps.empty());
+  EXPECT_EQ(o.maps.back().num_experiences, built.maps.back().num_experiences);
+  EXPECT_EQ(o.maps.back().num_links, built.maps.back().num_links);
+}
+
+TEST_F(SlamdBinary, BadInvocationsFailWithAOneLineReason) {
+  const std::string bad = (dir_ / "bad.yaml").string();
+  std::ofstream(bad) << "slam:\n  match:\n    shift_maxx: 3\n";
+  Subprocess p1({kSlamd, "--config", bad, "--print-config"});
+  EXPECT_EQ(p1.wait(30), 1);
+  EXPECT_THAT(p1.output(), HasSubstr("unknown key 'slam.match.shift_maxx'"));
+  Subprocess p2({kSlamd, "--mode", "sonar", "--print-config"});
+  EXPECT_EQ(p2.wait(30), 1);
+  EXPECT_THAT(p2.output(), HasSubstr("sonar"));
+  Subprocess p3({kSlamd, "--localise"});
+  EXPECT_NE(p3.wait(30), 0);
+  EXPECT_THAT(p3.output(), HasSubstr("--map"));
+  Subprocess p4({kSlamd, "--config", kConfig, "--print-config"});
+  EXPECT_EQ(p4.wait(30), 0);
+  EXPECT_THAT(p4.output(), HasSubstr("slam.match.threshold_vita: "));
+}
+
+// Runs inside a private network namespace (the test binary is started by scripts/netns-run).
+TEST_F(SlamdBinary, LiveRunFedByLcmLogplayerTakesTheSameDecisionsAsReplay) {
+  const std::string replayed = (dir_ / "reference.lcmlog").string();
+  ASSERT_EQ(replay(replayed), 0);
+  const Output reference = read_output(replayed);
+
+  LcmBus bus;
+  DecodeErrors errors;
+  std::mutex mutex;
+  std::vector<vita_event_t> live;
+  subscribe<vita_event_t>(bus, "VITA_EVENT", [&](const vita_event_t& m) { live.push_back(m); }, errors);
+
+  const fs::path state = dir_ / "live_state";
+  fs::remove_all(state);
+  Subprocess slamd({kSlamd, "--config", kConfig, "--state-dir", state.string(), "--checkpoint-every", "0"});
+  ASSERT_TRUE(wait_until([&] { return slamd.output().find("running in vita mode") != std::string::npos; }, 20))
+      << slamd.output();
+  Subprocess player({"lcm-logplayer", "--speed", "2", sim_log_});
+  bool done = false;
+  while (!done) {
+    bus.handle_timeout(50);
+    done = !player.running();
+  }
+  EXPECT_EQ(player.wait(1), 0) << player.output();
+  // Let the last messages drain.
+  for (int i = 0; i < 40; ++i) bus.handle_timeout(50);
+  EXPECT_EQ(slamd.stop(20, SIGTERM), 0) << slamd.output();
+  EXPECT_THAT(slamd.output(), HasSubstr("stopped after"));
+  EXPECT_FALSE(fs::is_empty(state)) << "a checkpoint is written on SIGTERM";
+
+  // The last cycle of a log may still be waiting for a camera frame after its end when the log
+  // stops; --replay flushes it, a live daemon keeps it pending. Everything before must agree.
+  ASSERT_GE(live.size() + 1, reference.events.size()) << slamd.output();
+  ASSERT_LE(live.size(), reference.events.size());
+  for (std::size_t i = 0; i < live.size(); ++i) {
+    EXPECT_EQ(live[i].cycle, reference.events[i].cycle) << i;
+    EXPECT_EQ(live[i].type, reference.events[i].type) << i;
+    EXPECT_EQ(live[i].from_id, reference.events[i].from_id) << i;
+    EXPECT_EQ(live[i].to_id, reference.events[i].to_id) << i;
+    EXPECT_EQ(live[i].template_id, reference.events[i].template_id) << i;
+  }
+  EXPECT_EQ(errors.total(), 0);
+}
+
+}  // namespace
+}  // namespace whiskeye
