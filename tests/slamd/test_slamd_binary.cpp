@@ -15,6 +15,7 @@
 #include <fstream>
 #include <mutex>
 #include <sstream>
+#include <unistd.h>
 
 namespace whiskeye {
 namespace {
@@ -63,7 +64,8 @@ std::string slurp(const std::string& path) {
 class SlamdBinary : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = fs::path(::testing::TempDir()) / "slamd_binary";
+    // ctest runs each test in its own process, concurrently: one directory per process.
+    dir_ = fs::path(::testing::TempDir()) / ("slamd_binary_" + std::to_string(::getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
     sim_log_ = (dir_ / "sim.lcmlog").string();
