@@ -36,14 +36,14 @@ Renderer::Renderer(const World& world, const RobotGeometry& robot)
       p_camera_in_head_(robot.camera.p_camera_in_head),
       T_base_head_(robot.T_base_head) {
   if (width_ % 2 != 0) throw std::invalid_argument("camera width must be even (YUYV pairs)");
-  column_.resize(static_cast<std::size_t>(height_));
-  image_.resize(static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_));
-  // 12 random bits per pixel pick one of 4096 quantiles: Gaussian marginals at the cost of an L1
-  // table look-up (the table is 16 KB).
-  noise_.resize(4096);
+  strip_.resize(static_cast<std::size_t>(kStrip) * static_cast<std::size_t>(height_));
+  // 8 random bits per pixel pick one of 256 quantiles of the Gaussian: its marginal distribution
+  // (up to ±2.9 σ) at the cost of a 1 KB table look-up.
+  noise_.resize(256);
   for (std::size_t k = 0; k < noise_.size(); ++k) {
-    noise_[k] = static_cast<float>(world_.camera.sigma * normal_quantile((static_cast<double>(k) + 0.5) / 4096.0));
+    noise_[k] = static_cast<float>(world_.camera.sigma * normal_quantile((static_cast<double>(k) + 0.5) / 256.0));
   }
+
   auto add = [&](const std::vector<Panel>& panels, double bias) {
     for (const Panel& p : panels) {
       const double ex = p.to.x - p.from.x;
@@ -60,8 +60,7 @@ double Renderer::column_bearing(int u) const { return std::atan((0.5 * width_ - 
 
 double Renderer::bearing_column(double bearing) const { return 0.5 * width_ - f_ * std::tan(bearing); }
 
-void Renderer::render_column(const Point2& cam, double heading, int u) {
-  float* column = column_.data();
+void Renderer::render_column(const Point2& cam, double heading, int u, float* column) {
   const double a = (0.5 * width_ - (u + 0.5)) / f_;
   const double k = std::sqrt(1.0 + a * a);  // horizontal ray distance per unit of forward depth
   const double bearing = heading + std::atan(a);
@@ -137,27 +136,38 @@ void Renderer::render_column(const Point2& cam, double heading, int u) {
       column[v] = static_cast<float>(world_.floor_value * light.ambient / (1.0 + light.attenuation * t));
     }
   }
-  for (int v = 0; v < height_; ++v) image_[static_cast<std::size_t>(v) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(u)] = column[v];
 }
 
 void Renderer::render(const Pose2& T_world_base, double t, FastRng& rng, std::vector<uint8_t>& grey) {
   const Pose2 head = compose(T_world_base, T_base_head_);
   Point2 cam;
   transform_point(head, p_camera_in_head_.x, p_camera_in_head_.y, cam.x, cam.y);
-  for (int u = 0; u < width_; ++u) render_column(cam, head.theta, u);
+  // Columns are rendered a strip at a time (the strip stays in L1), then each row of the strip gets
+  // lighting, noise (drawn in strip-row order: deterministic) and quantisation in one pass.
+  const std::size_t H = static_cast<std::size_t>(height_);
+  const std::size_t W = static_cast<std::size_t>(width_);
   const float gain = static_cast<float>(255.0 * world_.lighting.gain_at(t));
   const bool noisy = world_.camera.sigma > 0.0;
-  const std::size_t n = image_.size();
-  grey.resize(n);
-  auto to_byte = [](float p) { return static_cast<uint8_t>(std::min(std::max(p, 0.0f), 255.0f) + 0.5f); };
-  std::size_t i = 0;
-  if (noisy) {
-    for (; i + 5 <= n; i += 5) {
-      uint64_t r = rng.next();  // five pixels per draw, 12 bits each
-      for (std::size_t j = 0; j < 5; ++j, r >>= 12) grey[i + j] = to_byte(image_[i + j] * gain + noise_[r & 0xFFF]);
+  const float* table = noise_.data();
+  grey.resize(W * H);
+  for (int u0 = 0; u0 < width_; u0 += kStrip) {
+    const int m = std::min(kStrip, width_ - u0);
+    for (int j = 0; j < m; ++j) render_column(cam, head.theta, u0 + j, &strip_[static_cast<std::size_t>(j) * H]);
+    for (std::size_t v = 0; v < H; ++v) {
+      uint8_t* dst = &grey[v * W + static_cast<std::size_t>(u0)];
+      uint64_t r = 0;
+      for (int j = 0; j < m; ++j) {
+        if ((j & 7) == 0 && noisy) r = rng.next();  // eight pixels per draw
+        float p = strip_[static_cast<std::size_t>(j) * H + v] * gain;
+        if (noisy) {
+          p += table[r & 0xFF];
+          r >>= 8;
+        }
+        p = std::min(std::max(p, 0.0f), 255.0f) + 0.5f;
+        dst[j] = static_cast<uint8_t>(static_cast<int>(p));
+      }
     }
   }
-  for (; i < n; ++i) grey[i] = to_byte(image_[i] * gain + (noisy ? noise_[rng.next() & 0xFFF] : 0.0f));
 }
 
 void grey_to_yuyv(const std::vector<uint8_t>& grey, int width, int height, std::vector<uint8_t>& yuyv) {

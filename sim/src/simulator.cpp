@@ -44,6 +44,17 @@ Simulator::Simulator(const World& world, const RobotGeometry& robot, const rcp::
   controller_.enable();
 }
 
+Simulator::~Simulator() {
+  if (next_frame_.valid()) next_frame_.wait();
+}
+
+std::vector<uint8_t> Simulator::render_frame(int64_t elapsed_us) {
+  const double t = static_cast<double>(elapsed_us) * 1e-6;
+  std::vector<uint8_t> image;
+  renderer_.render(world_.trajectory.pose_at(t), t, camera_rng_, image);
+  return image;
+}
+
 double Simulator::duration() const { return static_cast<double>(total_steps_ * params_.period_us) * 1e-6; }
 
 void Simulator::update_obstacles(const Pose2& T_world_head) {
@@ -109,9 +120,14 @@ bool Simulator::step(SimSink& sink) {
     sink.ground_truth(utime, T_world_base);
   }
   if (elapsed_us >= next_camera_us_) {
+    const std::vector<uint8_t> image = next_frame_.valid() ? next_frame_.get() : render_frame(elapsed_us);
     next_camera_us_ += camera_period_us_;
-    renderer_.render(T_world_base, t, camera_rng_, image_);
-    sink.camera(utime, camera_seq_++, image_, renderer_.width(), renderer_.height());
+    if (params_.render_ahead && next_camera_us_ < total_steps_ * params_.period_us) {
+      // Rendered at the control period that will publish it (the first at or after its due time).
+      const int64_t at = (next_camera_us_ + params_.period_us - 1) / params_.period_us * params_.period_us;
+      next_frame_ = std::async(std::launch::async, [this, at] { return render_frame(at); });
+    }
+    sink.camera(utime, camera_seq_++, image, renderer_.width(), renderer_.height());
   }
   ++step_;
   return true;

@@ -70,7 +70,7 @@ class Renderer {
     double bias;  // subtracted from the distance for the depth order
     const Pattern* pattern;
   };
-  void render_column(const Point2& cam, double heading, int u);
+  void render_column(const Point2& cam, double heading, int u, float* column);
 
   const World& world_;
   int width_;
@@ -82,9 +82,9 @@ class Renderer {
   std::vector<FlatPanel> panels_;
   std::vector<Hit> hits_;
   std::vector<SolidHit> solid_hits_;
-  std::vector<float> column_;   // one column's intensities (0..1), before lighting and noise
-  std::vector<float> image_;    // row-major intensities of the frame
-  std::vector<float> noise_;    // 65536 quantiles of N(0, sigma²), grey levels: noise by table look-up
+  static constexpr int kStrip = 16;  // columns rendered before they are copied into the image
+  std::vector<float> strip_;    // kStrip columns' intensities (0..1), column-major
+  std::vector<float> noise_;    // 256 quantiles of N(0, sigma²), grey levels: noise by table look-up
 };
 
 // Packs 8-bit grey into V4L2 YUYV (Y0 U Y1 V, neutral chroma 128). Width must be even.
