@@ -3,10 +3,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace whiskeye::rcp {
 
-ContactDetector::ContactDetector(const DetectorParams& params) : params_(params) { reset(); }
+ContactDetector::ContactDetector(const DetectorParams& params)
+    : params_(params), bin_width_(params.threshold_max / params.noise_factor / kBins) {
+  reset();
+}
 
 void ContactDetector::reset() {
   learned_ = false;
@@ -17,8 +21,9 @@ void ContactDetector::reset() {
   magnitude_.fill(0.0);
   onsets_.fill(0);
   n_.fill(0);
-  mean_.fill(0.0);
-  m2_.fill(0.0);
+  above_.fill(0);
+  quiet_.fill(std::numeric_limits<int64_t>::max() / 2);  // never in contact yet
+  for (auto& h : histogram_) h.fill(0);
 }
 
 void ContactDetector::update(const WhiskerSample& sample, bool learning) {
@@ -30,13 +35,6 @@ void ContactDetector::update(const WhiskerSample& sample, bool learning) {
     const double y = sample.deflection_y[w];
     const double m = std::sqrt(x * x + y * y);
     magnitude_[w] = m;
-    // A sample above the default threshold is probably a contact, not noise: never learn from it.
-    if (learn && m < params_.default_threshold) {
-      ++n_[w];
-      const double delta = m - mean_[w];
-      mean_[w] += delta / static_cast<double>(n_[w]);
-      m2_[w] += delta * (m - mean_[w]);
-    }
     const double th = threshold_[w];
     const bool was = in_contact_[w];
     const bool now = was ? m >= params_.release_ratio * th : m > th;
@@ -44,6 +42,19 @@ void ContactDetector::update(const WhiskerSample& sample, bool learning) {
     if (now && !was) {
       onset_[w] = true;
       ++onsets_[w];
+    }
+    quiet_[w] = now ? 0 : quiet_[w] + 1;
+    // Learn the floor only from samples away from any contact seen with the default threshold:
+    // not while in contact, nor in the release tail just after. The rising edge before a contact
+    // is detected remains; the quantile statistic is robust to it.
+    if (learn && quiet_[w] > params_.learn_guard_samples) {
+      ++n_[w];
+      const auto bin = static_cast<int64_t>(m / bin_width_);
+      if (bin < kBins) {
+        ++histogram_[w][static_cast<std::size_t>(bin)];
+      } else {
+        ++above_[w];
+      }
     }
     level_[w] = now ? std::clamp(params_.contact_gain * (m - th), 0.0, 1.0) : 0.0;
   }
@@ -54,8 +65,18 @@ void ContactDetector::finish_learning() {
   learned_ = true;
   for (int w = 0; w < kNumWhiskers; ++w) {
     if (n_[w] < params_.learn_min_samples) continue;
-    const double sigma = std::sqrt(m2_[w] / static_cast<double>(n_[w] - 1));
-    threshold_[w] = std::clamp(mean_[w] + params_.noise_k_sigma * sigma, params_.threshold_min, params_.threshold_max);
+    // Upper edge of the bin where the cumulative count reaches the quantile (conservative).
+    const auto rank = static_cast<int64_t>(std::ceil(params_.noise_quantile * static_cast<double>(n_[w])));
+    int64_t cumulative = 0;
+    double quantile = static_cast<double>(kBins) * bin_width_;  // in the overflow: threshold_max
+    for (int b = 0; b < kBins; ++b) {
+      cumulative += histogram_[w][static_cast<std::size_t>(b)];
+      if (cumulative >= rank) {
+        quantile = static_cast<double>(b + 1) * bin_width_;
+        break;
+      }
+    }
+    threshold_[w] = std::clamp(params_.noise_factor * quantile, params_.threshold_min, params_.threshold_max);
   }
 }
 

@@ -74,8 +74,11 @@ ControlOutput Controller::step(const WhiskerSample& sample) {
   }
   if (running_ && !starting) {
     const double step = pp.ramp_time > 0.0 ? dt / pp.ramp_time : 1.0;
-    envelope_ = enabled_ ? std::min(1.0, envelope_ + step) : std::max(0.0, envelope_ - step);
-    if (!enabled_ && envelope_ <= 0.0) {
+    envelope_ += enabled_ ? step : -step;
+    // Snap the ends so rounding of the summed steps cannot leave the ramp a hair short.
+    if (envelope_ >= 1.0 - 1e-9) envelope_ = 1.0;
+    if (envelope_ <= 1e-9) envelope_ = 0.0;
+    if (!enabled_ && envelope_ == 0.0) {
       running_ = false;
       if (assembler_.has_cycle()) ++stats_.cycles_discarded;
       assembler_.discard();

@@ -31,6 +31,10 @@ void CycleAssembler::start_cycle(const CycleTag& tag) {
   current_partial_ = false;
 }
 
+void CycleAssembler::recycle(WhiskCycle&& used) {
+  if (used.samples.capacity() > spare_.capacity()) spare_.swap(used.samples);
+}
+
 void CycleAssembler::discard() {
   if (have_current_) ++discarded_;
   have_current_ = false;
@@ -48,7 +52,12 @@ void CycleAssembler::roll(const CycleTag& tag, std::optional<WhiskCycle>& done) 
     } else {
       done = std::move(current_);
       current_ = WhiskCycle{};
-      current_.samples.reserve(static_cast<std::size_t>(expected_samples_ + 16));
+      if (spare_.capacity() > 0) {
+        current_.samples.swap(spare_);
+        current_.samples.clear();
+      } else {
+        current_.samples.reserve(static_cast<std::size_t>(expected_samples_ + 16));
+      }
     }
   }
   start_cycle(tag);

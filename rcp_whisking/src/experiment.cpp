@@ -2,6 +2,7 @@
 #include <whiskeye/rcp/experiment.h>
 
 #include <algorithm>
+#include <limits>
 #include <stdexcept>
 
 namespace whiskeye::rcp {
@@ -68,6 +69,8 @@ RunMetrics run_closed_loop(const ControllerParams& controller_params, const Plan
   };
 
   PerWhisker<double> command = controller.last_output().theta_command;
+  PerWhisker<int64_t> last_true_contact;
+  last_true_contact.fill(std::numeric_limits<int64_t>::min() / 2);
   int64_t current_cycle = 0;
   for (int64_t utime = spec.start_utime;; utime += spec.period_us) {
     const WhiskerSample sample = plant.step(utime, command);
@@ -85,9 +88,12 @@ RunMetrics run_closed_loop(const ControllerParams& controller_params, const Plan
     for (int w = 0; w < kNumWhiskers; ++w) {
       CycleTrack& t = track[w];
       if (onset[w]) {
-        if (!truth[w].in_contact) ++m.false_contacts;
+        // A real contact the plant made a moment ago (the whisker hovering at the obstacle's edge) is
+        // not a false contact; one with no true contact in the last 20 ms is.
+        if (!truth[w].in_contact && out.utime - last_true_contact[w] > 20'000) ++m.false_contacts;
         if (measured) ++m.contact_onsets;
       }
+      if (truth[w].in_contact) last_true_contact[w] = out.utime;
       if (out.in_contact[w]) t.detected = true;
       if (truth[w].in_contact && t.true_contact_utime < 0) t.true_contact_utime = out.utime;
       if (out.in_contact[w] && t.detect_utime < 0 && out.phase == Phase::Protract) t.detect_utime = out.utime;

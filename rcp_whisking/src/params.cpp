@@ -77,10 +77,12 @@ void load(const ParamNode& node, ControllerParams& params) {
   DetectorParams& d = params.detector;
   det.get("learn_cycles", d.learn_cycles, 0, 1000);
   det.get("learn_min_samples", d.learn_min_samples, 1, 1000000);
+  det.get("learn_guard_samples", d.learn_guard_samples, 0, 100000);
   det.get("default_threshold", d.default_threshold, 1e-4, 1.0);
   det.get("threshold_min", d.threshold_min, 1e-4, 1.0);
   det.get("threshold_max", d.threshold_max, 1e-4, 1.0);
-  det.get("noise_k_sigma", d.noise_k_sigma, 0.0, 100.0);
+  det.get("noise_quantile", d.noise_quantile, 0.05, 0.99);
+  det.get("noise_factor", d.noise_factor, 1.0, 100.0);
   det.get("release_ratio", d.release_ratio, 0.05, 1.0);
   det.get("contact_gain", d.contact_gain, 0.01, 1000.0);
 

@@ -1,7 +1,177 @@
-// rcp-plant: runs the whisking controller against the plant model (placeholder until implemented).
+// rcp-plant: runs the whisking controller against the whisker plant model for N cycles with an
+// obstacle and prints JSON (contact rate, peak base deflection with and without RCP, reaction
+// latency, false contacts) — how a user tunes RCP without a robot. See docs/rcp-whisking.md.
+#include <whiskeye/rcp/experiment.h>
+
 #include <CLI/CLI.hpp>
+
+#include <cstdio>
+#include <iostream>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+using namespace whiskeye;
+using namespace whiskeye::rcp;
+
+void print_metrics(std::ostream& out, const RunMetrics& m, const std::string& indent) {
+  out << "{\n"
+      << indent << "  \"cycles_measured\": " << m.cycles_measured << ",\n"
+      << indent << "  \"whisker_cycles_with_obstacle\": " << m.whisker_cycles_with_obstacle << ",\n"
+      << indent << "  \"whisker_cycles_with_contact\": " << m.whisker_cycles_with_contact << ",\n"
+      << indent << "  \"contact_rate\": " << m.contact_rate << ",\n"
+      << indent << "  \"peak_deflection\": " << m.peak_deflection << ",\n"
+      << indent << "  \"mean_cycle_peak_deflection\": " << m.mean_cycle_peak_deflection << ",\n"
+      << indent << "  \"reaction_latency_mean_ms\": " << m.reaction_latency_mean * 1e3 << ",\n"
+      << indent << "  \"reaction_latency_max_ms\": " << m.reaction_latency_max * 1e3 << ",\n"
+      << indent << "  \"controller_latency_max_ms\": " << m.controller_latency_max * 1e3 << ",\n"
+      << indent << "  \"reactions\": " << m.reactions << ",\n"
+      << indent << "  \"contact_onsets\": " << m.contact_onsets << ",\n"
+      << indent << "  \"false_contacts\": " << m.false_contacts << "\n"
+      << indent << "}";
+}
+
+std::vector<int> parse_whiskers(const std::string& text) {
+  std::vector<int> out;
+  if (text == "all") {
+    for (int w = 0; w < kNumWhiskers; ++w) out.push_back(w);
+    return out;
+  }
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    std::size_t used = 0;
+    int w = -1;
+    try {
+      w = std::stoi(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used != item.size() || w < 0 || w >= kNumWhiskers) {
+      throw std::invalid_argument("--whiskers: '" + item + "' is not a whisker index 0..23");
+    }
+    out.push_back(w);
+  }
+  return out;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
-  CLI::App app{"rcp-plant"};
+  CLI::App app{
+      "rcp-plant: run the whisking controller (pattern, contact detection, RCP) against the whisker "
+      "plant model with an obstacle and print JSON figures: contact rate, peak base deflection with "
+      "and without RCP, reaction latency, false contacts."};
+  std::string config_path;
+  std::string scenario_path;
+  int cycles = 20;
+  int warmup = 1;
+  uint64_t seed = 1;
+  std::string whiskers_text;
+  std::optional<double> contact_angle_deg;
+  std::optional<double> radial_distance;
+  std::optional<double> stiffness;
+  std::optional<std::string> law;
+  std::optional<double> noise;
+  std::optional<double> frequency;
+  bool no_compare = false;
+  bool print_params = false;
+  app.add_option("--config", config_path, "controller parameters YAML (sections pattern, detector, rcp; e.g. config/rcp.yaml)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--scenario", scenario_path,
+                 "scenario YAML: sections plant (PlantParams), run (cycles, warmup_cycles, seed), list obstacles "
+                 "(whiskers, contact_angle_deg, radial_distance, stiffness_scale, deflection_direction_deg)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--cycles", cycles, "whisk cycles to run")->check(CLI::Range(2, 100000));
+  app.add_option("--warmup", warmup, "first cycles left out of the figures")->check(CLI::Range(0, 1000));
+  app.add_option("--seed", seed, "plant noise seed");
+  app.add_option("--whiskers", whiskers_text, "whiskers with the flag obstacle: 'all' or e.g. 0,6,12 (default all)");
+  app.add_option("--contact-angle-deg", contact_angle_deg, "obstacle: protraction angle of first touch, deg (default 10)");
+  app.add_option("--radial-distance", radial_distance, "obstacle: radial contact distance from the base, m (default 0.05)");
+  app.add_option("--stiffness", stiffness, "obstacle: stiffness scale (default 1)");
+  app.add_option("--law", law, "override rcp.law")->check(CLI::IsMember({"whiskeye", "rate_limited", "off"}));
+  app.add_option("--noise", noise, "override plant noise_sigma (Hall x/y, calibrated units)");
+  app.add_option("--frequency-hz", frequency, "override pattern.frequency_hz");
+  app.add_flag("--no-compare", no_compare, "skip the run without RCP");
+  app.add_flag("--print-params", print_params, "print every parameter used to stderr");
   CLI11_PARSE(app, argc, argv);
+
+  try {
+    ControllerParams cp;
+    PlantParams pp;
+    ExperimentSpec spec;
+    spec.cycles = cycles;
+    spec.warmup_cycles = warmup;
+    spec.seed = seed;
+
+    const ParamNode config = config_path.empty() ? ParamNode::empty() : ParamNode::from_file(config_path);
+    load(config, cp);
+    config.check_no_unknown_keys();
+    if (law) cp.rcp.law = *law == "whiskeye" ? RcpLaw::Whiskeye : *law == "rate_limited" ? RcpLaw::RateLimited : RcpLaw::Off;
+    if (frequency) cp.pattern.frequency_hz = *frequency;
+    validate(cp);  // the overrides too
+
+    Obstacle flag_obstacle;
+    flag_obstacle.contact_angle = deg_to_rad(10.0);
+    bool flag_obstacles = scenario_path.empty() || !whiskers_text.empty() || contact_angle_deg || radial_distance || stiffness;
+    if (!scenario_path.empty()) {
+      const ParamNode scenario = ParamNode::from_file(scenario_path);
+      load(scenario.section("plant"), pp);
+      const ParamNode run = scenario.section("run");
+      run.get("cycles", spec.cycles, 2, 100000);
+      run.get("warmup_cycles", spec.warmup_cycles, 0, 1000);
+      run.get("seed", spec.seed);
+      if (app.count("--cycles")) spec.cycles = cycles;
+      if (app.count("--warmup")) spec.warmup_cycles = warmup;
+      if (app.count("--seed")) spec.seed = seed;
+      for (const ParamNode& item : scenario.list("obstacles")) {
+        std::vector<int> ws;
+        item.require("whiskers", ws);
+        Obstacle o;
+        double angle_deg = 10.0;
+        item.require("contact_angle_deg", angle_deg);
+        o.contact_angle = deg_to_rad(angle_deg);
+        item.require("radial_distance", o.radial_distance);
+        item.get("stiffness_scale", o.stiffness_scale, 0.0, 100.0);
+        double dir_deg = 180.0;
+        item.get("deflection_direction_deg", dir_deg, -360.0, 360.0);
+        o.deflection_direction = deg_to_rad(dir_deg);
+        for (int w : ws) {
+          if (w < 0 || w >= kNumWhiskers) throw ParamError(scenario_path + ": 'obstacles.whiskers' index " + std::to_string(w) + " is not 0..23");
+          spec.obstacles[w] = o;
+        }
+      }
+      scenario.check_no_unknown_keys();
+      if (print_params) std::cerr << scenario.dump();
+    }
+    if (noise) pp.noise_sigma = *noise;
+    if (flag_obstacles) {
+      if (contact_angle_deg) flag_obstacle.contact_angle = deg_to_rad(*contact_angle_deg);
+      if (radial_distance) flag_obstacle.radial_distance = *radial_distance;
+      if (stiffness) flag_obstacle.stiffness_scale = *stiffness;
+      for (int w : parse_whiskers(whiskers_text.empty() ? "all" : whiskers_text)) spec.obstacles[w] = flag_obstacle;
+    }
+    if (spec.cycles <= spec.warmup_cycles) throw std::invalid_argument("--cycles must exceed --warmup");
+    spec.compare_without_rcp = !no_compare;
+    if (print_params) std::cerr << config.dump();
+
+    const ExperimentResult r = run_experiment(cp, pp, spec);
+    std::cout.precision(6);
+    std::cout << "{\n  \"law\": \"" << to_string(cp.rcp.law) << "\",\n  \"frequency_hz\": " << cp.pattern.frequency_hz
+              << ",\n  \"cycles\": " << spec.cycles << ",\n  \"seed\": " << spec.seed << ",\n  \"with_rcp\": ";
+    print_metrics(std::cout, r.rcp, "  ");
+    if (r.without_rcp) {
+      std::cout << ",\n  \"without_rcp\": ";
+      print_metrics(std::cout, *r.without_rcp, "  ");
+      std::cout << ",\n  \"peak_reduction\": " << r.peak_reduction;
+    }
+    std::cout << "\n}\n";
+  } catch (const std::exception& e) {
+    std::cerr << "rcp-plant: " << e.what() << "\n";
+    return 1;
+  }
   return 0;
 }

@@ -12,12 +12,13 @@ class ContactDetector {
  public:
   explicit ContactDetector(const DetectorParams& params);
 
-  // Feeds one sample. `learning` says the whiskers are whisking freely and the noise floor may be
-  // learned from this sample (samples above the default threshold are never learned from).
+  // Feeds one sample. `learning` says the whiskers are whisking and the noise floor may be learned
+  // from this sample; a whisker in contact (default threshold) or within learn_guard_samples after
+  // one is not learned from.
   // Invalid whiskers keep their previous state.
   void update(const WhiskerSample& sample, bool learning);
-  // Ends the learning phase: thresholds become clamp(mean + k sigma, threshold_min, threshold_max)
-  // for whiskers with enough samples; the others keep the default threshold.
+  // Ends the learning phase: thresholds become clamp(noise_factor x noise_quantile of |xy|,
+  // threshold_min, threshold_max) for whiskers with enough samples; the others keep the default.
   void finish_learning();
   bool learned() const { return learned_; }
 
@@ -41,10 +42,14 @@ class ContactDetector {
   PerWhisker<double> level_{};
   PerWhisker<double> magnitude_{};
   PerWhisker<int64_t> onsets_{};
-  // Welford running statistics of the free-whisking magnitude.
+  // Histogram of the free-whisking magnitude over [0, threshold_max / noise_factor); larger values
+  // only count (the quantile needs to know they are above it, not where).
+  static constexpr int kBins = 256;
+  double bin_width_ = 1.0;
   PerWhisker<int64_t> n_{};
-  PerWhisker<double> mean_{};
-  PerWhisker<double> m2_{};
+  PerWhisker<int64_t> above_{};
+  PerWhisker<int64_t> quiet_{};  // samples since the whisker was last in contact
+  std::array<std::array<int32_t, kBins>, kNumWhiskers> histogram_{};
 };
 
 }  // namespace whiskeye::rcp

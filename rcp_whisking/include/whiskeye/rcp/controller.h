@@ -52,6 +52,9 @@ class Controller {
   // the cycle in progress is discarded.
   void disable();
   bool enabled() const { return enabled_; }
+  // Optional: hand a completed cycle back after publishing it, so its storage is reused and the
+  // real-time loop never allocates (otherwise each cycle completion allocates one sample vector).
+  void recycle(WhiskCycle&& used) { assembler_.recycle(std::move(used)); }
   // The pattern clock is running (whisking, or ramping down after disable()).
   bool running() const { return running_; }
 

@@ -36,6 +36,10 @@ class CycleAssembler {
   // The first cycle seen after construction / discard() is emitted only if its first sample is
   // within one sample period of tag.cycle_start_utime (otherwise its beginning was never seen and
   // it is discarded, counted).
+  // Gives back the storage of an emitted cycle once its user is done with it: the next emission
+  // reuses it instead of allocating, so a loop that recycles every cycle never allocates.
+  void recycle(WhiskCycle&& used);
+
   // Drops the cycle in progress (e.g. whisking stopped mid-cycle); counted as discarded.
   void discard();
 
@@ -50,6 +54,7 @@ class CycleAssembler {
   void start_cycle(const CycleTag& tag);
   void roll(const CycleTag& tag, std::optional<WhiskCycle>& done);
 
+  std::vector<WhiskCycle::Sample> spare_;
   int64_t period_us_;
   int expected_samples_;
   bool have_current_ = false;

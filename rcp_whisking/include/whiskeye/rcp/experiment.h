@@ -34,7 +34,7 @@ struct RunMetrics {
   // latency; 0 means the same step).
   double controller_latency_max = 0.0;  // s
   int64_t reactions = 0;
-  int64_t false_contacts = 0;  // detector onsets while the plant's whisker was not in contact
+  int64_t false_contacts = 0;  // detector onsets with no true plant contact in the last 20 ms
   int64_t contact_onsets = 0;  // all detector onsets in measured cycles
 };
 

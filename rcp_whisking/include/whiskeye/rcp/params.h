@@ -37,10 +37,15 @@ struct PatternParams {
 struct DetectorParams {
   int learn_cycles = 2;             // free whisking cycles used to learn the noise floor
   int learn_min_samples = 200;      // per whisker, else the default threshold stays
+  int learn_guard_samples = 25;     // samples after a contact ends that are not learned from (50 ms)
   double default_threshold = 0.08;  // |xy| threshold until the floor is learned
   double threshold_min = 0.04;      // learned threshold never below this (WhiskEye's 0.04)
   double threshold_max = 0.3;       // learned threshold never above this
-  double noise_k_sigma = 8.0;       // learned threshold = mean + k sigma of free-whisking |xy|
+  // Learned threshold = noise_factor x the noise_quantile of |xy| during free whisking. A quantile
+  // (not mean + k sigma) so that the contacts made while learning, which sit in the upper tail,
+  // cannot inflate it as long as they fill less than 1 - noise_quantile of the learning samples.
+  double noise_quantile = 0.75;
+  double noise_factor = 4.0;        // Rayleigh noise of sigma s: 4 x 1.665 s = 6.7 s, P(exceed) ~ 2e-10
   double release_ratio = 0.6;       // hysteresis: contact ends below release_ratio * threshold
   double contact_gain = 5.0;        // contact level c = clip(gain (|xy| - threshold), 0, 1)
 };

@@ -1,0 +1,71 @@
+// The control step allocates nothing except at the step that hands over a completed cycle.
+#include <gtest/gtest.h>
+#include <whiskeye/rcp/controller.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <new>
+
+#include "helpers.h"
+
+namespace {
+std::atomic<long> g_allocations{0};
+}  // namespace
+
+// Counting replacements of the global allocation functions (this test binary only).
+void* operator new(std::size_t n) {
+  ++g_allocations;
+  if (void* p = std::malloc(n == 0 ? 1 : n)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+
+using namespace whiskeye::rcp;
+using whiskeye::rcp::test::make_sample;
+
+TEST(ControllerAllocation, StepAllocatesOnlyWhenACycleCompletes) {
+  Controller c{ControllerParams{}};
+  c.enable();
+  for (int64_t seq = 0; seq < 1500; ++seq) c.step(make_sample(seq, 0.003, 0.0));  // past learning
+  long inside_cycle = 0;
+  long at_boundary = 0;
+  int completed = 0;
+  for (int64_t seq = 1500; seq < 3500; ++seq) {
+    WhiskerSample s = make_sample(seq, 0.003, 0.0);
+    if (seq % 97 == 0) s.deflection_x[seq % 24] = -0.3;  // some contacts too
+    const long before = g_allocations.load();
+    const ControlOutput out = c.step(s);
+    const long used = g_allocations.load() - before;
+    if (out.completed_cycle) {
+      ++completed;
+      at_boundary += used;
+    } else {
+      inside_cycle += used;
+    }
+  }
+  EXPECT_EQ(completed, 4);
+  EXPECT_EQ(inside_cycle, 0);
+  EXPECT_LE(at_boundary, 4 * 2);  // the next cycle's reserved storage (+ the moved-out copy)
+}
+
+TEST(ControllerAllocation, RecyclingCompletedCyclesRemovesAllAllocations) {
+  Controller c{ControllerParams{}};
+  c.enable();
+  for (int64_t seq = 0; seq < 1500; ++seq) {
+    ControlOutput out = c.step(make_sample(seq, 0.003, 0.0));
+    if (out.completed_cycle) c.recycle(std::move(*out.completed_cycle));
+  }
+  const long before = g_allocations.load();
+  int completed = 0;
+  for (int64_t seq = 1500; seq < 3500; ++seq) {
+    ControlOutput out = c.step(make_sample(seq, 0.003, 0.0));
+    if (out.completed_cycle) {
+      ++completed;
+      EXPECT_EQ(out.completed_cycle->samples.size(), 500u);
+      c.recycle(std::move(*out.completed_cycle));
+    }
+  }
+  EXPECT_EQ(completed, 4);
+  EXPECT_EQ(g_allocations.load() - before, 0);
+}
