@@ -44,6 +44,7 @@ struct ContactTruth {
     int whisker = 0;
     int64_t utime = 0;
     Vec3 p_in_head;
+    int solid = -1;  // index of the touched solid (-1: a wall or landmark panel)
   };
   std::vector<Point> points;
 };
@@ -80,6 +81,11 @@ class Simulator {
   // Advances one control period, delivering its outputs; false once the run is complete.
   bool step(SimSink& sink);
 
+  // Whisk cycles completed, and those with at least one true contact; contact onsets per solid.
+  int64_t cycles() const { return cycles_; }
+  int64_t cycles_with_contact() const { return cycles_with_contact_; }
+  const std::vector<int64_t>& onsets_per_solid() const { return onsets_per_solid_; }
+
   const rcp::Controller& controller() const { return controller_; }
   const rcp::WhiskerPlant& plant() const { return plant_; }
 
@@ -104,6 +110,9 @@ class Simulator {
   rcp::PerWhisker<double> command_{};
   rcp::PerWhisker<std::optional<WhiskerContact>> contacts_{};
   rcp::PerWhisker<bool> was_in_contact_{};
+  int64_t cycles_ = 0;
+  int64_t cycles_with_contact_ = 0;
+  std::vector<int64_t> onsets_per_solid_;
   std::map<int64_t, ContactTruth> truth_;  // by cycle, until the cycle completes
   std::future<std::vector<uint8_t>> next_frame_;  // the frame at next_camera_us_, when render_ahead
 };
