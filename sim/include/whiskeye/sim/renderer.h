@@ -83,7 +83,8 @@ class Renderer {
   std::vector<Hit> hits_;
   std::vector<SolidHit> solid_hits_;
   static constexpr int kStrip = 16;  // columns rendered before they are copied into the image
-  std::vector<float> strip_;    // kStrip columns' intensities (0..1), column-major
+  std::vector<float> column_;   // one column's intensities (0..1), before lighting and noise
+  std::vector<float> strip_;    // kStrip columns of them, row-major (row v: strip_[v * kStrip + j])
   std::vector<float> noise_;    // 256 quantiles of N(0, sigma²), grey levels: noise by table look-up
 };
 
