@@ -12,6 +12,7 @@ find_package(Eigen3 3.3 REQUIRED NO_MODULE)
 find_package(OpenCVParts REQUIRED)  # OpenCV::core, OpenCV::imgproc, OpenCV::imgcodecs
 find_package(yaml-cpp REQUIRED)
 find_package(CLI11 REQUIRED)
+find_package(nlohmann_json 3 REQUIRED)  # vita-eval JSON output (nlohmann-json3-dev)
 find_package(GTest REQUIRED)
 find_package(Python3 REQUIRED COMPONENTS Interpreter)
 if(WHISKEYE_BUILD_BENCHMARKS)

@@ -4,6 +4,8 @@
 #include <whiskeye/rcp/rcp.h>
 
 #include <algorithm>
+#include <chrono>
+#include <optional>
 #include <cmath>
 #include <vector>
 
@@ -90,6 +92,37 @@ void BM_ReferenceWhiskEyeLaw(benchmark::State& state) {
   }
 }
 
+// Only the step that completes a whisk cycle (it hands over 500 samples and, unless the caller
+// recycles the previous cycle, allocates the next cycle's storage). Timed by hand around that step.
+void run_completion(benchmark::State& state, bool recycle) {
+  Controller c{ControllerParams{}};
+  c.enable();
+  WhiskerSample s;
+  s.valid.fill(true);
+  int64_t k = 0;
+  std::optional<WhiskCycle> held;
+  for (auto _ : state) {
+    ControlOutput out;
+    // Untimed up to the last sample of the cycle; sample k = 500 n starts cycle n + 1.
+    for (;;) {
+      s.utime = k * kPeriodUs;
+      s.seq = k;
+      ++k;
+      if (s.seq > 0 && s.seq % 500 == 0) break;
+      out = c.step(s);
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    out = c.step(s);
+    const auto t1 = std::chrono::steady_clock::now();
+    state.SetIterationTime(std::chrono::duration<double>(t1 - t0).count());
+    if (!out.completed_cycle) state.SkipWithError("no cycle completed at the timed step");
+    if (out.completed_cycle && recycle) c.recycle(std::move(*out.completed_cycle));
+    held = std::move(out.completed_cycle);  // freed outside the timed step
+  }
+}
+void BM_ControllerStep_CycleCompletion(benchmark::State& state) { run_completion(state, false); }
+void BM_ControllerStep_CycleCompletionRecycled(benchmark::State& state) { run_completion(state, true); }
+
 void BM_PlantStep(benchmark::State& state) {
   WhiskerPlant plant(PlantParams{}, 1);
   for (int w = 0; w < kNumWhiskers; ++w) plant.set_obstacle(w, Obstacle{0.1, 0.05});
@@ -125,6 +158,9 @@ void BM_AssemblerPush(benchmark::State& state) {
 
 BENCHMARK(BM_ControllerStep_FreeWhisking);
 BENCHMARK(BM_ControllerStep_AllWhiskersTouching);
+// Each iteration steps through a whole cycle untimed: a fixed iteration count keeps the run short.
+BENCHMARK(BM_ControllerStep_CycleCompletion)->UseManualTime()->Iterations(300);
+BENCHMARK(BM_ControllerStep_CycleCompletionRecycled)->UseManualTime()->Iterations(300);
 BENCHMARK(BM_ReferenceWhiskEyeLaw);
 BENCHMARK(BM_PlantStep);
 BENCHMARK(BM_AssemblerPush);

@@ -31,9 +31,17 @@ int64_t DecodeErrors::count(const std::string& channel) const {
 
 // ---- MemoryBus ----
 
+bool is_plain_channel_name(const std::string& channel) {
+  return channel.find_first_of(".[]{}()\\*+?|^$") == std::string::npos;
+}
+
 struct MemoryBus::Sub {
+  std::string name;  // exact name, when the pattern is not a regex (regex matching is slow)
   std::regex pattern;
   RawHandler handler;
+  bool matches(const std::string& channel) const {
+    return name.empty() ? std::regex_match(channel, pattern) : channel == name;
+  }
 };
 
 void MemoryBus::publish_raw(const std::string& channel, std::span<const uint8_t> data) {
@@ -41,12 +49,19 @@ void MemoryBus::publish_raw(const std::string& channel, std::span<const uint8_t>
   // Copy: a handler may subscribe while we deliver.
   const auto subs = subs_;
   for (const auto& sub : subs) {
-    if (std::regex_match(channel, sub->pattern)) sub->handler(data, info);
+    if (sub->matches(channel)) sub->handler(data, info);
   }
 }
 
 void MemoryBus::subscribe_raw(const std::string& channel, RawHandler handler) {
-  subs_.push_back(std::make_shared<Sub>(Sub{std::regex(channel, std::regex::extended), std::move(handler)}));
+  auto sub = std::make_shared<Sub>();
+  if (is_plain_channel_name(channel)) {
+    sub->name = channel;
+  } else {
+    sub->pattern = std::regex(channel, std::regex::extended);
+  }
+  sub->handler = std::move(handler);
+  subs_.push_back(std::move(sub));
 }
 
 // ---- LcmBus ----
@@ -100,6 +115,15 @@ bool LogReader::next(LogEvent& event) {
   event.channel = ev->channel;
   const auto* bytes = static_cast<const uint8_t*>(ev->data);
   event.data.assign(bytes, bytes + ev->datalen);
+  return true;
+}
+
+bool LogReader::next(EventView& event) {
+  const lcm::LogEvent* ev = log_->readNextEvent();
+  if (ev == nullptr) return false;
+  event.utime = ev->timestamp;
+  event.channel = ev->channel;
+  event.data = std::span<const uint8_t>(static_cast<const uint8_t*>(ev->data), static_cast<std::size_t>(ev->datalen));
   return true;
 }
 

@@ -76,6 +76,49 @@ TEST(LogFiles, WriterAndReaderRoundTrip) {
   std::remove(path.c_str());
 }
 
+TEST(MemoryBus, PlainNamesMatchExactlyAndRegexesAsRegexes) {
+  EXPECT_TRUE(is_plain_channel_name("WHISK_CYCLE"));
+  EXPECT_FALSE(is_plain_channel_name("VITA_.*"));
+  MemoryBus bus;
+  DecodeErrors errors;
+  int exact = 0;
+  int regex = 0;
+  subscribe<pose2d_t>(bus, "POSE", [&](const pose2d_t&) { ++exact; }, errors);
+  subscribe<pose2d_t>(bus, "POSE|POSE_B", [&](const pose2d_t&) { ++regex; }, errors);
+  publish(bus, "POSE", pose2d_t{});
+  publish(bus, "POSE_B", pose2d_t{});
+  publish(bus, "POSEX", pose2d_t{});
+  EXPECT_EQ(exact, 1);
+  EXPECT_EQ(regex, 2);
+}
+
+TEST(LogFiles, ViewsReadTheSameEventsWithoutCopying) {
+  const std::string path = ::testing::TempDir() + "views.lcmlog";
+  {
+    LogWriterBus out(path);
+    for (int i = 0; i < 3; ++i) {
+      out.set_time(10 * i);
+      pose2d_t p{};
+      p.x = i;
+      publish(out, i == 1 ? "B" : "A", p);
+    }
+  }
+  LogReader in(path);
+  LogReader::EventView ev;
+  std::vector<std::string> channels;
+  std::vector<double> xs;
+  while (in.next(ev)) {
+    pose2d_t p;
+    ASSERT_TRUE(decode_message(ev.data, p));
+    channels.emplace_back(ev.channel);
+    xs.push_back(p.x);
+    EXPECT_EQ(ev.utime, static_cast<int64_t>(10 * p.x));
+  }
+  EXPECT_EQ(channels, (std::vector<std::string>{"A", "B", "A"}));
+  EXPECT_EQ(xs, (std::vector<double>{0, 1, 2}));
+  std::remove(path.c_str());
+}
+
 TEST(LogFiles, MissingFileIsAnErrorNamingIt) {
   try {
     LogReader r("/nonexistent/x.lcmlog");

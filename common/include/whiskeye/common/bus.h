@@ -15,6 +15,7 @@
 #include <span>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <type_traits>
 #include <vector>
 
@@ -56,15 +57,14 @@ class DecodeErrors {
   Callback callback_;
 };
 
-// Encodes an LCM message. Throws std::runtime_error if the message cannot be encoded (e.g. an
-// array shorter than its length field).
+// Encodes an LCM message. The caller keeps every array as long as its length field says: LCM's
+// generated encoders index arrays by those fields without checking.
 template <typename T>
 std::vector<uint8_t> encode_message(const T& msg) {
   const int size = msg.getEncodedSize();
   std::vector<uint8_t> buf(static_cast<std::size_t>(size));
   if (size < 0 || msg.encode(buf.data(), 0, size) != size) {
-    throw std::runtime_error(std::string("cannot encode ") + T::getTypeName() +
-                             ": array length fields disagree with the data");
+    throw std::runtime_error(std::string("cannot encode ") + T::getTypeName());
   }
   return buf;
 }
@@ -123,6 +123,9 @@ class MemoryBus : public Bus {
   int64_t now_utime_ = 0;
 };
 
+// True when `channel` is a plain name, not a regex (so exact comparison gives the same answer).
+bool is_plain_channel_name(const std::string& channel);
+
 // LCM over a URL ("" = $LCM_DEFAULT_URL or LCM's default). Throws std::runtime_error if LCM cannot
 // start (e.g. no multicast route for udpm://).
 class LcmBus : public Bus {
@@ -160,6 +163,14 @@ class LogReader {
   LogReader& operator=(const LogReader&) = delete;
   // False at the end of the log.
   bool next(LogEvent& event);
+  // Same without copying: channel and data point into the reader's buffer and stay valid until the
+  // next call. For replaying large logs (camera frames) fast.
+  struct EventView {
+    int64_t utime = 0;
+    std::string_view channel;
+    std::span<const uint8_t> data;
+  };
+  bool next(EventView& event);
   // Fraction of the file read, 0..1 (for progress bars).
   double progress() const;
 

@@ -1,0 +1,131 @@
+// The real LCM tools work with our types: udpm:// between processes, lcm-logger, our log reader on
+// lcm-logger's files, lcm-logplayer, the generated Python modules, and lcm-spy (headless).
+// Runs inside a private network namespace (NETNS in CMake), so no packet leaves the machine.
+#include "samples.h"
+#include "../support/subprocess.h"
+
+#include "whiskeye/common/bus.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <map>
+#include <set>
+#include <thread>
+
+namespace whiskeye {
+namespace {
+
+using testing::all_type_samples;
+using testing::Subprocess;
+using testing::wait_until;
+namespace fs = std::filesystem;
+
+class LcmTools : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::path(::testing::TempDir()) /
+           ("lcm_tools_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  // Starts an lcm_peer receiver and waits until it has subscribed.
+  std::unique_ptr<Subprocess> start_receiver(double timeout_s) {
+    auto rx = std::make_unique<Subprocess>(
+        std::vector<std::string>{LCM_PEER, "receive", "--timeout", std::to_string(timeout_s)});
+    EXPECT_TRUE(wait_until([&] { return rx->output().find("READY") != std::string::npos; }, 10.0))
+        << rx->output();
+    return rx;
+  }
+
+  // Records our traffic with the real lcm-logger and returns the log path.
+  std::string record_with_lcm_logger() {
+    const std::string log = (dir_ / "recorded.lcmlog").string();
+    Subprocess logger({"lcm-logger", "-f", log});
+    // lcm-logger prints nothing once subscribed; it opens the file first, so wait for the file and
+    // then keep publishing until it has seen every type at least once.
+    EXPECT_TRUE(wait_until([&] { return fs::exists(log); }, 10.0)) << logger.output();
+    LcmBus bus;
+    const auto samples = all_type_samples();
+    for (int round = 0; round < 20; ++round) {
+      for (const auto& s : samples) bus.publish_raw(s.channel, s.bytes);
+      std::this_thread::sleep_for(std::chrono::milliseconds(25));
+    }
+    EXPECT_EQ(logger.stop(10.0, SIGINT), 0) << logger.output();
+    return log;
+  }
+
+  fs::path dir_;
+};
+
+TEST_F(LcmTools, EveryTypeRoundTripsOverUdpmBetweenProcesses) {
+  auto rx = start_receiver(15.0);
+  LcmBus bus;
+  const auto samples = all_type_samples();
+  // UDP multicast: publish until the receiver has verified everything (or gives up).
+  const bool done = wait_until(
+      [&] {
+        for (const auto& s : samples) bus.publish_raw(s.channel, s.bytes);
+        return !rx->running();
+      },
+      20.0);
+  ASSERT_TRUE(done) << rx->output();
+  EXPECT_EQ(rx->wait(1.0), 0) << rx->output();
+  for (const auto& s : samples) EXPECT_NE(rx->output().find("OK " + s.type + "\n"), std::string::npos) << s.type;
+}
+
+TEST_F(LcmTools, OurLogReaderReadsWhatLcmLoggerRecorded) {
+  const std::string log = record_with_lcm_logger();
+  std::map<std::string, const testing::TypeSample*> by_channel;
+  const auto samples = all_type_samples();
+  for (const auto& s : samples) by_channel[s.channel] = &s;
+  std::set<std::string> seen;
+  LogReader reader(log);
+  LogEvent ev;
+  int64_t last_utime = 0;
+  while (reader.next(ev)) {
+    EXPECT_GE(ev.utime, last_utime) << "lcm-logger writes events in time order";
+    last_utime = ev.utime;
+    const auto it = by_channel.find(ev.channel);
+    ASSERT_NE(it, by_channel.end()) << "unexpected channel " << ev.channel;
+    EXPECT_TRUE(it->second->round_trips(ev.data)) << ev.channel;
+    seen.insert(it->second->type);
+  }
+  EXPECT_EQ(seen.size(), samples.size());
+}
+
+TEST_F(LcmTools, LcmLogplayerReplaysARecordingToASubscriber) {
+  const std::string log = record_with_lcm_logger();
+  auto rx = start_receiver(30.0);
+  Subprocess player({"lcm-logplayer", log});
+  EXPECT_EQ(player.wait(30.0), 0) << player.output();
+  EXPECT_EQ(rx->wait(10.0), 0) << rx->output();
+}
+
+TEST_F(LcmTools, GeneratedPythonModulesDecodeOurBytes) {
+  Subprocess writer({LCM_PEER, "write-bytes", dir_.string()});
+  ASSERT_EQ(writer.wait(10.0), 0) << writer.output();
+  std::vector<std::string> argv{"python3", WHISKEYE_SOURCE_DIR "/tests/lcm/check_python_bindings.py", dir_.string()};
+  for (const auto& s : all_type_samples()) argv.push_back(s.type);
+  Subprocess py(argv, "", {"PYTHONPATH=" WHISKEYE_LCM_PYTHON_DIR});
+  EXPECT_EQ(py.wait(30.0), 0) << py.output();
+  for (const auto& s : all_type_samples()) EXPECT_NE(py.output().find("OK " + s.type), std::string::npos) << py.output();
+}
+
+TEST_F(LcmTools, LcmSpyStartsHeadlessAndFindsAllOurTypes) {
+  Subprocess spy({"xvfb-run", "-a", WHISKEYE_SOURCE_DIR "/scripts/lcm-spy"}, "",
+                 {"WHISKEYE_TYPES_JAR=" WHISKEYE_TYPES_JAR});
+  const std::string expected = "Found " + std::to_string(all_type_samples().size()) + " LCM types";
+  EXPECT_TRUE(wait_until([&] { return spy.output().find(expected) != std::string::npos; }, 60.0)) << spy.output();
+  // Still running (the GUI came up under Xvfb) and no Java exception on the way.
+  std::this_thread::sleep_for(std::chrono::seconds(2));
+  EXPECT_TRUE(spy.running()) << spy.output();
+  EXPECT_EQ(spy.output().find("Exception"), std::string::npos) << spy.output();
+  spy.stop(5.0, SIGTERM);
+}
+
+}  // namespace
+}  // namespace whiskeye

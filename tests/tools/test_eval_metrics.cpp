@@ -1,0 +1,347 @@
+// Unit tests of the Table I metrics on synthetic inputs whose answers can be computed by hand.
+#include "whiskeye/eval/metrics.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace whiskeye::eval {
+namespace {
+
+constexpr int64_t kSecond = 1'000'000;
+
+// The paper's trajectory: a 1 m radius circle around the origin, facing outwards, one revolution per
+// `period_s`, sampled at 50 Hz.
+Pose2 circle_pose(double t_s, double period_s, double phase = 0.0, double direction = 1.0) {
+  const double a = phase + direction * kTwoPi * t_s / period_s;
+  return {std::cos(a), std::sin(a), wrap_angle(a)};
+}
+
+std::vector<PoseSample> circle_gt(double duration_s, double period_s, double phase = 0.0,
+                                  double direction = 1.0, double cx = 0.0, double cy = 0.0) {
+  std::vector<PoseSample> out;
+  for (int64_t u = 0; u <= static_cast<int64_t>(duration_s * kSecond); u += 20'000) {
+    Pose2 p = circle_pose(static_cast<double>(u) / kSecond, period_s, phase, direction);
+    p.x += cx;
+    p.y += cy;
+    out.push_back({u, p});
+  }
+  return out;
+}
+
+// An estimate in a map frame that sits at T_world_map in the world, otherwise exact.
+std::vector<PoseSample> exact_estimate(const std::vector<PoseSample>& gt, const Pose2& T_world_map) {
+  std::vector<PoseSample> out;
+  for (const PoseSample& s : gt) out.push_back({s.utime, compose(inverse(T_world_map), s.pose)});
+  return out;
+}
+
+ExperienceMap exact_chain_map(const GroundTruth& gt, const Pose2& T_world_map, int n, int64_t every_us) {
+  ExperienceMap map;
+  for (int i = 0; i < n; ++i) {
+    const int64_t t = i * every_us;
+    map.experiences.push_back({i, compose(inverse(T_world_map), *gt.at(t)), t, i % 2 == 0});
+    if (i > 0) map.links.push_back({i - 1, i});
+  }
+  return map;
+}
+
+TEST(GroundTruth, InterpolatesHeadingAcrossThePiWrap) {
+  const GroundTruth gt({{0, {0.0, 0.0, kPi - 0.1}}, {100, {1.0, -2.0, -kPi + 0.1}}});
+  const Pose2 mid = *gt.at(50);
+  EXPECT_NEAR(mid.x, 0.5, 1e-12);
+  EXPECT_NEAR(mid.y, -1.0, 1e-12);
+  EXPECT_NEAR(std::abs(angle_diff(mid.theta, kPi)), 0.0, 1e-12);  // through pi, not through 0
+  EXPECT_NEAR(gt.at(25)->theta, kPi - 0.05, 1e-12);
+  EXPECT_NEAR(gt.at(75)->theta, -kPi + 0.05, 1e-12);
+}
+
+TEST(GroundTruth, ReturnsSamplesExactlyAndNothingOutsideItsRange) {
+  const GroundTruth gt({{200, {2.0, 0.0, 0.0}}, {100, {1.0, 0.0, 0.5}}});  // unsorted on purpose
+  EXPECT_EQ(gt.begin_utime(), 100);
+  EXPECT_EQ(gt.end_utime(), 200);
+  EXPECT_DOUBLE_EQ(gt.at(100)->theta, 0.5);
+  EXPECT_DOUBLE_EQ(gt.at(200)->x, 2.0);
+  EXPECT_FALSE(gt.at(99).has_value());
+  EXPECT_FALSE(gt.at(201).has_value());
+}
+
+TEST(Lem, PerfectEstimateGivesZeroLemAndZeroEnm) {
+  EvalInput in;
+  in.ground_truth = circle_gt(20.0, 10.0);
+  const GroundTruth gt(in.ground_truth);
+  in.estimate = in.ground_truth;
+  in.map = exact_chain_map(gt, Pose2{}, 20, kSecond / 2);
+  const EvalResult r = evaluate(in, EvalParams{});
+  ASSERT_TRUE(r.lem.has_value());
+  EXPECT_EQ(r.lem->samples_used, in.estimate.size());
+  EXPECT_NEAR(r.lem->position_m.rmse, 0.0, 1e-12);
+  EXPECT_NEAR(r.lem->orientation_rad.rmse, 0.0, 1e-12);
+  ASSERT_TRUE(r.enm.enm.has_value());
+  EXPECT_EQ(r.enm.links_used, 19u);
+  EXPECT_NEAR(*r.enm.enm, 0.0, 1e-20);
+}
+
+TEST(Lem, ConstantOffsetEstimateAlignedByFirstExperienceGivesZero) {
+  const Pose2 T_world_map{2.0, -1.0, 2.7};
+  EvalInput in;
+  in.ground_truth = circle_gt(20.0, 10.0);
+  const GroundTruth gt(in.ground_truth);
+  in.estimate = exact_estimate(in.ground_truth, T_world_map);
+  in.map = exact_chain_map(gt, T_world_map, 20, kSecond / 2);
+  const EvalResult r = evaluate(in, EvalParams{});
+  ASSERT_TRUE(r.alignment.valid);
+  EXPECT_NEAR(r.alignment.T_world_map.x, 2.0, 1e-9);
+  EXPECT_NEAR(r.alignment.T_world_map.y, -1.0, 1e-9);
+  EXPECT_NEAR(r.alignment.T_world_map.theta, 2.7, 1e-9);
+  EXPECT_NEAR(r.lem->position_m.rmse, 0.0, 1e-9);
+  EXPECT_NEAR(r.lem->orientation_rad.rmse, 0.0, 1e-9);
+  ASSERT_TRUE(r.best_fit.valid);
+  EXPECT_NEAR(r.lem_best_fit->position_m.rmse, 0.0, 1e-9);
+  EXPECT_NEAR(*r.enm.enm, 0.0, 1e-18);
+}
+
+TEST(Lem, WithoutAlignmentAnOffsetEstimateShowsTheOffset) {
+  // The same offset estimate, evaluated with identity alignment, must not look perfect.
+  const GroundTruth gt(circle_gt(10.0, 10.0));
+  const LemResult lem = compute_lem(exact_estimate(gt.samples(), Pose2{0.3, 0.4, 0.0}), gt, Pose2{});
+  EXPECT_NEAR(lem.position_m.rmse, 0.5, 1e-12);
+  EXPECT_NEAR(lem.position_m.std_abs, 0.0, 1e-9);
+}
+
+TEST(Lem, AlignmentUsesTheEarliestCreatedExperienceNotTheFirstListed) {
+  const GroundTruth gt({{0, {0.0, 0.0, 0.0}}, {10, {1.0, 0.0, 0.0}}});
+  ExperienceMap map;
+  map.experiences.push_back({0, {5.0, 5.0, 0.0}, 10, false});  // id 0 but created later
+  map.experiences.push_back({7, {3.0, 0.0, 0.0}, 0, false});
+  const Alignment a = align_by_first_experience(map, gt);
+  ASSERT_TRUE(a.valid);
+  EXPECT_NEAR(a.T_world_map.x, -3.0, 1e-12);
+  EXPECT_NEAR(a.T_world_map.y, 0.0, 1e-12);
+}
+
+TEST(Lem, ReportsRmseMeanAndStdOfKnownErrorsIncludingAcrossTheWrap) {
+  const GroundTruth gt({{0, {0.0, 0.0, -kPi + 0.05}}, {100, {0.0, 0.0, -kPi + 0.05}}});
+  const std::vector<PoseSample> est = {{0, {0.1, 0.0, kPi - 0.05}},    // |e| = 0.1 m, 0.1 rad
+                                       {100, {0.0, 0.3, -kPi + 0.35}},  // |e| = 0.3 m, 0.3 rad
+                                       {101, {9.0, 9.0, 0.0}}};         // no ground truth: excluded
+  const LemResult lem = compute_lem(est, gt, Pose2{});
+  EXPECT_EQ(lem.samples_used, 2u);
+  EXPECT_EQ(lem.samples_outside_gt, 1u);
+  EXPECT_NEAR(lem.position_m.rmse, std::sqrt(0.05), 1e-12);
+  EXPECT_NEAR(lem.position_m.mean_abs, 0.2, 1e-12);
+  EXPECT_NEAR(lem.position_m.std_abs, 0.1, 1e-9);
+  EXPECT_NEAR(lem.orientation_rad.rmse, std::sqrt(0.05), 1e-9);
+  EXPECT_NEAR(lem.orientation_rad.mean_abs, 0.2, 1e-9);
+}
+
+TEST(Lem, NoAlignmentWithoutExperiencesOrGroundTruthAtTheFirst) {
+  const GroundTruth gt({{100, {0.0, 0.0, 0.0}}, {200, {1.0, 0.0, 0.0}}});
+  ExperienceMap map;
+  EXPECT_FALSE(align_by_first_experience(map, gt).valid);
+  map.experiences.push_back({0, {0.0, 0.0, 0.0}, 50, false});
+  const Alignment a = align_by_first_experience(map, gt);
+  EXPECT_FALSE(a.valid);
+  EXPECT_NE(a.reason.find("no ground truth"), std::string::npos);
+}
+
+TEST(Enm, KnownHeadingErrorGivesKnownEnm) {
+  const GroundTruth gt(circle_gt(10.0, 10.0));
+  const Pose2 T_world_map{0.4, 0.1, -1.0};
+  ExperienceMap map = exact_chain_map(gt, T_world_map, 3, kSecond);
+  map.experiences[2].pose.theta = wrap_angle(map.experiences[2].pose.theta + 0.1);
+  const EnmResult r = compute_enm(map, gt);
+  EXPECT_EQ(r.links_used, 2u);
+  // Link 0->1 is exact; link 1->2 is off by 0.1 rad and nothing in translation.
+  EXPECT_NEAR(*r.enm, 0.01 / 2, 1e-12);
+  EXPECT_NEAR(*r.rotation, 0.01 / 2, 1e-12);
+  EXPECT_NEAR(*r.translation, 0.0, 1e-20);
+}
+
+TEST(Enm, MatchesTheHandWorkedExampleOfTheDocs) {
+  // docs/evaluation.md: x1 = (1,0,0), x2 = (0,1,pi/2); map x1 = (0,0,0), x2 = (-1,1,pi/2+0.1).
+  const GroundTruth gt({{0, {1.0, 0.0, 0.0}}, {10, {0.0, 1.0, kPi / 2}}});
+  ExperienceMap map;
+  map.experiences.push_back({1, {0.0, 0.0, 0.0}, 0, false});
+  map.experiences.push_back({2, {-1.0, 1.0, kPi / 2 + 0.1}, 10, false});
+  map.links.push_back({1, 2});
+  const EnmResult r = compute_enm(map, gt);
+  EXPECT_NEAR(*r.translation, 0.0, 1e-24);
+  EXPECT_NEAR(*r.rotation, 0.01, 1e-12);
+}
+
+TEST(Enm, KnownTranslationErrorGivesKnownEnm) {
+  const GroundTruth gt(circle_gt(10.0, 10.0));
+  ExperienceMap map = exact_chain_map(gt, Pose2{}, 3, kSecond);
+  map.experiences[2].pose.x += 0.3;
+  map.experiences[2].pose.y += 0.4;
+  const EnmResult r = compute_enm(map, gt);
+  EXPECT_NEAR(*r.translation, 0.25 / 2, 1e-12);
+  EXPECT_NEAR(*r.rotation, 0.0, 1e-20);
+  EXPECT_NEAR(*r.enm, 0.125, 1e-12);
+}
+
+TEST(Enm, ExcludesAndCountsLinksItCannotEvaluate) {
+  const GroundTruth gt(circle_gt(10.0, 10.0));
+  ExperienceMap map = exact_chain_map(gt, Pose2{}, 3, kSecond);
+  map.links.push_back({2, 42});                               // no such experience
+  map.experiences.push_back({3, Pose2{}, 60 * kSecond, false});  // created after ground truth ends
+  map.links.push_back({2, 3});
+  const EnmResult r = compute_enm(map, gt);
+  EXPECT_EQ(r.links_used, 2u);
+  EXPECT_EQ(r.links_excluded, 2u);
+  ExperienceMap empty;
+  EXPECT_FALSE(compute_enm(empty, gt).enm.has_value());
+}
+
+TEST(BaseSet, EndsAfterOneFullRevolutionAroundTheCentre) {
+  EvalParams params;
+  // Starting at an arbitrary phase, counter-clockwise; 10 s per revolution.
+  const GroundTruth ccw(circle_gt(25.0, 10.0, 0.3));
+  const auto end = base_set_end(ccw, params);
+  ASSERT_TRUE(end.has_value());
+  EXPECT_NEAR(static_cast<double>(*end), 10.0 * kSecond, 2.0);
+  // Clockwise counts the same.
+  const GroundTruth cw(circle_gt(25.0, 10.0, 1.0, -1.0));
+  EXPECT_NEAR(static_cast<double>(*base_set_end(cw, params)), 10.0 * kSecond, 2.0);
+}
+
+TEST(BaseSet, UsesTheConfiguredCentreAndDuration) {
+  EvalParams params;
+  const GroundTruth gt(circle_gt(25.0, 10.0, 0.0, 1.0, 3.0, 3.0));  // around (3, 3)
+  EXPECT_FALSE(base_set_end(gt, params).has_value());  // never goes around (0, 0)
+  params.centre_x = 3.0;
+  params.centre_y = 3.0;
+  EXPECT_NEAR(static_cast<double>(*base_set_end(gt, params)), 10.0 * kSecond, 2.0);
+  params.base_duration_s = 4.5;
+  EXPECT_EQ(*base_set_end(gt, params), 4'500'000);
+}
+
+// A scripted run along a line: ground truth at every whole second, events at whole seconds.
+class ScriptedExm : public ::testing::Test {
+ protected:
+  void at(int64_t t_s, Pose2 pose) { gt_samples_.push_back({t_s * kSecond, pose}); }
+  void ev(int64_t t_s, EventType type, int32_t from, int32_t to) {
+    events_.push_back({t_s * kSecond, t_s, type, from, to});
+    if (type == EventType::kNewExperience) map_.experiences.push_back({to, Pose2{}, t_s * kSecond, false});
+  }
+  ExmResult run(double base_duration_s) {
+    EvalParams params;
+    params.base_duration_s = base_duration_s;
+    return compute_exm(events_, map_, GroundTruth(gt_samples_), params);
+  }
+  std::vector<PoseSample> gt_samples_;
+  std::vector<ExperienceEvent> events_;
+  ExperienceMap map_;
+};
+
+TEST_F(ScriptedExm, CountsReLocalisationsCorrectnessAtTheThresholdsAndValidity) {
+  using E = EventType;
+  for (int t = 0; t <= 13; ++t) at(t, {10.0 * t, 0.0, 0.0});  // far apart by default
+  gt_samples_[0].pose = {0.0, 0.0, 0.0};
+  gt_samples_[1].pose = {1.0, 0.0, 0.0};
+  gt_samples_[4].pose = {0.0799, 0.0, 0.0};                // 0.0799 m from exp 0: correct
+  gt_samples_[6].pose = {1.0801, 0.0, 0.0};                // 0.0801 m from exp 1: incorrect
+  gt_samples_[9].pose = {0.0, 0.0, deg_to_rad(4.5)};       // 4.5 deg from exp 0: correct
+  gt_samples_[11].pose = {1.0, 0.0, -deg_to_rad(4.7)};     // 4.7 deg from exp 1: incorrect
+  ev(0, E::kNewExperience, -1, 0);
+  ev(1, E::kNewExperience, 0, 1);
+  ev(2, E::kNewExperience, 1, 2);
+  // ---- base set ends at 2.5 s
+  ev(3, E::kSameExperience, 2, 2);
+  ev(4, E::kRelocalise, 2, 0);
+  ev(5, E::kNewExperience, 0, 3);   // valid
+  ev(6, E::kRelocalise, 3, 1);
+  ev(7, E::kNewExperience, 1, 4);   // invalid
+  ev(8, E::kNewExperience, 4, 5);   // invalid
+  ev(9, E::kRelocalise, 5, 0);
+  ev(10, E::kNewExperience, 0, 6);  // valid again
+  ev(11, E::kRelocalise, 6, 1);
+  ev(12, E::kRelocalise, 1, 1);     // not a change of experience
+  ev(13, E::kRelocalise, 1, 99);    // target never created
+  const ExmResult r = run(2.5);
+
+  EXPECT_EQ(r.base_set_size, 3u);
+  EXPECT_EQ(r.experience_events_after_base, 8u);  // 4 new + 4 re-localisations
+  EXPECT_EQ(r.relocalisations_after_base, 4u);
+  EXPECT_EQ(r.correct_after_base, 2u);
+  ASSERT_TRUE(r.arr && r.arcr);
+  EXPECT_DOUBLE_EQ(*r.arr, 0.5);
+  EXPECT_DOUBLE_EQ(*r.arcr, 0.5);
+  ASSERT_EQ(r.relocalisations.size(), 4u);
+  EXPECT_TRUE(r.relocalisations[0].correct);
+  EXPECT_FALSE(r.relocalisations[1].correct);
+  EXPECT_TRUE(r.relocalisations[2].correct);
+  EXPECT_FALSE(r.relocalisations[3].correct);
+  EXPECT_NEAR(r.relocalisations[3].angle_error_rad, deg_to_rad(4.7), 1e-12);
+  EXPECT_EQ(r.experiences_created, 7u);
+  EXPECT_EQ(r.valid_experiences, 5u);
+  EXPECT_DOUBLE_EQ(*r.valid_fraction, 5.0 / 7.0);
+  EXPECT_EQ(r.relocalise_to_current, 1u);
+  EXPECT_EQ(r.relocalise_unknown_target, 1u);
+}
+
+TEST_F(ScriptedExm, ArcrIsUndefinedWithoutReLocalisationsNotOne) {
+  using E = EventType;
+  for (int t = 0; t <= 5; ++t) at(t, {static_cast<double>(t), 0.0, 0.0});
+  for (int t = 0; t <= 5; ++t) ev(t, E::kNewExperience, t - 1, t);
+  const ExmResult r = run(1.5);
+  EXPECT_EQ(r.experience_events_after_base, 4u);
+  ASSERT_TRUE(r.arr.has_value());
+  EXPECT_DOUBLE_EQ(*r.arr, 0.0);
+  EXPECT_FALSE(r.arcr.has_value());
+  EXPECT_DOUBLE_EQ(*r.valid_fraction, 1.0);
+}
+
+TEST_F(ScriptedExm, ArrIsUndefinedWhenNothingHappensAfterTheBaseSet) {
+  for (int t = 0; t <= 5; ++t) at(t, {static_cast<double>(t), 0.0, 0.0});
+  ev(0, EventType::kNewExperience, -1, 0);
+  const ExmResult r = run(3.0);
+  EXPECT_FALSE(r.arr.has_value());
+  EXPECT_FALSE(r.arcr.has_value());
+}
+
+TEST_F(ScriptedExm, AnIncorrectReLocalisationDuringTheBaseSetInvalidatesLaterExperiences) {
+  using E = EventType;
+  for (int t = 0; t <= 5; ++t) at(t, {static_cast<double>(t), 0.0, 0.0});
+  ev(0, E::kNewExperience, -1, 0);
+  ev(1, E::kNewExperience, 0, 1);
+  ev(2, E::kRelocalise, 1, 0);  // 2 m away: incorrect, inside the base set
+  ev(4, E::kNewExperience, 0, 2);
+  const ExmResult r = run(3.0);
+  EXPECT_EQ(r.relocalisations_total, 1u);
+  EXPECT_EQ(r.relocalisations_after_base, 0u);
+  EXPECT_FALSE(r.relocalisations[0].after_base_set);
+  EXPECT_FALSE(r.arcr.has_value());
+  EXPECT_DOUBLE_EQ(*r.arr, 0.0);
+  EXPECT_EQ(r.valid_experiences, 2u);
+  EXPECT_EQ(r.experiences_created, 3u);
+}
+
+TEST_F(ScriptedExm, TakesCreationTimesFromEventsWhenTheMapLacksTheExperience) {
+  using E = EventType;
+  for (int t = 0; t <= 5; ++t) at(t, {0.0, 0.0, 0.0});
+  ev(0, E::kNewExperience, -1, 0);
+  ev(1, E::kNewExperience, 0, 1);
+  map_.experiences.clear();
+  ev(4, E::kRelocalise, 1, 0);
+  const ExmResult r = run(2.0);
+  ASSERT_EQ(r.relocalisations.size(), 1u);
+  EXPECT_TRUE(r.relocalisations[0].correct);
+  EXPECT_DOUBLE_EQ(*r.arcr, 1.0);
+}
+
+TEST_F(ScriptedExm, ExcludesEventsOutsideTheGroundTruthAndCountsThem) {
+  using E = EventType;
+  for (int t = 0; t <= 3; ++t) at(t, {0.0, 0.0, 0.0});
+  ev(0, E::kNewExperience, -1, 0);
+  ev(2, E::kNewExperience, 0, 1);
+  ev(5, E::kRelocalise, 1, 0);  // ground truth ended at 3 s
+  const ExmResult r = run(1.0);
+  EXPECT_EQ(r.events_outside_gt, 1u);
+  EXPECT_EQ(r.relocalisations_total, 0u);
+  EXPECT_EQ(r.experience_events_after_base, 1u);
+}
+
+}  // namespace
+}  // namespace whiskeye::eval

@@ -1,0 +1,258 @@
+// Integration test of the vita-eval binary: writes small slamd-like output logs (VITA_* and
+// GROUND_TRUTH) with LogWriterBus, runs the real executable on them and checks its JSON, its table
+// and its PNG plots.
+#include "whiskeye/common/bus.h"
+#include "whiskeye/common/se2.h"
+
+#include <whiskeye/pose2d_t.hpp>
+#include <whiskeye/vita_event_t.hpp>
+#include <whiskeye/vita_map_t.hpp>
+#include <whiskeye/vita_pose_t.hpp>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace whiskeye {
+namespace {
+
+constexpr int64_t kSecond = 1'000'000;
+constexpr int64_t kStart = 1'700'000'000 * kSecond;  // a realistic epoch time
+constexpr double kPeriodS = 20.0;                    // one revolution
+const Pose2 kWorldMap{0.5, -0.2, 0.3};               // where slamd's map frame sits in the world
+
+Pose2 gt_at(int64_t utime) {
+  const double a = kTwoPi * static_cast<double>(utime - kStart) / (kPeriodS * kSecond);
+  return {std::cos(a), std::sin(a), wrap_angle(a)};  // 1 m circle, facing outwards
+}
+
+Pose2 map_pose(int64_t utime) { return compose(inverse(kWorldMap), gt_at(utime)); }
+
+experience_t experience(int32_t id, int64_t utime, double heading_error = 0.0) {
+  experience_t e{};
+  const Pose2 p = map_pose(utime);
+  e.id = id;
+  e.x = p.x;
+  e.y = p.y;
+  e.theta = wrap_angle(p.theta + heading_error);
+  e.utime_created = utime;
+  e.visual_template_id = id;
+  e.tactile_template_id = id % 2 == 0 ? id : -1;
+  e.dense = id % 2 == 0;
+  return e;
+}
+
+// pose2d_t and vita_pose_t share these fields.
+template <typename Msg>
+void set_pose(Msg& msg, int64_t utime, const Pose2& p) {
+  msg.utime = utime;
+  msg.x = p.x;
+  msg.y = p.y;
+  msg.theta = p.theta;
+}
+
+link_t link(int32_t from, int32_t to) {
+  link_t l{};
+  l.from_id = from;
+  l.to_id = to;
+  return l;
+}
+
+struct Script {
+  int8_t mode = vita_pose_t::MODE_VITA;
+  bool relocalise = true;  // false: new experiences all through the second revolution instead
+};
+
+// Two revolutions. Experiences 0..19 are created once a second in the first; in the second the
+// robot re-localises to the experience of the same place each second (correct), except at 30 s it
+// jumps to experience 3 (incorrect), creates experience 20 at 30.5 s (invalid, heading off by
+// 0.2 rad in the map) and re-localises correctly again at 31 s.
+// Expected: ARR = 19/20, ARCR = 18/19, valid 20/21, LEM 0, EnM = 0.2² / 20 links.
+void write_log(const std::string& path, const Script& script) {
+  LogWriterBus bus(path);
+  vita_map_t map{};
+  map.mode = script.mode;
+  int32_t current = -1;
+  auto publish_event = [&](int64_t t, int8_t type, int32_t to) {
+    vita_event_t e{};
+    e.utime = t;
+    e.cycle = (t - kStart) / (kSecond / 2);
+    e.type = type;
+    e.from_id = current;
+    e.to_id = to;
+    e.mode = script.mode;
+    bus.set_time(t);
+    publish(bus, "VITA_EVENT", e);
+    current = to;
+  };
+  auto add_experience = [&](int64_t t, int32_t id, double heading_error = 0.0) {
+    if (current >= 0) map.links.push_back(link(current, id));
+    map.experiences.push_back(experience(id, t, heading_error));
+    publish_event(t, vita_event_t::NEW_EXPERIENCE, id);
+  };
+  for (int64_t u = 0; u <= static_cast<int64_t>(2 * kPeriodS) * kSecond; u += 20'000) {  // 50 Hz
+    const int64_t t = kStart + u;
+    bus.set_time(t);
+    pose2d_t gt{};
+    set_pose(gt, t, gt_at(t));
+    publish(bus, "GROUND_TRUTH", gt);
+    if (u % 100'000 == 0) {  // 10 Hz pose estimate, exact in the map frame
+      vita_pose_t vp{};
+      set_pose(vp, t, map_pose(t));
+      vp.experience_id = current;
+      vp.mode = script.mode;
+      publish(bus, "VITA_POSE", vp);
+    }
+    if (u % kSecond == 0) {
+      const int64_t s = u / kSecond;
+      if (s < 20) {
+        add_experience(t, static_cast<int32_t>(s));
+      } else if (s > 20 && s < 40 && script.relocalise) {
+        publish_event(t, vita_event_t::RELOCALISE, s == 30 ? 3 : static_cast<int32_t>(s - 20));
+      } else if (s > 20 && s < 40) {
+        add_experience(t, static_cast<int32_t>(s + 100));  // never recognises a place: no loop closure
+      } else if (s == 40) {
+        publish_event(t, vita_event_t::SAME_EXPERIENCE, current);
+      }
+      if (s == 10) {  // an early, partial map that must not be the one evaluated
+        vita_map_t early = map;
+        early.experiences[0].x += 5.0;
+        early.num_experiences = static_cast<int32_t>(early.experiences.size());
+        early.num_links = static_cast<int32_t>(early.links.size());
+        publish(bus, "VITA_MAP", early);
+      }
+    }
+    if (u == 30 * kSecond + kSecond / 2 && script.relocalise) add_experience(t, 20, 0.2);
+    if (u == 0) publish(bus, "SOMETHING_ELSE", gt);  // other channels are ignored
+  }
+  map.utime = kStart + static_cast<int64_t>(2 * kPeriodS) * kSecond;
+  map.num_experiences = static_cast<int32_t>(map.experiences.size());
+  map.num_links = static_cast<int32_t>(map.links.size());
+  map.current_experience_id = current;
+  bus.set_time(map.utime);
+  publish(bus, "VITA_MAP", map);
+}
+
+int run_vita_eval(const std::string& args, const std::string& stdout_path) {
+  const std::string cmd = std::string(VITA_EVAL_BINARY) + " " + args + " > " + stdout_path + " 2>&1";
+  return std::system(cmd.c_str());
+}
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// Pixels of roughly this BGR colour.
+int count_colour(const cv::Mat& img, int b, int g, int r) {
+  int n = 0;
+  for (int y = 0; y < img.rows; ++y) {
+    for (int x = 0; x < img.cols; ++x) {
+      const cv::Vec3b p = img.at<cv::Vec3b>(y, x);
+      if (std::abs(p[0] - b) < 30 && std::abs(p[1] - g) < 30 && std::abs(p[2] - r) < 30) ++n;
+    }
+  }
+  return n;
+}
+
+class VitaEvalBinary : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = std::filesystem::path(::testing::TempDir()) /
+           ("vita_eval_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    std::filesystem::remove_all(dir_);
+    std::filesystem::create_directories(dir_);
+  }
+  std::string file(const std::string& name) const { return (dir_ / name).string(); }
+  std::filesystem::path dir_;
+};
+
+TEST_F(VitaEvalBinary, ComputesTheExpectedMetricsAndWritesJsonAndPlots) {
+  write_log(file("vita.lcmlog"), Script{});
+  ASSERT_EQ(run_vita_eval("--input " + file("vita.lcmlog") + " --json " + file("out.json") + " --plots " +
+                              file("plots") + " --paper-row vita",
+                          file("stdout.txt")),
+            0)
+      << read_text(file("stdout.txt"));
+
+  const nlohmann::json j = nlohmann::json::parse(read_text(file("out.json")));
+  ASSERT_EQ(j["runs"].size(), 1u);
+  const nlohmann::json& run = j["runs"][0];
+  EXPECT_EQ(run["label"], "vita");
+  EXPECT_EQ(run["counts"]["map_experiences"], 21);
+  EXPECT_TRUE(run["alignment"]["valid"]);
+  EXPECT_NEAR(run["alignment"]["T_world_map"]["x"].get<double>(), 0.5, 1e-9);
+  EXPECT_NEAR(run["alignment"]["T_world_map"]["theta"].get<double>(), 0.3, 1e-9);
+  EXPECT_LT(run["lem"]["position_m"]["rmse"].get<double>(), 1e-9);
+  EXPECT_LT(run["lem"]["orientation_rad"]["rmse"].get<double>(), 1e-9);
+  EXPECT_EQ(run["lem"]["samples_used"], 401);
+  EXPECT_EQ(run["exm"]["base_set_size"], 20);
+  EXPECT_NEAR(run["exm"]["base_end_s"].get<double>(), 20.0, 1e-5);
+  EXPECT_EQ(run["exm"]["experience_events_after_base"], 20);
+  EXPECT_EQ(run["exm"]["relocalisations_after_base"], 19);
+  EXPECT_NEAR(run["exm"]["arr"].get<double>(), 19.0 / 20.0, 1e-12);
+  EXPECT_NEAR(run["exm"]["arcr"].get<double>(), 18.0 / 19.0, 1e-12);
+  EXPECT_NEAR(run["exm"]["valid_fraction"].get<double>(), 20.0 / 21.0, 1e-12);
+  EXPECT_EQ(run["enm"]["links_used"], 20);
+  EXPECT_NEAR(run["enm"]["enm"].get<double>(), 0.04 / 20.0, 1e-9);
+  EXPECT_NEAR(run["enm"]["rotation_rad2"].get<double>(), 0.04 / 20.0, 1e-9);
+  EXPECT_NEAR(run["enm"]["translation_m2"].get<double>(), 0.0, 1e-12);
+  ASSERT_EQ(j["paper_rows"].size(), 1u);
+  EXPECT_DOUBLE_EQ(j["paper_rows"][0]["enm"].get<double>(), 0.4311);
+
+  const std::string table = read_text(file("stdout.txt"));
+  EXPECT_NE(table.find("paper ViTa-SLAM"), std::string::npos);
+  EXPECT_NE(table.find("0.9474"), std::string::npos);  // ARCR 18/19 in the table
+
+  const cv::Mat map_png = cv::imread(file("plots/vita_experience_map.png"));
+  ASSERT_FALSE(map_png.empty());
+  EXPECT_GE(map_png.cols, 600);
+  EXPECT_GT(count_colour(map_png, 0, 140, 255), 100);    // dense experiences (orange)
+  EXPECT_GT(count_colour(map_png, 170, 170, 170), 500);  // ground-truth trajectory (grey)
+  const cv::Mat reloc_png = cv::imread(file("plots/vita_relocalisations.png"));
+  ASSERT_FALSE(reloc_png.empty());
+  EXPECT_GT(count_colour(reloc_png, 40, 40, 220), 100);  // the incorrect one (red)
+  EXPECT_GT(count_colour(reloc_png, 40, 160, 40), 100);  // correct ones (green)
+}
+
+TEST_F(VitaEvalBinary, PrintsOneRowPerInputAndNullArcrWithoutReLocalisations) {
+  write_log(file("vita.lcmlog"), Script{});
+  write_log(file("tactile.lcmlog"), Script{vita_pose_t::MODE_TACTILE, false});
+  ASSERT_EQ(run_vita_eval("--input " + file("vita.lcmlog") + " --input " + file("tactile.lcmlog") + " --json " +
+                              file("out.json"),
+                          file("stdout.txt")),
+            0)
+      << read_text(file("stdout.txt"));
+  const nlohmann::json j = nlohmann::json::parse(read_text(file("out.json")));
+  ASSERT_EQ(j["runs"].size(), 2u);
+  EXPECT_EQ(j["runs"][1]["label"], "tactile");
+  EXPECT_TRUE(j["runs"][1]["exm"]["arcr"].is_null());
+  EXPECT_NEAR(j["runs"][1]["exm"]["arr"].get<double>(), 0.0, 1e-12);
+  const std::string table = read_text(file("stdout.txt"));
+  EXPECT_NE(table.find("\ntactile "), std::string::npos);
+  EXPECT_NE(table.find("n/a"), std::string::npos);
+}
+
+TEST_F(VitaEvalBinary, FailsWithAOneLineReasonOnALogWithoutGroundTruth) {
+  {
+    LogWriterBus bus(file("nogt.lcmlog"));
+    vita_map_t map{};
+    publish(bus, "VITA_MAP", map);
+  }
+  EXPECT_NE(run_vita_eval("--input " + file("nogt.lcmlog"), file("stdout.txt")), 0);
+  EXPECT_NE(read_text(file("stdout.txt")).find("no GROUND_TRUTH"), std::string::npos);
+  EXPECT_NE(run_vita_eval("--input " + file("missing.lcmlog"), file("stdout2.txt")), 0);
+  EXPECT_NE(run_vita_eval("--input " + file("nogt.lcmlog") + " --centre 1:2", file("stdout3.txt")), 0);
+  EXPECT_NE(read_text(file("stdout3.txt")).find("--centre must be X,Y"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace whiskeye

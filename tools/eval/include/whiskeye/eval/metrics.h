@@ -1,0 +1,192 @@
+// The evaluation metrics of the paper's Table I (LEM, ExM, EnM) as pure functions, following the
+// contract in ../shared/design/metrics.md. Plain structs in, plain structs out: no LCM, no files, no
+// clocks — `vita-eval` reads the log and converts; tests build the inputs by hand.
+//
+// Frames: ground truth is the pose of the robot base in the world frame; pose estimates and
+// experiences are poses of the base in the SLAM map frame. T_world_map ties them together.
+// Relative poses use common/se2.h: a ⊖ b := between(a, b) = "b expressed in a's frame".
+#pragma once
+
+#include "whiskeye/common/se2.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace whiskeye::eval {
+
+struct PoseSample {
+  int64_t utime = 0;
+  Pose2 pose;
+};
+
+enum class EventType { kSameExperience, kNewExperience, kRelocalise };
+
+struct ExperienceEvent {
+  int64_t utime = 0;
+  int64_t cycle = 0;
+  EventType type = EventType::kSameExperience;
+  int32_t from_id = -1;
+  int32_t to_id = -1;
+};
+
+struct MapExperience {
+  int32_t id = -1;
+  Pose2 pose;  // map frame, after relaxation
+  int64_t utime_created = 0;
+  bool dense = false;
+};
+
+struct MapLink {
+  int32_t from_id = -1;
+  int32_t to_id = -1;
+};
+
+struct ExperienceMap {
+  std::vector<MapExperience> experiences;
+  std::vector<MapLink> links;
+  const MapExperience* find(int32_t id) const;
+};
+
+// Ground truth, interpolated between samples: positions linearly, headings along the shorter arc.
+// Queries outside [begin, end] return nothing: the metrics exclude (and count) such times rather
+// than extrapolate.
+class GroundTruth {
+ public:
+  // Sorts by time; of samples with equal times the last one wins.
+  explicit GroundTruth(std::vector<PoseSample> samples);
+  std::optional<Pose2> at(int64_t utime) const;
+  bool empty() const { return samples_.empty(); }
+  int64_t begin_utime() const { return samples_.empty() ? 0 : samples_.front().utime; }
+  int64_t end_utime() const { return samples_.empty() ? 0 : samples_.back().utime; }
+  const std::vector<PoseSample>& samples() const { return samples_; }
+
+ private:
+  std::vector<PoseSample> samples_;
+};
+
+struct EvalParams {
+  double correct_position_m = 0.08;              // ExM: re-localisation position threshold
+  double correct_angle_rad = deg_to_rad(4.6);    // ExM: re-localisation heading threshold
+  double centre_x = 0.0;                         // arena centre for the first revolution (m)
+  double centre_y = 0.0;
+  std::optional<double> base_duration_s;         // if set, base set = first S seconds of GT instead
+};
+
+// ---- Alignment ----
+
+struct Alignment {
+  bool valid = false;
+  std::string reason;   // why not valid
+  Pose2 T_world_map;    // world pose of the map frame
+};
+
+// The contract's alignment: the single transform putting the first experience (earliest
+// utime_created; ties by smaller id) onto the ground-truth pose at its creation time.
+Alignment align_by_first_experience(const ExperienceMap& map, const GroundTruth& gt);
+
+// Least-squares SE(2) over the positions of the pose samples (closed form, 2-D Kabsch). Reported
+// beside the contract's alignment only, never used for the headline numbers.
+Alignment align_best_fit(const std::vector<PoseSample>& estimate, const GroundTruth& gt);
+
+// ---- LEM ----
+
+struct ErrorStats {
+  double rmse = 0.0;
+  double mean_abs = 0.0;
+  double std_abs = 0.0;  // population standard deviation of |e|
+};
+
+struct LemResult {
+  std::size_t samples_used = 0;
+  std::size_t samples_outside_gt = 0;  // excluded: no ground truth at their time
+  ErrorStats position_m;
+  ErrorStats orientation_rad;
+};
+
+LemResult compute_lem(const std::vector<PoseSample>& estimate, const GroundTruth& gt,
+                      const Pose2& T_world_map);
+
+// ---- ExM ----
+
+struct Relocalisation {
+  int64_t utime = 0;
+  int32_t from_id = -1;
+  int32_t to_id = -1;
+  Pose2 gt_now;             // ground truth at the event
+  Pose2 gt_target_created;  // ground truth at the target experience's creation
+  double position_error_m = 0.0;
+  double angle_error_rad = 0.0;  // |wrapped heading difference|
+  bool correct = false;
+  bool after_base_set = false;
+};
+
+struct ExmResult {
+  bool base_end_found = false;     // false: the revolution was never completed (everything is base)
+  int64_t base_end_utime = 0;      // events strictly after this time are "after the base set"
+  double base_end_s = 0.0;         // the same, in seconds after the first ground-truth sample
+  std::size_t base_set_size = 0;   // experiences created at or before base_end_utime
+  std::size_t experience_events_after_base = 0;  // new experiences + re-localisations
+  std::size_t relocalisations_after_base = 0;
+  std::size_t correct_after_base = 0;
+  std::size_t relocalisations_total = 0;         // including those during the base set
+  std::size_t correct_total = 0;
+  std::optional<double> arr;   // undefined when there is no experience event after the base set
+  std::optional<double> arcr;  // undefined when there is no re-localisation after the base set
+  std::size_t experiences_created = 0;  // NEW_EXPERIENCE events (with ground truth)
+  std::size_t valid_experiences = 0;
+  std::optional<double> valid_fraction;
+  // Events not counted: no ground truth at the event or at the target's creation, unknown target,
+  // or a RELOCALISE that does not change the current experience.
+  std::size_t events_outside_gt = 0;
+  std::size_t relocalise_unknown_target = 0;
+  std::size_t relocalise_to_current = 0;
+  std::vector<Relocalisation> relocalisations;  // all counted ones, in time order
+};
+
+// Time at which ground truth has completed its first full revolution (2π of net polar-angle travel
+// around the centre), or the configured base duration after the first GT sample.
+std::optional<int64_t> base_set_end(const GroundTruth& gt, const EvalParams& params);
+
+// `events` in any order (sorted by utime, then cycle, internally). An experience's creation time is
+// its utime_created in the final map (as for EnM), else the time of the NEW_EXPERIENCE event that
+// created it (an experience dropped from the map).
+ExmResult compute_exm(const std::vector<ExperienceEvent>& events, const ExperienceMap& map,
+                      const GroundTruth& gt, const EvalParams& params);
+
+// ---- EnM ----
+
+struct EnmResult {
+  std::size_t links_used = 0;
+  std::size_t links_excluded = 0;  // endpoint missing from the map, or no GT at a creation time
+  std::optional<double> enm;            // (1/N) Σ trans² + rot²; undefined with N = 0
+  std::optional<double> translation;    // (1/N) Σ trans²  (m²)
+  std::optional<double> rotation;       // (1/N) Σ rot²    (rad²)
+};
+
+// For every link (i = from, j = to): δ̂ = x̂_i ⊖ x̂_j, δ = x_i ⊖ x_j, error = δ̂ ⊖ δ.
+EnmResult compute_enm(const ExperienceMap& map, const GroundTruth& gt);
+
+// ---- Everything ----
+
+struct EvalInput {
+  std::vector<PoseSample> estimate;       // VITA_POSE
+  std::vector<ExperienceEvent> events;    // VITA_EVENT
+  ExperienceMap map;                      // last VITA_MAP
+  std::vector<PoseSample> ground_truth;   // GROUND_TRUTH
+};
+
+struct EvalResult {
+  Alignment alignment;
+  Alignment best_fit;
+  std::optional<LemResult> lem;           // with the contract's alignment
+  std::optional<LemResult> lem_best_fit;  // labelled: best-fit alignment
+  ExmResult exm;
+  EnmResult enm;
+};
+
+EvalResult evaluate(const EvalInput& input, const EvalParams& params);
+
+}  // namespace whiskeye::eval

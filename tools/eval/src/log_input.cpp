@@ -1,0 +1,87 @@
+// Converts VITA_POSE / VITA_EVENT / VITA_MAP / GROUND_TRUTH log events into EvalInput.
+#include "log_input.h"
+
+#include "whiskeye/common/bus.h"
+
+#include <whiskeye/pose2d_t.hpp>
+#include <whiskeye/vita_event_t.hpp>
+#include <whiskeye/vita_map_t.hpp>
+#include <whiskeye/vita_pose_t.hpp>
+
+#include <stdexcept>
+
+namespace whiskeye::eval {
+
+namespace {
+
+std::string mode_name(int8_t mode) {
+  switch (mode) {
+    case vita_pose_t::MODE_VISUAL: return "visual";
+    case vita_pose_t::MODE_TACTILE: return "tactile";
+    case vita_pose_t::MODE_VITA: return "vita";
+    default: return "unknown";
+  }
+}
+
+template <typename T>
+bool decode_counted(const LogEvent& ev, T& msg, LoadedRun& run) {
+  if (decode_message(std::span<const uint8_t>(ev.data), msg)) return true;
+  ++run.decode_errors[ev.channel];
+  return false;
+}
+
+}  // namespace
+
+LoadedRun load_run(const std::string& path) {
+  LoadedRun run;
+  run.path = path;
+  LogReader reader(path);
+  LogEvent ev;
+  vita_map_t last_map{};
+  std::optional<int8_t> pose_mode;
+  while (reader.next(ev)) {
+    if (ev.channel == "VITA_POSE") {
+      vita_pose_t m{};
+      if (!decode_counted(ev, m, run)) continue;
+      run.input.estimate.push_back({m.utime, {m.x, m.y, m.theta}});
+      pose_mode = m.mode;
+    } else if (ev.channel == "VITA_EVENT") {
+      vita_event_t m{};
+      if (!decode_counted(ev, m, run)) continue;
+      EventType type = EventType::kSameExperience;
+      if (m.type == vita_event_t::NEW_EXPERIENCE) {
+        type = EventType::kNewExperience;
+      } else if (m.type == vita_event_t::RELOCALISE) {
+        type = EventType::kRelocalise;
+      } else if (m.type != vita_event_t::SAME_EXPERIENCE) {
+        ++run.decode_errors[ev.channel];  // an event type this contract does not know
+        continue;
+      }
+      run.input.events.push_back({m.utime, m.cycle, type, m.from_id, m.to_id});
+    } else if (ev.channel == "VITA_MAP") {
+      vita_map_t m{};
+      if (!decode_counted(ev, m, run)) continue;
+      last_map = std::move(m);
+      ++run.map_messages;
+    } else if (ev.channel == "GROUND_TRUTH") {
+      pose2d_t m{};
+      if (!decode_counted(ev, m, run)) continue;
+      run.input.ground_truth.push_back({m.utime, {m.x, m.y, m.theta}});
+    }
+  }
+  if (run.input.ground_truth.empty()) {
+    throw std::runtime_error(path + ": no GROUND_TRUTH messages (the metrics need the simulator's ground truth)");
+  }
+  if (run.map_messages == 0) {
+    throw std::runtime_error(path + ": no VITA_MAP messages (is this a slamd output log?)");
+  }
+  for (const experience_t& e : last_map.experiences) {
+    run.input.map.experiences.push_back({e.id, {e.x, e.y, e.theta}, e.utime_created, e.dense != 0});
+  }
+  for (const link_t& l : last_map.links) run.input.map.links.push_back({l.from_id, l.to_id});
+  run.mode = mode_name(last_map.mode);
+  if (run.mode == "unknown" && pose_mode) run.mode = mode_name(*pose_mode);
+  return run;
+}
+
+}  // namespace whiskeye::eval

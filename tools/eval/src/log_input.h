@@ -1,0 +1,24 @@
+// Reads a slamd output log into the metrics' plain input structs (the only LCM-aware part of vita-eval).
+#pragma once
+
+#include "whiskeye/eval/metrics.h"
+
+#include <cstdint>
+#include <map>
+#include <string>
+
+namespace whiskeye::eval {
+
+struct LoadedRun {
+  std::string path;
+  std::string mode;  // "visual", "tactile", "vita" or "unknown" (from VITA_MAP, else VITA_POSE)
+  EvalInput input;
+  std::map<std::string, int64_t> decode_errors;  // per channel
+  int64_t map_messages = 0;
+};
+
+// Throws std::runtime_error with a one-line reason if the file cannot be read or lacks the
+// channels the metrics need (GROUND_TRUTH, VITA_MAP).
+LoadedRun load_run(const std::string& path);
+
+}  // namespace whiskeye::eval

@@ -1,0 +1,217 @@
+// Formats the metrics as a Table-I-like table and as JSON (undefined values: "n/a" / null).
+#include "report.h"
+
+#include <cstdio>
+#include <sstream>
+
+namespace whiskeye::eval {
+
+std::optional<PaperRow> paper_row(const std::string& name) {
+  // Table I of the paper, copied from ../shared/design/metrics.md.
+  if (name == "visual") return PaperRow{"paper Visual-SLAM", 4.4024, 0.121, 0.0, 0.9168, 0.6776, 1.8872, 8.4155};
+  if (name == "tactile") return PaperRow{"paper Tactile-SLAM", 3.8129, 0.4643, 0.0, 1.1739, 1.2901, 1.5604, 3.0061};
+  if (name == "vita") return PaperRow{"paper ViTa-SLAM", 0.4311, 0.7778, 1.0, 0.1445, 0.0474, 0.6404, 3.8371};
+  return std::nullopt;
+}
+
+namespace {
+
+std::string fmt(const char* format, double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, format, v);
+  return buf;
+}
+
+std::string opt(const std::optional<double>& v, const char* format = "%.4f") {
+  return v ? fmt(format, *v) : std::string("n/a");
+}
+
+std::string lem_cell(const std::optional<LemResult>& lem, bool position) {
+  if (!lem || lem->samples_used == 0) return "n/a";
+  const ErrorStats& s = position ? lem->position_m : lem->orientation_rad;
+  return fmt("%.4f", s.rmse) + " (" + fmt("%.4f", s.mean_abs) + " ± " + fmt("%.4f", s.std_abs) + ")";
+}
+
+// Pads to a width counted in code points ("±" is two bytes in UTF-8).
+std::string pad(const std::string& s, std::size_t width) {
+  std::size_t cps = 0;
+  for (unsigned char c : s) cps += (c & 0xC0) != 0x80;
+  return s + std::string(cps < width ? width - cps : 0, ' ');
+}
+
+std::string row(const std::vector<std::string>& cells) {
+  static const std::size_t widths[] = {22, 9, 8, 8, 30, 30};
+  std::string out;
+  for (std::size_t i = 0; i < cells.size(); ++i) out += pad(cells[i], widths[i]) + (i + 1 < cells.size() ? " " : "");
+  while (!out.empty() && out.back() == ' ') out.pop_back();
+  return out + "\n";
+}
+
+nlohmann::json opt_json(const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); }
+
+nlohmann::json pose_json(const Pose2& p) { return {{"x", p.x}, {"y", p.y}, {"theta", p.theta}}; }
+
+nlohmann::json alignment_json(const Alignment& a) {
+  nlohmann::json j = {{"valid", a.valid}};
+  if (a.valid) {
+    j["T_world_map"] = pose_json(a.T_world_map);
+  } else {
+    j["reason"] = a.reason;
+  }
+  return j;
+}
+
+nlohmann::json stats_json(const ErrorStats& s) {
+  return {{"rmse", s.rmse}, {"mean_abs", s.mean_abs}, {"std_abs", s.std_abs}};
+}
+
+nlohmann::json lem_json(const std::optional<LemResult>& lem) {
+  if (!lem) return nullptr;
+  return {{"samples_used", lem->samples_used},
+          {"samples_outside_gt", lem->samples_outside_gt},
+          {"position_m", stats_json(lem->position_m)},
+          {"orientation_rad", stats_json(lem->orientation_rad)}};
+}
+
+nlohmann::json exm_json(const ExmResult& x) {
+  nlohmann::json relocs = nlohmann::json::array();
+  for (const Relocalisation& r : x.relocalisations) {
+    relocs.push_back({{"utime", r.utime},
+                      {"from_id", r.from_id},
+                      {"to_id", r.to_id},
+                      {"position_error_m", r.position_error_m},
+                      {"angle_error_rad", r.angle_error_rad},
+                      {"correct", r.correct},
+                      {"after_base_set", r.after_base_set}});
+  }
+  return {{"arr", opt_json(x.arr)},
+          {"arcr", opt_json(x.arcr)},
+          {"valid_fraction", opt_json(x.valid_fraction)},
+          {"base_end_found", x.base_end_found},
+          {"base_end_utime", x.base_end_found ? nlohmann::json(x.base_end_utime) : nlohmann::json(nullptr)},
+          {"base_end_s", x.base_end_found ? nlohmann::json(x.base_end_s) : nlohmann::json(nullptr)},
+          {"base_set_size", x.base_set_size},
+          {"experience_events_after_base", x.experience_events_after_base},
+          {"relocalisations_after_base", x.relocalisations_after_base},
+          {"correct_after_base", x.correct_after_base},
+          {"relocalisations_total", x.relocalisations_total},
+          {"correct_total", x.correct_total},
+          {"experiences_created", x.experiences_created},
+          {"valid_experiences", x.valid_experiences},
+          {"events_outside_gt", x.events_outside_gt},
+          {"relocalise_unknown_target", x.relocalise_unknown_target},
+          {"relocalise_to_current", x.relocalise_to_current},
+          {"relocalisations", relocs}};
+}
+
+nlohmann::json enm_json(const EnmResult& e) {
+  return {{"enm", opt_json(e.enm)},
+          {"translation_m2", opt_json(e.translation)},
+          {"rotation_rad2", opt_json(e.rotation)},
+          {"links_used", e.links_used},
+          {"links_excluded", e.links_excluded}};
+}
+
+}  // namespace
+
+std::string format_table(const std::vector<RunReport>& runs, const std::vector<PaperRow>& paper) {
+  std::ostringstream out;
+  out << row({"method", "EnM", "ARR", "ARCR", "LEM pos (m)", "LEM ori (rad)"});
+  out << row({"", "", "", "", "RMSE (mean|e| ± std|e|)", "RMSE (mean|e| ± std|e|)"});
+  out << std::string(112, '-') << "\n";
+  for (const RunReport& r : runs) {
+    const EvalResult& e = r.result;
+    out << row({r.label, opt(e.enm.enm), opt(e.exm.arr), opt(e.exm.arcr), lem_cell(e.lem, true),
+                lem_cell(e.lem, false)});
+  }
+  for (const PaperRow& p : paper) {
+    out << row({p.method, fmt("%.4f", p.enm), fmt("%.4f", p.arr), fmt("%.4f", p.arcr),
+                fmt("%.4f", p.lem_pos) + " ± " + fmt("%.4f", p.lem_pos_spread),
+                fmt("%.4f", p.lem_ori) + " ± " + fmt("%.4f", p.lem_ori_spread)});
+  }
+  out << "\n";
+  for (const RunReport& r : runs) {
+    const EvalResult& e = r.result;
+    out << r.label << " (" << r.path << "):\n";
+    out << "  samples: " << r.pose_samples << " VITA_POSE, " << r.events << " VITA_EVENT, "
+        << r.ground_truth_samples << " GROUND_TRUTH; final map " << r.map_experiences << " experiences, "
+        << r.map_links << " links\n";
+    for (const auto& [ch, n] : r.decode_errors) out << "  undecodable messages on " << ch << ": " << n << "\n";
+    if (e.alignment.valid) {
+      const Pose2& t = e.alignment.T_world_map;
+      out << "  alignment (first experience onto ground truth): T_world_map = (" << fmt("%.4f", t.x) << ", "
+          << fmt("%.4f", t.y) << ", " << fmt("%.4f", t.theta) << " rad)\n";
+    } else {
+      out << "  alignment: none (" << e.alignment.reason << "); LEM not computed\n";
+    }
+    if (e.lem) {
+      out << "  LEM: " << e.lem->samples_used << " samples, " << e.lem->samples_outside_gt
+          << " excluded (outside the ground-truth time range)\n";
+    }
+    if (e.lem_best_fit) {
+      out << "  LEM with BEST-FIT alignment (for comparison only, not the metric): pos "
+          << lem_cell(e.lem_best_fit, true) << " m, ori " << lem_cell(e.lem_best_fit, false) << " rad\n";
+    }
+    const ExmResult& x = e.exm;
+    out << "  ExM: base set " << x.base_set_size << " experiences ("
+        << (x.base_end_found ? "until " + fmt("%.3f", x.base_end_s) + " s after the first ground truth"
+                             : std::string("revolution never completed: all are base"))
+        << "); after it " << x.experience_events_after_base << " experience events, "
+        << x.relocalisations_after_base << " re-localisations, " << x.correct_after_base << " correct\n";
+    out << "       all re-localisations incl. base set: " << x.relocalisations_total << ", correct "
+        << x.correct_total << "; valid experiences " << x.valid_experiences << "/" << x.experiences_created
+        << " = " << opt(x.valid_fraction) << "\n";
+    if (x.events_outside_gt + x.relocalise_unknown_target + x.relocalise_to_current > 0) {
+      out << "       not counted: " << x.events_outside_gt << " outside ground truth, "
+          << x.relocalise_unknown_target << " to an unknown experience, " << x.relocalise_to_current
+          << " to the current experience\n";
+    }
+    out << "  EnM: " << opt(e.enm.enm) << " = translation " << opt(e.enm.translation) << " m² + rotation "
+        << opt(e.enm.rotation) << " rad² over " << e.enm.links_used << " links (" << e.enm.links_excluded
+        << " excluded)\n";
+  }
+  return out.str();
+}
+
+nlohmann::json to_json(const std::vector<RunReport>& runs, const EvalParams& params,
+                       const std::vector<PaperRow>& paper) {
+  nlohmann::json j;
+  j["params"] = {{"correct_position_m", params.correct_position_m},
+                 {"correct_angle_rad", params.correct_angle_rad},
+                 {"centre", {params.centre_x, params.centre_y}},
+                 {"base_duration_s", opt_json(params.base_duration_s)}};
+  j["runs"] = nlohmann::json::array();
+  for (const RunReport& r : runs) {
+    const EvalResult& e = r.result;
+    nlohmann::json decode = nlohmann::json::object();
+    for (const auto& [ch, n] : r.decode_errors) decode[ch] = n;
+    j["runs"].push_back({{"label", r.label},
+                         {"input", r.path},
+                         {"mode", r.mode},
+                         {"counts",
+                          {{"pose_samples", r.pose_samples},
+                           {"events", r.events},
+                           {"map_experiences", r.map_experiences},
+                           {"map_links", r.map_links},
+                           {"ground_truth_samples", r.ground_truth_samples}}},
+                         {"decode_errors", decode},
+                         {"alignment", alignment_json(e.alignment)},
+                         {"best_fit_alignment", alignment_json(e.best_fit)},
+                         {"lem", lem_json(e.lem)},
+                         {"lem_best_fit_alignment", lem_json(e.lem_best_fit)},
+                         {"exm", exm_json(e.exm)},
+                         {"enm", enm_json(e.enm)}});
+  }
+  j["paper_rows"] = nlohmann::json::array();
+  for (const PaperRow& p : paper) {
+    j["paper_rows"].push_back({{"method", p.method},
+                               {"enm", p.enm},
+                               {"arr", p.arr},
+                               {"arcr", p.arcr},
+                               {"lem_pos", {p.lem_pos, p.lem_pos_spread}},
+                               {"lem_ori", {p.lem_ori, p.lem_ori_spread}}});
+  }
+  return j;
+}
+
+}  // namespace whiskeye::eval

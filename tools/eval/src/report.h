@@ -1,0 +1,48 @@
+// Output of vita-eval: the Table-I-like text table and the JSON document.
+#pragma once
+
+#include "whiskeye/eval/metrics.h"
+
+#include <nlohmann/json.hpp>
+
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace whiskeye::eval {
+
+struct RunReport {
+  std::string label;
+  std::string path;
+  std::string mode;
+  std::size_t pose_samples = 0;
+  std::size_t events = 0;
+  std::size_t map_experiences = 0;
+  std::size_t map_links = 0;
+  std::size_t ground_truth_samples = 0;
+  std::map<std::string, int64_t> decode_errors;
+  EvalResult result;
+};
+
+// A row of the paper's Table I, as printed there (metrics.md).
+struct PaperRow {
+  std::string method;
+  double enm;
+  double arr;
+  double arcr;
+  double lem_pos;
+  double lem_pos_spread;
+  double lem_ori;
+  double lem_ori_spread;
+};
+
+// "visual", "tactile" or "vita"; nothing for another name.
+std::optional<PaperRow> paper_row(const std::string& name);
+
+std::string format_table(const std::vector<RunReport>& runs, const std::vector<PaperRow>& paper);
+
+nlohmann::json to_json(const std::vector<RunReport>& runs, const EvalParams& params,
+                       const std::vector<PaperRow>& paper);
+
+}  // namespace whiskeye::eval

@@ -1,0 +1,135 @@
+// vita-eval: the paper's Table I metrics (LEM, ExM, EnM; ../shared/design/metrics.md) from one or
+// more slamd output logs that carry GROUND_TRUTH. Prints the table, optionally writes JSON and PNGs.
+#include "log_input.h"
+#include "plots.h"
+#include "report.h"
+
+#include "whiskeye/eval/metrics.h"
+
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+#include <exception>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <set>
+#include <sstream>
+
+namespace {
+
+using namespace whiskeye;
+using namespace whiskeye::eval;
+
+bool parse_centre(const std::string& text, double& x, double& y) {
+  std::istringstream in(text);
+  char comma = 0;
+  return static_cast<bool>(in >> x >> comma >> y) && comma == ',' && (in >> std::ws).eof();
+}
+
+int run(int argc, char** argv) {
+  CLI::App app{"vita-eval: LEM, ExM (ARR, ARCR, valid fraction) and EnM of slamd output logs against "
+               "their GROUND_TRUTH, as in the paper's Table I (see docs/evaluation.md)"};
+  std::vector<std::string> inputs;
+  std::string json_path;
+  std::string plots_dir;
+  std::vector<std::string> paper_names;
+  std::string centre = "0,0";
+  double position_threshold_m = 0.08;
+  double angle_threshold_deg = 4.6;
+  double base_duration_s = -1.0;
+  app.add_option("--input", inputs, "slamd output log (repeat for a multi-row table)")->required();
+  app.add_option("--json", json_path, "write all results as JSON to this file");
+  app.add_option("--plots", plots_dir, "write PNG plots into this directory (created if missing)");
+  app.add_option("--paper-row", paper_names, "add the paper's Table I row: visual, tactile or vita (repeatable)")
+      ->check(CLI::IsMember({"visual", "tactile", "vita"}));
+  app.add_option("--centre", centre, "arena centre X,Y (m) for the first revolution (base set)")
+      ->capture_default_str();
+  app.add_option("--base-duration", base_duration_s,
+                 "base set = experiences of the first S seconds of ground truth instead of the first revolution")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--position-threshold", position_threshold_m, "ExM: correct re-localisation within this (m)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  app.add_option("--angle-threshold-deg", angle_threshold_deg, "ExM: and within this heading (deg)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+
+  EvalParams params;
+  params.correct_position_m = position_threshold_m;
+  params.correct_angle_rad = deg_to_rad(angle_threshold_deg);
+  if (!parse_centre(centre, params.centre_x, params.centre_y)) {
+    std::cerr << "vita-eval: --centre must be X,Y in metres, got '" << centre << "'\n";
+    return 2;
+  }
+  if (base_duration_s > 0) params.base_duration_s = base_duration_s;
+
+  std::vector<RunReport> reports;
+  std::vector<EvalInput> loaded_inputs;
+  std::set<std::string> labels;
+  for (const std::string& path : inputs) {
+    LoadedRun run = load_run(path);
+    RunReport r;
+    r.label = run.mode;
+    for (int n = 2; labels.count(r.label) > 0; ++n) r.label = run.mode + "#" + std::to_string(n);
+    labels.insert(r.label);
+    r.path = path;
+    r.mode = run.mode;
+    r.pose_samples = run.input.estimate.size();
+    r.events = run.input.events.size();
+    r.map_experiences = run.input.map.experiences.size();
+    r.map_links = run.input.map.links.size();
+    r.ground_truth_samples = run.input.ground_truth.size();
+    r.decode_errors = run.decode_errors;
+    r.result = evaluate(run.input, params);
+    for (const auto& [ch, n] : run.decode_errors) {
+      std::cerr << "vita-eval: " << path << ": " << n << " undecodable messages on " << ch << "\n";
+    }
+    if (!r.result.alignment.valid) std::cerr << "vita-eval: " << path << ": " << r.result.alignment.reason << "\n";
+    if (!r.result.exm.base_end_found) {
+      std::cerr << "vita-eval: " << path
+                << ": ground truth never completes a revolution around the centre; every experience is in "
+                   "the base set (use --centre or --base-duration)\n";
+    }
+    reports.push_back(std::move(r));
+    loaded_inputs.push_back(std::move(run.input));
+  }
+
+  std::vector<PaperRow> paper;
+  for (const std::string& name : paper_names) paper.push_back(*paper_row(name));
+
+  std::cout << format_table(reports, paper);
+
+  if (!json_path.empty()) {
+    std::ofstream out(json_path);
+    out << to_json(reports, params, paper).dump(2) << "\n";
+    if (!out) throw std::runtime_error("cannot write " + json_path);
+  }
+  if (!plots_dir.empty()) {
+    std::filesystem::create_directories(plots_dir);
+    for (std::size_t i = 0; i < reports.size(); ++i) {
+      const std::string base = (std::filesystem::path(plots_dir) / reports[i].label).string();
+      plot_experience_map(base + "_experience_map.png", reports[i].label + ": experience map (aligned) over ground truth",
+                          loaded_inputs[i], reports[i].result);
+      plot_relocalisations(base + "_relocalisations.png", reports[i].label + ": re-localisations",
+                           loaded_inputs[i], reports[i].result, params);
+    }
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "vita-eval: " << e.what() << "\n";
+    return 1;
+  }
+}
