@@ -183,23 +183,32 @@ void Renderer::render(const Pose2& T_world_base, double t, FastRng& rng, std::ve
   const float* table = noise_.data();
   grey.resize(W * H);
   float* strip = strip_.data();  // row-major: strip[v * kStrip + j]
-  alignas(64) float noise[kStrip];
+  alignas(64) float noise[kStrip] = {};
   for (int u0 = 0; u0 < width_; u0 += kStrip) {
     const int m = std::min(kStrip, width_ - u0);
     for (int j = 0; j < m; ++j) {
       render_column(cam, head.theta, u0 + j, strip + j, kStrip);
     }
     for (std::size_t v = 0; v < H; ++v) {
-      for (int j = 0; j < kStrip; j += 8) {
-        uint64_t r = noisy ? rng.next() : 0;  // eight pixels per draw
-        for (int k = 0; k < 8; ++k, r >>= 8) noise[j + k] = noisy ? table[r & 0xFF] : 0.0f;
+      if (noisy) {
+        for (int j = 0; j < kStrip; j += 8) {
+          uint64_t r = rng.next();  // eight pixels per draw
+          for (int k = 0; k < 8; ++k, r >>= 8) noise[j + k] = table[r & 0xFF];
+        }
       }
       const float* row = &strip[v * kStrip];
       uint8_t* dst = &grey[v * W + static_cast<std::size_t>(u0)];
       // Branch-free, contiguous: vectorised (this file is built with -ftree-vectorize).
-      for (int j = 0; j < m; ++j) {
-        const float p = std::min(std::max(row[j] * gain + noise[j], 0.0f), 255.0f) + 0.5f;
-        dst[j] = static_cast<uint8_t>(static_cast<int>(p));
+      auto quantise = [&](int count) {
+        for (int j = 0; j < count; ++j) {
+          const float p = std::min(std::max(row[j] * gain + noise[j], 0.0f), 255.0f) + 0.5f;
+          dst[j] = static_cast<uint8_t>(static_cast<int>(p));
+        }
+      };
+      if (m == kStrip) {
+        quantise(kStrip);  // constant trip count: fully vectorised
+      } else {
+        quantise(m);
       }
     }
   }
