@@ -201,8 +201,9 @@ void Renderer::render(const Pose2& T_world_base, double t, FastRng& rng, std::ve
       // Branch-free, contiguous: vectorised (this file is built with -ftree-vectorize).
       auto quantise = [&](int count) {
         for (int j = 0; j < count; ++j) {
-          const float p = std::min(std::max(row[j] * gain + noise[j], 0.0f), 255.0f) + 0.5f;
-          dst[j] = static_cast<uint8_t>(static_cast<int>(p));
+          // Clamped as integers: float min/max does not vectorise without -ffast-math.
+          const int q = static_cast<int>(row[j] * gain + noise[j] + 0.5f);
+          dst[j] = static_cast<uint8_t>(std::clamp(q, 0, 255));
         }
       };
       if (m == kStrip) {
