@@ -36,14 +36,14 @@ Renderer::Renderer(const World& world, const RobotGeometry& robot)
       p_camera_in_head_(robot.camera.p_camera_in_head),
       T_base_head_(robot.T_base_head) {
   if (width_ % 2 != 0) throw std::invalid_argument("camera width must be even (YUYV pairs)");
-  column_.resize(static_cast<std::size_t>(height_));
-  image_.resize(static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_));
-  // 12 random bits per pixel pick one of 4096 quantiles: Gaussian marginals at the cost of an L1
-  // table look-up (the table is 16 KB).
-  noise_.resize(4096);
+  strip_.resize(static_cast<std::size_t>(kStrip) * static_cast<std::size_t>(height_));
+  // 8 random bits per pixel pick one of 256 quantiles of the Gaussian: its marginal distribution
+  // (up to ±2.9 σ) at the cost of a 1 KB table look-up.
+  noise_.resize(256);
   for (std::size_t k = 0; k < noise_.size(); ++k) {
-    noise_[k] = static_cast<float>(world_.camera.sigma * normal_quantile((static_cast<double>(k) + 0.5) / 4096.0));
+    noise_[k] = static_cast<float>(world_.camera.sigma * normal_quantile((static_cast<double>(k) + 0.5) / 256.0));
   }
+
   auto add = [&](const std::vector<Panel>& panels, double bias) {
     for (const Panel& p : panels) {
       const double ex = p.to.x - p.from.x;
@@ -60,8 +60,7 @@ double Renderer::column_bearing(int u) const { return std::atan((0.5 * width_ - 
 
 double Renderer::bearing_column(double bearing) const { return 0.5 * width_ - f_ * std::tan(bearing); }
 
-void Renderer::render_column(const Point2& cam, double heading, int u) {
-  float* column = column_.data();
+void Renderer::render_column(const Point2& cam, double heading, int u, float* out, std::size_t stride) {
   const double a = (0.5 * width_ - (u + 0.5)) / f_;
   const double k = std::sqrt(1.0 + a * a);  // horizontal ray distance per unit of forward depth
   const double bearing = heading + std::atan(a);
@@ -93,81 +92,137 @@ void Renderer::render_column(const Point2& cam, double heading, int u) {
   }
   std::sort(hits_.begin(), hits_.end(), [](const Hit& p, const Hit& q) { return p.t < q.t; });
 
-  std::fill(column, column + height_, -1.0f);
   const double cy = 0.5 * height_;
   const double fk = f_ * k;
   auto row_of = [&](double z, double t) { return cy + (cam_z_ - z) * fk / t - 0.5; };  // fractional row
   auto clamp_row = [&](double v) {
     return static_cast<int>(std::clamp(v, -1.0, static_cast<double>(height_)));
   };
+  // Surfaces are painted front to back; each covers one interval of rows, so the painted rows are a
+  // few sorted intervals and every pixel is written exactly once.
+  painted_.clear();
+  auto paint = [&](int a, int b, auto&& fill) {
+    a = std::max(a, 0);
+    b = std::min(b, height_ - 1);
+    if (a > b) return;
+    int cur = a;
+    for (const auto& [p0, p1] : painted_) {
+      if (p1 < cur) continue;
+      if (p0 > b) break;
+      if (p0 > cur) fill(cur, std::min(b, p0 - 1));
+      cur = std::max(cur, p1 + 1);
+      if (cur > b) break;
+    }
+    if (cur <= b) fill(cur, b);
+    // Insert [a, b] and merge overlapping or touching intervals.
+    auto it = std::lower_bound(painted_.begin(), painted_.end(), std::pair{a, b});
+    it = painted_.insert(it, {a, b});
+    std::size_t w = 0;
+    for (std::size_t r = 1; r < painted_.size(); ++r) {
+      if (painted_[r].first <= painted_[w].second + 1) {
+        painted_[w].second = std::max(painted_[w].second, painted_[r].second);
+      } else {
+        painted_[++w] = painted_[r];
+      }
+    }
+    painted_.resize(w + 1);
+  };
   for (const Hit& h : hits_) {
+    if (painted_.size() == 1 && painted_[0].first == 0 && painted_[0].second == height_ - 1) break;
     const double t = std::max(h.t, 1e-6);
-    const int v0 = std::max(0, clamp_row(std::ceil(row_of(h.z1, t))));
-    const int v1 = std::min(height_ - 1, clamp_row(std::floor(row_of(h.z0, t))));
+    const int v0 = clamp_row(std::ceil(row_of(h.z1, t)));
+    const int v1 = clamp_row(std::floor(row_of(h.z0, t)));
     if (h.pattern->constant_in_z()) {
       const float value = static_cast<float>(h.pattern->value(h.s, 0.0) * h.shade);
-      for (int v = v0; v <= v1; ++v) {
-        if (column[v] < 0.0f) column[v] = value;
-      }
+      paint(v0, v1, [&](int a, int b) {
+        for (int v = a; v <= b; ++v) out[static_cast<std::size_t>(v) * stride] = value;
+      });
     } else {
-      for (int v = v0; v <= v1; ++v) {
-        if (column[v] >= 0.0f) continue;
-        const double z = cam_z_ - ((v + 0.5) - cy) * t / fk;
-        column[v] = static_cast<float>(h.pattern->value(h.s, z) * h.shade);
-      }
+      paint(v0, v1, [&](int a, int b) {
+        for (int v = a; v <= b; ++v) {
+          const double z = cam_z_ - ((v + 0.5) - cy) * t / fk;
+          out[static_cast<std::size_t>(v) * stride] = static_cast<float>(h.pattern->value(h.s, z) * h.shade);
+        }
+      });
     }
     // The top face of a solid below the camera, seen between its entry and exit distances.
     if (h.top_value >= 0.0 && h.z1 < cam_z_ && h.t_out > t) {
-      const int w0 = std::max(0, clamp_row(std::ceil(row_of(h.z1, h.t_out))));
-      const int w1 = std::min(height_ - 1, clamp_row(std::floor(row_of(h.z1, t))));
+      const int w0 = clamp_row(std::ceil(row_of(h.z1, h.t_out)));
+      const int w1 = clamp_row(std::floor(row_of(h.z1, t)));
       const float top = static_cast<float>(h.top_value * light.ambient / (1.0 + light.attenuation * t));
-      for (int v = w0; v <= w1; ++v) {
-        if (column[v] < 0.0f) column[v] = top;
-      }
+      paint(w0, w1, [&](int a, int b) {
+        for (int v = a; v <= b; ++v) out[static_cast<std::size_t>(v) * stride] = top;
+      });
     }
   }
   // What no surface covers: the sky above the horizon, the floor below.
-  for (int v = 0; v < height_; ++v) {
-    if (column[v] >= 0.0f) continue;
-    const double dv = (v + 0.5) - cy;
-    if (dv <= 0.0) {
-      column[v] = static_cast<float>(world_.sky_value);
-    } else {
-      const double t = cam_z_ * fk / dv;
-      column[v] = static_cast<float>(world_.floor_value * light.ambient / (1.0 + light.attenuation * t));
+  const int horizon = static_cast<int>(std::ceil(cy - 0.5));  // first row whose centre is below cy
+  const float sky = static_cast<float>(world_.sky_value);
+  paint(0, horizon - 1, [&](int a, int b) {
+    for (int v = a; v <= b; ++v) out[static_cast<std::size_t>(v) * stride] = sky;
+  });
+  paint(horizon, height_ - 1, [&](int a, int b) {
+    for (int v = a; v <= b; ++v) {
+      const double t = cam_z_ * fk / ((v + 0.5) - cy);
+      out[static_cast<std::size_t>(v) * stride] =
+          static_cast<float>(world_.floor_value * light.ambient / (1.0 + light.attenuation * t));
     }
-  }
-  for (int v = 0; v < height_; ++v) image_[static_cast<std::size_t>(v) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(u)] = column[v];
+  });
 }
 
 void Renderer::render(const Pose2& T_world_base, double t, FastRng& rng, std::vector<uint8_t>& grey) {
   const Pose2 head = compose(T_world_base, T_base_head_);
   Point2 cam;
   transform_point(head, p_camera_in_head_.x, p_camera_in_head_.y, cam.x, cam.y);
-  for (int u = 0; u < width_; ++u) render_column(cam, head.theta, u);
+  // Columns are rendered a strip at a time (the strip stays in L1), then each row of the strip gets
+  // lighting, noise (drawn in strip-row order: deterministic) and quantisation in one pass.
+  const std::size_t H = static_cast<std::size_t>(height_);
+  const std::size_t W = static_cast<std::size_t>(width_);
   const float gain = static_cast<float>(255.0 * world_.lighting.gain_at(t));
   const bool noisy = world_.camera.sigma > 0.0;
-  const std::size_t n = image_.size();
-  grey.resize(n);
-  auto to_byte = [](float p) { return static_cast<uint8_t>(std::min(std::max(p, 0.0f), 255.0f) + 0.5f); };
-  std::size_t i = 0;
-  if (noisy) {
-    for (; i + 5 <= n; i += 5) {
-      uint64_t r = rng.next();  // five pixels per draw, 12 bits each
-      for (std::size_t j = 0; j < 5; ++j, r >>= 12) grey[i + j] = to_byte(image_[i + j] * gain + noise_[r & 0xFFF]);
+  const float* table = noise_.data();
+  grey.resize(W * H);
+  float* strip = strip_.data();  // row-major: strip[v * kStrip + j]
+  alignas(64) float noise[kStrip] = {};
+  for (int u0 = 0; u0 < width_; u0 += kStrip) {
+    const int m = std::min(kStrip, width_ - u0);
+    for (int j = 0; j < m; ++j) {
+      render_column(cam, head.theta, u0 + j, strip + j, kStrip);
+    }
+    for (std::size_t v = 0; v < H; ++v) {
+      if (noisy) {
+        for (int j = 0; j < kStrip; j += 8) {
+          uint64_t r = rng.next();  // eight pixels per draw
+          for (int k = 0; k < 8; ++k, r >>= 8) noise[j + k] = table[r & 0xFF];
+        }
+      }
+      const float* row = &strip[v * kStrip];
+      uint8_t* dst = &grey[v * W + static_cast<std::size_t>(u0)];
+      // Branch-free, contiguous: vectorised (this file is built with -ftree-vectorize).
+      auto quantise = [&](int count) {
+        for (int j = 0; j < count; ++j) {
+          // Clamped as integers: float min/max does not vectorise without -ffast-math.
+          const int q = static_cast<int>(row[j] * gain + noise[j] + 0.5f);
+          dst[j] = static_cast<uint8_t>(std::clamp(q, 0, 255));
+        }
+      };
+      if (m == kStrip) {
+        quantise(kStrip);  // constant trip count: fully vectorised
+      } else {
+        quantise(m);
+      }
     }
   }
-  for (; i < n; ++i) grey[i] = to_byte(image_[i] * gain + (noisy ? noise_[rng.next() & 0xFFF] : 0.0f));
 }
 
 void grey_to_yuyv(const std::vector<uint8_t>& grey, int width, int height, std::vector<uint8_t>& yuyv) {
   const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
   yuyv.resize(2 * n);
-  for (std::size_t i = 0; i < n; i += 2) {
-    yuyv[2 * i] = grey[i];
-    yuyv[2 * i + 1] = 128;
-    yuyv[2 * i + 2] = grey[i + 1];
-    yuyv[2 * i + 3] = 128;
+  const uint8_t* in = grey.data();
+  uint8_t* out = yuyv.data();
+  for (std::size_t i = 0; i < n; ++i) {
+    out[2 * i] = in[i];
+    out[2 * i + 1] = 128;
   }
 }
 

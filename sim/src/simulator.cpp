@@ -41,7 +41,19 @@ Simulator::Simulator(const World& world, const RobotGeometry& robot, const rcp::
   total_steps_ = static_cast<int64_t>(std::ceil(d * 1e6 / static_cast<double>(params_.period_us) - 1e-9));
   camera_period_us_ = std::llround(1e6 / robot_.camera.fps);
   command_.fill(plant_.params().initial_theta);
+  onsets_per_solid_.assign(world_.solids.size(), 0);
   controller_.enable();
+}
+
+Simulator::~Simulator() {
+  if (next_frame_.valid()) next_frame_.wait();
+}
+
+std::vector<uint8_t> Simulator::render_frame(int64_t elapsed_us) {
+  const double t = static_cast<double>(elapsed_us) * 1e-6;
+  std::vector<uint8_t> image;
+  renderer_.render(world_.trajectory.pose_at(t), t, camera_rng_, image);
+  return image;
 }
 
 double Simulator::duration() const { return static_cast<double>(total_steps_ * params_.period_us) * 1e-6; }
@@ -74,7 +86,7 @@ bool Simulator::step(SimSink& sink) {
 
   if (step_ % params_.contact_update_divider == 0) update_obstacles(T_world_head);
   const rcp::WhiskerSample sample = plant_.step(utime, command_);
-  const rcp::ControlOutput out = controller_.step(sample);
+  rcp::ControlOutput out = controller_.step(sample);
   command_ = out.theta_command;
 
   // A completed cycle ends at the previous sample: it goes out before this period's messages.
@@ -85,14 +97,19 @@ bool Simulator::step(SimSink& sink) {
     if (auto it = truth_.find(c.cycle); it != truth_.end()) truth = std::move(it->second);
     truth.cycle = c.cycle;
     truth.utime = c.utime_end;
+    ++cycles_;
+    if (!truth.points.empty()) ++cycles_with_contact_;
     sink.contact_truth(truth);
     truth_.erase(truth_.begin(), truth_.upper_bound(c.cycle));
+    controller_.recycle(std::move(*out.completed_cycle));  // its storage serves the next cycle
+    out.completed_cycle.reset();
   }
   // True contact onsets of this period, attributed to the controller's current cycle.
   const auto& state = plant_.true_state();
   for (int w = 0; w < kNumWhiskers; ++w) {
     if (state[w].in_contact && !was_in_contact_[w] && contacts_[w]) {
-      truth_[out.cycle].points.push_back({w, utime, contacts_[w]->p_contact_in_head});
+      truth_[out.cycle].points.push_back({w, utime, contacts_[w]->p_contact_in_head, contacts_[w]->solid});
+      if (contacts_[w]->solid >= 0) ++onsets_per_solid_[static_cast<std::size_t>(contacts_[w]->solid)];
     }
     was_in_contact_[w] = state[w].in_contact;
   }
@@ -109,9 +126,14 @@ bool Simulator::step(SimSink& sink) {
     sink.ground_truth(utime, T_world_base);
   }
   if (elapsed_us >= next_camera_us_) {
+    const std::vector<uint8_t> image = next_frame_.valid() ? next_frame_.get() : render_frame(elapsed_us);
     next_camera_us_ += camera_period_us_;
-    renderer_.render(T_world_base, t, camera_rng_, image_);
-    sink.camera(utime, camera_seq_++, image_, renderer_.width(), renderer_.height());
+    if (params_.render_ahead && next_camera_us_ < total_steps_ * params_.period_us) {
+      // Rendered at the control period that will publish it (the first at or after its due time).
+      const int64_t at = (next_camera_us_ + params_.period_us - 1) / params_.period_us * params_.period_us;
+      next_frame_ = std::async(std::launch::async, [this, at] { return render_frame(at); });
+    }
+    sink.camera(utime, camera_seq_++, image, renderer_.width(), renderer_.height());
   }
   ++step_;
   return true;

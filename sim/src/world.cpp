@@ -19,10 +19,6 @@ uint64_t splitmix64(uint64_t& state) {
 
 double uniform01(uint64_t& state) { return static_cast<double>(splitmix64(state) >> 11) * 0x1.0p-53; }
 
-double positive_mod(double a, double m) {
-  const double r = std::fmod(a, m);
-  return r < 0.0 ? r + m : r;
-}
 
 [[noreturn]] void bad(const ParamNode& n, const std::string& key, const std::string& what) {
   throw ParamError(n.source() + ": '" + n.path_of(key) + "' " + what);
@@ -153,35 +149,6 @@ Solid load_solid(const ParamNode& n, const World& w) {
 }
 
 }  // namespace
-
-double Pattern::value(double s, double z) const {
-  switch (type) {
-    case Type::Solid:
-      return high;
-    case Type::Stripes: {
-      const double u = positive_mod(vertical ? s : z, period) / period;
-      return u < duty ? low : high;
-    }
-    case Type::Checker: {
-      const auto i = static_cast<int64_t>(std::floor(s / cell)) + static_cast<int64_t>(std::floor(z / cell));
-      return (i & 1) ? high : low;
-    }
-    case Type::Blobs: {
-      const double ts = positive_mod(s, period);
-      const double tz = positive_mod(z, period);
-      const double r2 = radius * radius;
-      for (const Point2& c : blob_centres) {
-        double ds = std::abs(ts - c.x);
-        double dz = std::abs(tz - c.y);
-        ds = std::min(ds, period - ds);  // the tile repeats
-        dz = std::min(dz, period - dz);
-        if (ds * ds + dz * dz < r2) return low;
-      }
-      return high;
-    }
-  }
-  return high;
-}
 
 void Solid::finalize() {
   if (shape != Shape::Polygon || vertices.empty()) return;

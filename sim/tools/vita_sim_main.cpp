@@ -5,6 +5,8 @@
 #include "whiskeye/sim/lcm_sink.h"
 #include "whiskeye/sim/simulator.h"
 
+#include <whiskeye/rcp/params.h>
+
 #include <CLI/CLI.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -64,9 +66,14 @@ void plot_world(const World& world, const RobotGeometry& robot, const std::strin
     const double dx = world.trajectory.centre.x - mid.x;
     const double dy = world.trajectory.centre.y - mid.y;
     const double n = std::hypot(dx, dy);
-    const cv::Point at = px(mid.x + 0.35 * dx / n, mid.y + 0.35 * dy / n);
     const std::string label = p.name + " (" + world.patterns[static_cast<std::size_t>(p.pattern)].name + ")";
-    cv::putText(img, label, at - cv::Point(static_cast<int>(label.size()) * 5, 0), cv::FONT_HERSHEY_SIMPLEX, 0.45, c, 1, cv::LINE_AA);
+    int baseline = 0;
+    const cv::Size size = cv::getTextSize(label, cv::FONT_HERSHEY_SIMPLEX, 0.45, 1, &baseline);
+    // Centred, far enough inwards that the text clears the wall.
+    const double inset = 0.3 + 0.5 * size.width / scale * std::abs(dx / n);
+    const cv::Point at = px(mid.x + inset * dx / n, mid.y + inset * dy / n);
+    cv::putText(img, label, at - cv::Point(size.width / 2, -size.height / 2), cv::FONT_HERSHEY_SIMPLEX, 0.45, c, 1,
+                cv::LINE_AA);
   }
   const Trajectory& t = world.trajectory;
   cv::circle(img, px(t.centre.x, t.centre.y), static_cast<int>(t.radius * scale), cv::Scalar(200, 0, 200), 2, cv::LINE_AA);
@@ -82,11 +89,13 @@ void plot_world(const World& world, const RobotGeometry& robot, const std::strin
       for (const Point2& q : s.vertices) poly.push_back(px(q.x, q.y));
       cv::fillPoly(img, std::vector<std::vector<cv::Point>>{poly}, c, cv::LINE_AA);
     }
+    // Labels inside the path, clear of the wall landmarks' labels.
     const double dx = s.centre.x - t.centre.x;
     const double dy = s.centre.y - t.centre.y;
     const double n = std::max(1e-9, std::hypot(dx, dy));
-    cv::putText(img, s.name, px(s.centre.x + 0.25 * dx / n, s.centre.y + 0.25 * dy / n) - cv::Point(30, 0),
-                cv::FONT_HERSHEY_SIMPLEX, 0.45, black, 1, cv::LINE_AA);
+    const cv::Point at = px(s.centre.x - 0.75 * dx / n, s.centre.y - 0.75 * dy / n);
+    cv::putText(img, s.name, at - cv::Point(static_cast<int>(s.name.size()) * 4, -4), cv::FONT_HERSHEY_SIMPLEX, 0.45,
+                black, 1, cv::LINE_AA);
   }
   // Start pose: base position and heading.
   const Pose2 start = t.pose_at(0.0);
@@ -106,6 +115,34 @@ void plot_world(const World& world, const RobotGeometry& robot, const std::strin
   if (!cv::imwrite(path, img)) throw std::runtime_error(path + ": cannot write the PNG");
 }
 
+// Noise-free camera views at the given polar angles of the trajectory, tiled two per row at half
+// size with their angle written on them: to check a world's visual aliasing by eye.
+void plot_views(const World& world, const RobotGeometry& robot, const std::vector<double>& angles_deg,
+                const std::string& path) {
+  World w = world;
+  w.camera.sigma = 0.0;
+  Renderer renderer(w, robot);
+  FastRng rng(1);
+  const int tw = renderer.width() / 2;
+  const int th = renderer.height() / 2;
+  const int cols = std::min<int>(2, static_cast<int>(angles_deg.size()));
+  const int rows = (static_cast<int>(angles_deg.size()) + 1) / 2;
+  cv::Mat out(rows * th, cols * tw, CV_8UC1, cv::Scalar(255));
+  for (std::size_t i = 0; i < angles_deg.size(); ++i) {
+    Trajectory t = w.trajectory;
+    t.start_angle = deg_to_rad(angles_deg[i]);
+    std::vector<uint8_t> grey;
+    renderer.render(t.pose_at(0.0), 0.0, rng, grey);
+    const cv::Mat full(renderer.height(), renderer.width(), CV_8UC1, grey.data());
+    cv::Mat tile = out(cv::Rect(static_cast<int>(i % 2) * tw, static_cast<int>(i / 2) * th, tw, th));
+    cv::resize(full, tile, tile.size(), 0, 0, cv::INTER_AREA);
+    const std::string label = "polar angle " + std::to_string(static_cast<int>(std::lround(angles_deg[i]))) + " deg";
+    cv::rectangle(tile, cv::Rect(0, 0, 190, 22), cv::Scalar(255), cv::FILLED);
+    cv::putText(tile, label, cv::Point(5, 16), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0), 1, cv::LINE_AA);
+  }
+  if (!cv::imwrite(path, out)) throw std::runtime_error(path + ": cannot write the PNG");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -113,8 +150,11 @@ int main(int argc, char** argv) {
   std::string world_path;
   std::string output;
   std::string robot_path = "config/robot.yaml";
+  std::string rcp_path;
   std::string plot_path;
   std::string frames_dir;
+  std::string views_path;
+  std::vector<double> view_angles{90.0, 270.0, 0.0, 180.0};
   int frames_every = 1;
   uint64_t seed = 1;
   double duration = 0.0;
@@ -124,11 +164,17 @@ int main(int argc, char** argv) {
   app.add_option("--world", world_path, "World YAML file (e.g. config/worlds/aliased_arena.yaml)")->required()->check(CLI::ExistingFile);
   app.add_option("--output,-o", output, "LCM log to write");
   app.add_option("--robot", robot_path, "Robot geometry YAML")->capture_default_str();
+  app.add_option("--rcp", rcp_path, "Whisking controller YAML (e.g. config/rcp.yaml; default: built-in defaults)")
+      ->check(CLI::ExistingFile);
   app.add_option("--seed", seed, "Seed of every noise source (same seed -> byte-identical log)")->capture_default_str();
   app.add_option("--duration", duration, "Simulated seconds (overrides --laps)")->check(CLI::PositiveNumber);
   app.add_option("--laps", laps, "Revolutions (default: the world's trajectory.laps)")->check(CLI::PositiveNumber);
   app.add_option("--start-utime", start_utime, "utime of the first sample")->capture_default_str();
   app.add_option("--plot-world", plot_path, "Write a top-down PNG of the world (alone: no simulation)");
+  app.add_option("--plot-views", views_path, "Write noise-free camera views at --view-angles as one PNG (alone: no simulation)");
+  app.add_option("--view-angles", view_angles, "Polar angles (deg) of the trajectory for --plot-views")
+      ->delimiter(',')
+      ->capture_default_str();
   app.add_option("--frames-dir", frames_dir, "Also save camera frames as PNG in this directory");
   app.add_option("--frames-every", frames_every, "Save every N-th camera frame")->check(CLI::PositiveNumber);
   app.add_flag("--quiet,-q", quiet, "No progress output");
@@ -146,8 +192,12 @@ int main(int argc, char** argv) {
     if (!plot_path.empty()) {
       plot_world(world, robot, plot_path);
       std::cerr << "vita-sim: wrote " << plot_path << "\n";
-      if (output.empty()) return 0;
     }
+    if (!views_path.empty()) {
+      plot_views(world, robot, view_angles, views_path);
+      std::cerr << "vita-sim: wrote " << views_path << "\n";
+    }
+    if (output.empty() && !(plot_path.empty() && views_path.empty())) return 0;
     if (output.empty()) {
       std::cerr << "vita-sim: --output is required (or --plot-world alone)\n";
       return 2;
@@ -158,7 +208,12 @@ int main(int argc, char** argv) {
     params.seed = seed;
     params.duration = duration;
     params.start_utime = start_utime;
-    const rcp::ControllerParams controller;
+    rcp::ControllerParams controller;
+    if (!rcp_path.empty()) {
+      const ParamNode root = ParamNode::from_file(rcp_path);
+      rcp::load(root, controller);
+      root.check_no_unknown_keys();
+    }
     const rcp::PlantParams plant;
     Simulator sim(world, robot, controller, plant, params);
 
@@ -211,6 +266,10 @@ int main(int argc, char** argv) {
     std::cerr << "vita-sim: " << sim.duration() << " s simulated, " << bus.events_written() << " events -> " << output
               << "\n";
     for (const auto& [channel, n] : lcm.counts()) std::cerr << "  " << channel << ": " << n << "\n";
+    std::cerr << "  whisk cycles with a true contact: " << sim.cycles_with_contact() << " of " << sim.cycles() << "\n";
+    for (std::size_t i = 0; i < world.solids.size(); ++i) {
+      std::cerr << "  contact onsets on " << world.solids[i].name << ": " << sim.onsets_per_solid()[i] << "\n";
+    }
   } catch (const std::exception& e) {
     std::cerr << "vita-sim: " << e.what() << "\n";
     return 1;

@@ -10,6 +10,7 @@
 #include "whiskeye/sim/world.h"
 
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 namespace whiskeye::sim {
@@ -70,7 +71,8 @@ class Renderer {
     double bias;  // subtracted from the distance for the depth order
     const Pattern* pattern;
   };
-  void render_column(const Point2& cam, double heading, int u);
+  // Writes the column's intensities (0..1, before lighting and noise) to out[v * stride].
+  void render_column(const Point2& cam, double heading, int u, float* out, std::size_t stride);
 
   const World& world_;
   int width_;
@@ -81,10 +83,11 @@ class Renderer {
   Pose2 T_base_head_;
   std::vector<FlatPanel> panels_;
   std::vector<Hit> hits_;
+  std::vector<std::pair<int, int>> painted_;  // rows already painted in this column (sorted intervals)
   std::vector<SolidHit> solid_hits_;
-  std::vector<float> column_;   // one column's intensities (0..1), before lighting and noise
-  std::vector<float> image_;    // row-major intensities of the frame
-  std::vector<float> noise_;    // 65536 quantiles of N(0, sigma²), grey levels: noise by table look-up
+  static constexpr int kStrip = 16;  // columns rendered before they are copied into the image
+  std::vector<float> strip_;    // kStrip columns of them, row-major (row v: strip_[v * kStrip + j])
+  std::vector<float> noise_;    // 256 quantiles of N(0, sigma²), grey levels: noise by table look-up
 };
 
 // Packs 8-bit grey into V4L2 YUYV (Y0 U Y1 V, neutral chroma 128). Width must be even.

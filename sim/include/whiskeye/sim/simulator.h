@@ -16,6 +16,7 @@
 #include <whiskeye/rcp/plant.h>
 
 #include <cstdint>
+#include <future>
 #include <map>
 #include <optional>
 #include <vector>
@@ -30,6 +31,9 @@ struct SimParams {
   int odometry_divider = 10;      // ODOMETRY and GROUND_TRUTH every 10 periods (50 Hz)
   int contact_update_divider = 5; // obstacles recomputed every 5 periods (the head moves < 1 mm)
   SweepParams sweep;
+  // Render the next camera frame on a worker thread while the control loop runs (the trajectory is
+  // known ahead, frames are rendered strictly in order, so the output is identical either way).
+  bool render_ahead = true;
 };
 
 // The true contacts of one whisk cycle: one point per contact onset, head frame at onset time.
@@ -40,6 +44,7 @@ struct ContactTruth {
     int whisker = 0;
     int64_t utime = 0;
     Vec3 p_in_head;
+    int solid = -1;  // index of the touched solid (-1: a wall or landmark panel)
   };
   std::vector<Point> points;
 };
@@ -66,6 +71,9 @@ class Simulator {
  public:
   Simulator(const World& world, const RobotGeometry& robot, const rcp::ControllerParams& controller,
             const rcp::PlantParams& plant, const SimParams& params);
+  ~Simulator();
+  Simulator(const Simulator&) = delete;
+  Simulator& operator=(const Simulator&) = delete;
 
   int64_t total_steps() const { return total_steps_; }
   int64_t steps_done() const { return step_; }
@@ -73,11 +81,17 @@ class Simulator {
   // Advances one control period, delivering its outputs; false once the run is complete.
   bool step(SimSink& sink);
 
+  // Whisk cycles completed, and those with at least one true contact; contact onsets per solid.
+  int64_t cycles() const { return cycles_; }
+  int64_t cycles_with_contact() const { return cycles_with_contact_; }
+  const std::vector<int64_t>& onsets_per_solid() const { return onsets_per_solid_; }
+
   const rcp::Controller& controller() const { return controller_; }
   const rcp::WhiskerPlant& plant() const { return plant_; }
 
  private:
   void update_obstacles(const Pose2& T_world_head);
+  std::vector<uint8_t> render_frame(int64_t elapsed_us);
 
   World world_;
   RobotGeometry robot_;
@@ -96,8 +110,11 @@ class Simulator {
   rcp::PerWhisker<double> command_{};
   rcp::PerWhisker<std::optional<WhiskerContact>> contacts_{};
   rcp::PerWhisker<bool> was_in_contact_{};
+  int64_t cycles_ = 0;
+  int64_t cycles_with_contact_ = 0;
+  std::vector<int64_t> onsets_per_solid_;
   std::map<int64_t, ContactTruth> truth_;  // by cycle, until the cycle completes
-  std::vector<uint8_t> image_;
+  std::future<std::vector<uint8_t>> next_frame_;  // the frame at next_camera_us_, when render_ahead
 };
 
 }  // namespace whiskeye::sim

@@ -9,6 +9,8 @@
 #include "whiskeye/common/params.h"
 #include "whiskeye/common/se2.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -44,6 +46,48 @@ struct Pattern {
   // True when value() does not depend on z (solid, vertical stripes): one value per image column.
   bool constant_in_z() const { return type == Type::Solid || (type == Type::Stripes && vertical); }
 };
+
+// floor() without a library call (the default x86-64 target has no SSE4.1 round instruction).
+inline double fast_floor(double x) {
+  const double t = static_cast<double>(static_cast<int64_t>(x));
+  return t > x ? t - 1.0 : t;
+}
+
+// a mod m in [0, m): in the renderer's per-pixel path, so no fmod.
+inline double positive_mod(double a, double m) {
+  const double r = a - m * fast_floor(a / m);
+  return r < m ? r : 0.0;
+}
+
+// Inline: evaluated for every textured pixel.
+inline double Pattern::value(double s, double z) const {
+  switch (type) {
+    case Type::Solid:
+      return high;
+    case Type::Stripes: {
+      const double u = positive_mod(vertical ? s : z, period) / period;
+      return u < duty ? low : high;
+    }
+    case Type::Checker: {
+      const auto i = static_cast<int64_t>(fast_floor(s / cell)) + static_cast<int64_t>(fast_floor(z / cell));
+      return (i & 1) ? high : low;
+    }
+    case Type::Blobs: {
+      const double ts = positive_mod(s, period);
+      const double tz = positive_mod(z, period);
+      const double r2 = radius * radius;
+      for (const Point2& c : blob_centres) {
+        double ds = std::abs(ts - c.x);
+        double dz = std::abs(tz - c.y);
+        ds = std::min(ds, period - ds);  // the tile repeats
+        dz = std::min(dz, period - dz);
+        if (ds * ds + dz * dz < r2) return low;
+      }
+      return high;
+    }
+  }
+  return high;
+}
 
 // A vertical rectangle over the floor segment from -> to, z in [z0, z1] (walls and wall landmarks).
 struct Panel {

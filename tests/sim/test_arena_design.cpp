@@ -1,0 +1,78 @@
+// The default arena's design claims (docs/simulator.md): vision alone is aliased, touch alone is
+// aliased, the pair is unique. Checked with the renderer and the contact geometry themselves.
+#include "sim_test_util.h"
+
+#include "whiskeye/sim/renderer.h"
+#include "whiskeye/sim/whisker_contact.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace whiskeye::sim {
+namespace {
+
+struct Arena : ::testing::Test {
+  World world = load_world_file(test::source_path("config/worlds/aliased_arena.yaml"));
+  RobotGeometry robot = default_robot_geometry();
+
+  Pose2 base_at(double polar_deg) const {
+    Trajectory t = world.trajectory;
+    t.start_angle = deg_to_rad(polar_deg);
+    return t.pose_at(0.0);
+  }
+  std::vector<uint8_t> view(double polar_deg) {
+    world.camera.sigma = 0.0;
+    Renderer r(world, robot);
+    FastRng rng(1);
+    std::vector<uint8_t> img;
+    r.render(base_at(polar_deg), 0.0, rng, img);
+    return img;
+  }
+  // Mean absolute grey difference over the upper rows (walls and landmarks; tactile objects stand
+  // below the camera and only show in the bottom of the image).
+  static double upper_difference(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b) {
+    const std::size_t n = 640 * 260;
+    double sum = 0.0;
+    for (std::size_t i = 0; i < n; ++i) sum += std::abs(static_cast<int>(a[i]) - static_cast<int>(b[i]));
+    return sum / static_cast<double>(n);
+  }
+  // The first-touch angles of every whisker as the robot passes polar angle `deg` + `offset_deg`.
+  std::vector<double> touch(double polar_deg) const {
+    const Pose2 head = compose(base_at(polar_deg), robot.T_base_head);
+    std::vector<double> angles;
+    for (int w = 0; w < kNumWhiskers; ++w) {
+      const auto c = find_whisker_contact(world, robot, head, w);
+      angles.push_back(c ? c->theta : 99.0);
+    }
+    return angles;
+  }
+};
+
+TEST_F(Arena, VisionAloneIsAliasedBetweenNorthAndSouth) {
+  EXPECT_LT(upper_difference(view(90.0), view(270.0)), 0.5);   // stripes A on both walls
+  EXPECT_GT(upper_difference(view(0.0), view(90.0)), 10.0);    // checker B vs stripes A
+  EXPECT_GT(upper_difference(view(0.0), view(180.0)), 10.0);   // checker B vs blobs C
+}
+
+TEST_F(Arena, TouchAloneIsAliasedBetweenTheTwoBoxes) {
+  int touching = 0;
+  for (const double offset : {-6.0, -3.0, 0.0, 3.0, 6.0}) {
+    const std::vector<double> east = touch(0.0 + offset);
+    const std::vector<double> north = touch(90.0 + offset);
+    const std::vector<double> post = touch(270.0 + offset);
+    for (int w = 0; w < kNumWhiskers; ++w) {
+      EXPECT_NEAR(east[w], north[w], 1e-6) << "whisker " << w << " offset " << offset;
+      touching += east[w] < 10.0;
+    }
+    EXPECT_NE(east, post) << "offset " << offset;
+  }
+  EXPECT_GT(touching, 10);
+  // Between the landmarks nothing is within reach.
+  for (const double deg : {45.0, 135.0, 180.0, 225.0, 315.0}) {
+    for (double a : touch(deg)) EXPECT_EQ(a, 99.0) << deg;
+  }
+}
+
+}  // namespace
+}  // namespace whiskeye::sim
