@@ -12,6 +12,7 @@ void load(const ParamNode& node, SlamParams& p) {
     throw ParamError(node.source() + ": '" + node.path_of("mode") + "': " + e.what());
   }
   node.get("max_odometry_dt", p.max_odometry_dt, 1e-3, 60.0);
+  node.get("path_integration_period", p.path_integration_period, 0.0, 10.0);
   load(node.section("visual"), p.visual);
   load(node.section("tactile"), p.tactile);
   load(node.section("match"), p.match);

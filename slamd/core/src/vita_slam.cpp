@@ -38,7 +38,14 @@ CycleResult VitaSlam::process_cycle(const CycleInput& in) {
   CycleResult out;
   ++stats_.cycles;
 
-  // 1. Path integration.
+  // 1. Path integration. The experience map integrates every sample; the pose cells take one step
+  // per `path_integration_period` with the mean velocity of the samples in it, and the remainder is
+  // flushed at the cycle's end so that templates are matched against an up-to-date packet.
+  double acc_vx = 0.0, acc_vy = 0.0, acc_omega = 0.0, acc_dt = 0.0;
+  auto flush = [&] {
+    if (acc_dt > 0.0) cells_.step(acc_vx / acc_dt, acc_vy / acc_dt, acc_omega / acc_dt, acc_dt);
+    acc_vx = acc_vy = acc_omega = acc_dt = 0.0;
+  };
   for (const OdometrySample& o : in.odometry) {
     double dt = 0.0;
     if (have_odometry_time_) {
@@ -58,9 +65,15 @@ CycleResult VitaSlam::process_cycle(const CycleInput& in) {
       ++stats_.odometry_out_of_order;
       continue;
     }
-    cells_.step(o.vx, o.vy, o.omega, dt);
     map_.integrate(o.vx, o.vy, o.omega, dt);
+    if (dt <= 0.0) continue;
+    acc_vx += o.vx * dt;
+    acc_vy += o.vy * dt;
+    acc_omega += o.omega * dt;
+    acc_dt += dt;
+    if (acc_dt >= params_.path_integration_period) flush();
   }
+  flush();
 
   // 2. Templates of this cycle.
   std::optional<VisualTemplate> vt;

@@ -46,6 +46,10 @@ struct SlamParams {
   PoseCellParams pose_cells;
   ExperienceMapParams experience_map;
   double max_odometry_dt = 1.0;  // s; a longer gap between odometry samples is integrated as this
+  // s; odometry is summed over this long before one pose-cell step (attractor dynamics + shift).
+  // The cells' dynamics need not run at the base's 50 Hz: the packet moves under a cell per step
+  // at walking speed either way, and the step is the costliest part of a cycle. 0 = every sample.
+  double path_integration_period = 0.1;
 };
 // `node` is the `slam:` section of config/slam.yaml. Strict: unknown keys and out-of-range values
 // are ParamErrors naming the key.
