@@ -181,6 +181,29 @@ TEST_F(SlamdBinary, BadInvocationsFailWithAOneLineReason) {
   EXPECT_THAT(p4.output(), HasSubstr("slam.match.threshold_vita: "));
 }
 
+// config/slam.yaml documents the defaults: slamd without --config must run with the same values,
+// or a robot started from the unit file and a user replaying by hand would get different maps.
+TEST_F(SlamdBinary, ShippedConfigEqualsTheCompiledDefaults) {
+  auto slam_lines = [](const std::string& text) {
+    std::vector<std::string> lines;
+    std::istringstream in(text);
+    for (std::string line; std::getline(in, line);) {
+      if (line.rfind("slam.", 0) != 0) continue;
+      const auto tag = line.find("  (default)");
+      if (tag != std::string::npos) line.erase(tag);
+      lines.push_back(line);
+    }
+    return lines;
+  };
+  Subprocess compiled({kSlamd, "--print-config"});
+  ASSERT_EQ(compiled.wait(30), 0) << compiled.output();
+  Subprocess shipped({kSlamd, "--config", kConfig, "--print-config"});
+  ASSERT_EQ(shipped.wait(30), 0) << shipped.output();
+  const auto a = slam_lines(compiled.output());
+  EXPECT_GT(a.size(), 40u);
+  EXPECT_EQ(a, slam_lines(shipped.output()));
+}
+
 // Runs inside a private network namespace (the test binary is started by scripts/netns-run).
 TEST_F(SlamdBinary, LiveRunFedByLcmLogplayerTakesTheSameDecisionsAsReplay) {
   const std::string replayed = (dir_ / "reference.lcmlog").string();
