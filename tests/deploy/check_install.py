@@ -109,7 +109,12 @@ def check_layout(a, destdir):
     # The environment file keeps LCM on the robot and asks for no more buffer than the sysctl allows.
     with open(os.path.join(destdir, a.sysconfdir.lstrip("/"), "default/whiskeye")) as f:
         env = f.read()
-    url = re.search(r"^LCM_DEFAULT_URL=(\S+)$", env, re.M)
+    url = re.search(r'^LCM_DEFAULT_URL="(\S+)"$', env, re.M)
+    # Sourced by a shell it must give the same value systemd reads.
+    sourced = run(["bash", "-c", "set -a; . \"$1\"; printf %s \"$LCM_DEFAULT_URL\"", "-",
+                   os.path.join(destdir, a.sysconfdir.lstrip("/"), "default/whiskeye")]).stdout
+    if not url or sourced != url.group(1):
+        fail(f"environment file: LCM_DEFAULT_URL not quoted or not shell-sourceable (shell read {sourced!r})")
     with open(os.path.join(destdir, a.prefix.lstrip("/"), "lib/sysctl.d/60-whiskeye-lcm.conf")) as f:
         rmem = re.search(r"^net\.core\.rmem_max\s*=\s*(\d+)", f.read(), re.M)
     if not url or "ttl=0" not in url.group(1):
