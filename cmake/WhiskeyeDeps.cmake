@@ -6,6 +6,9 @@ pkg_check_modules(LCM REQUIRED IMPORTED_TARGET lcm)
 find_program(LCM_GEN_EXECUTABLE lcm-gen REQUIRED)
 find_file(LCM_JAR lcm.jar PATHS /usr/share/java REQUIRED NO_DEFAULT_PATH)
 find_package(Java 11 REQUIRED COMPONENTS Development)
+# sd_notify for the daemons (libsystemd-dev) and the GPIO lines of whiskerd (libgpiod-dev's C++ binding).
+pkg_check_modules(SYSTEMD REQUIRED IMPORTED_TARGET libsystemd)
+pkg_check_modules(GPIODCXX REQUIRED IMPORTED_TARGET libgpiodcxx)
 
 find_package(Threads REQUIRED)
 find_package(Eigen3 3.3 REQUIRED NO_MODULE)

@@ -3,7 +3,6 @@
 // and reopens with exponential backoff, reporting DEGRADED meanwhile. Bad configuration is the only
 // startup failure.
 #include <signal.h>
-#include <systemd/sd-daemon.h>
 
 #include <CLI/CLI.hpp>
 #include <atomic>
@@ -14,6 +13,7 @@
 #include <whiskeye/common/bus.h>
 #include <whiskeye/common/clock.h>
 #include <whiskeye/common/params.h>
+#include <whiskeye/common/service.h>
 #include <whiskeye/driver_status_t.hpp>
 #include <whiskeye/image_t.hpp>
 
@@ -79,7 +79,9 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   Params p;
+  std::unique_ptr<ServiceNotifier> service;
   try {
+    service = std::make_unique<ServiceNotifier>("camerad", monotonic_us());
     const ParamNode root = config_path.empty() ? ParamNode::empty() : ParamNode::from_file(config_path);
     load(root, p);
     if (print_config) {
@@ -120,9 +122,6 @@ int main(int argc, char** argv) {
   int64_t last_sequence = -1;
   const int64_t status_period_us = static_cast<int64_t>(p.status_period_s * 1e6);
   int64_t next_status_us = monotonic_us() + status_period_us;
-  uint64_t watchdog_usec = 0;
-  const bool watchdog = sd_watchdog_enabled(0, &watchdog_usec) > 0;
-  int64_t last_watchdog_us = 0;
   bool ready_sent = false;
   image_t img;
 
@@ -146,7 +145,7 @@ int main(int argc, char** argv) {
         next_open_us = now + static_cast<int64_t>(backoff.next() * 1e6);
       }
       if (!ready_sent) {
-        sd_notify(0, "READY=1");  // ready = running its loop; a missing camera is a status, not a failure
+        service->ready();  // ready = running its loop; a missing camera is a status, not a failure
         ready_sent = true;
       }
     }
@@ -210,12 +209,11 @@ int main(int argc, char** argv) {
       interval_frames = 0;
       interval_latency_sum_us = interval_latency_max_us = 0;
     }
-    if (watchdog && t - last_watchdog_us >= static_cast<int64_t>(watchdog_usec / 2)) {
-      sd_notify(0, "WATCHDOG=1");
-      last_watchdog_us = t;
-    }
+    service->keep_alive(t);
+    // Test-only (WHISKEYE_FAULT_INJECT): a stuck capture loop, to prove the watchdog notices.
+    service->stall_if_injected(t, [] { return g_stop.load(); });
   }
-  sd_notify(0, "STOPPING=1");
+  service->stopping();
   std::cerr << "camerad: stopped after " << frames << " frames\n";
   return 0;
 }

@@ -7,7 +7,6 @@
 #include <sched.h>
 #include <signal.h>
 #include <sys/mman.h>
-#include <systemd/sd-daemon.h>
 #include <time.h>
 
 #include <CLI/CLI.hpp>
@@ -24,6 +23,7 @@
 
 #include <whiskeye/common/bus.h>
 #include <whiskeye/common/clock.h>
+#include <whiskeye/common/service.h>
 #include <whiskeye/driver_status_t.hpp>
 #include <whiskeye/rcp_state_t.hpp>
 #include <whiskeye/whisk_cycle_t.hpp>
@@ -128,7 +128,8 @@ void rt_log(Shared& shared, const char* fmt, ...) {
   shared.ring.try_push(item);  // a full ring loses the line, never blocks
 }
 
-void control_thread(const Params& p, can::Socket& sock, gpio::MotorLines& lines, Shared& shared) {
+void control_thread(const Params& p, can::Socket& sock, gpio::MotorLines& lines, Shared& shared,
+                    ServiceNotifier& service) {
   const bool rt = make_realtime(p);
   WhiskerCore core(p);
   const int64_t period_ns = static_cast<int64_t>(1e9 / p.rate_hz);
@@ -153,6 +154,8 @@ void control_thread(const Params& p, can::Socket& sock, gpio::MotorLines& lines,
     while (!core.finished()) {
       while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, nullptr) == EINTR) {
       }
+      // Test-only (WHISKEYE_FAULT_INJECT): a stuck control loop, to prove the watchdog notices.
+      service.stall_if_injected(mono_now_us(), [] { return g_stop.load(); });
       const int64_t deadline = timespec_us(next);
       const int64_t woke = mono_now_us();
       wake.add(static_cast<double>(woke - deadline));
@@ -254,15 +257,13 @@ void control_thread(const Params& p, can::Socket& sock, gpio::MotorLines& lines,
   shared.rt_done.store(true);
 }
 
-void publisher_thread(const Params& p, Bus& bus, Shared& shared) {
+void publisher_thread(const Params& p, Bus& bus, Shared& shared, ServiceNotifier& service) {
   Item item;
   whisker_sample_t sample;
   rcp_state_t state;
   whisk_cycle_t cycle;
   driver_status_t status;
-  uint64_t watchdog_usec = 0;
-  const bool watchdog = sd_watchdog_enabled(0, &watchdog_usec) > 0;
-  int64_t last_watchdog = 0, last_periods = -1;
+  int64_t last_periods = -1;
   while (true) {
     bool any = false;
     while (shared.ring.try_pop(item)) {
@@ -282,15 +283,11 @@ void publisher_thread(const Params& p, Bus& bus, Shared& shared) {
         publish(bus, p.channel_status, status);
       }
     }
-    if (watchdog) {
-      const int64_t now = monotonic_us();
+    // Only pet the watchdog while the control loop makes progress: a stuck control thread must get
+    // the service restarted even though this thread is fine.
+    if (service.watchdog_enabled()) {
       const int64_t periods = shared.rt_periods.load();
-      // Only pet the watchdog while the control loop is alive.
-      if (now - last_watchdog >= static_cast<int64_t>(watchdog_usec / 2) && periods != last_periods) {
-        sd_notify(0, "WATCHDOG=1");
-        last_watchdog = now;
-        last_periods = periods;
-      }
+      if (periods != last_periods && service.keep_alive(monotonic_us())) last_periods = periods;
     }
     if (!any) {
       if (shared.rt_done.load() && shared.ring.size() == 0) break;
@@ -314,7 +311,9 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   Params params;
+  std::unique_ptr<ServiceNotifier> service;
   try {
+    service = std::make_unique<ServiceNotifier>("whiskerd", monotonic_us());
     const ParamNode root = config_path.empty() ? ParamNode::empty() : ParamNode::from_file(config_path);
     load(root, params);
     if (print_config) {
@@ -360,12 +359,12 @@ int main(int argc, char** argv) {
   sigaction(SIGINT, &sa, nullptr);
 
   auto shared = std::make_unique<Shared>();
-  std::thread control([&] { control_thread(params, *sock, *lines, *shared); });
-  std::thread publisher([&] { publisher_thread(params, *bus, *shared); });
-  sd_notify(0, "READY=1");
+  std::thread control([&] { control_thread(params, *sock, *lines, *shared, *service); });
+  std::thread publisher([&] { publisher_thread(params, *bus, *shared, *service); });
+  service->ready();
   control.join();
   publisher.join();
-  sd_notify(0, "STOPPING=1");
+  service->stopping();
   std::cerr << "whiskerd: stopped, motors disabled\n";
   return shared->exit_code.load();
 }

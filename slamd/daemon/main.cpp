@@ -9,11 +9,11 @@
 #include "whiskeye/common/clock.h"
 #include "whiskeye/common/params.h"
 #include "whiskeye/common/robot_geometry.h"
+#include "whiskeye/common/service.h"
 #include "whiskeye/common/utime.h"
 #include "whiskeye/slam/vita_slam.h"
 
 #include <CLI/CLI.hpp>
-#include <systemd/sd-daemon.h>
 
 #include <atomic>
 #include <csignal>
@@ -199,9 +199,8 @@ int run_live(const Loaded& cfg, const Options& o) {
   }
   std::signal(SIGTERM, on_signal);
   std::signal(SIGINT, on_signal);
-  uint64_t watchdog_usec = 0;
-  const bool watchdog = sd_watchdog_enabled(0, &watchdog_usec) > 0;
-  sd_notify(0, "READY=1\nSTATUS=running");
+  ServiceNotifier service("slamd", monotonic_us());
+  service.ready("running");
   log_line("running in " + slam::to_string(cfg.slam.mode) + " mode, state in " + state_dir);
   int64_t next_tick = monotonic_us();
   while (!g_stop) {
@@ -215,11 +214,13 @@ int run_live(const Loaded& cfg, const Options& o) {
       st.checkpoints_written = checkpoints;
       st.checkpoint_errors = checkpoint_errors;
       publish(bus, "SLAM_STATUS", st);
-      if (watchdog) sd_notify(0, "WATCHDOG=1");
-      next_tick = now + std::min<int64_t>(1'000'000, watchdog ? static_cast<int64_t>(watchdog_usec / 2) : 1'000'000);
+      next_tick = now + 1'000'000;
     }
+    service.keep_alive(now);  // sent when due; the loop wakes at least every 100 ms
+    // Test-only (WHISKEYE_FAULT_INJECT): a stuck main loop, to prove the watchdog notices.
+    service.stall_if_injected(now, [] { return g_stop.load(); });
   }
-  sd_notify(0, "STOPPING=1");
+  service.stopping();
   if (!o.localise) checkpoint();
   log_line("stopped after " + std::to_string(node.counters().cycles) + " cycles");
   return 0;

@@ -1,6 +1,8 @@
 // based: Festo Robotino base over its REST API → ODOMETRY; BASE_CMD → motion; DRIVER_STATUS at 1 Hz.
 // `based --circle R --speed V [--laps N]` drives the paper's experiment instead of following BASE_CMD.
 #include "whiskeye/based/node.h"
+#include "whiskeye/common/clock.h"
+#include "whiskeye/common/service.h"
 
 #include <CLI/CLI.hpp>
 
@@ -54,6 +56,7 @@ int main(int argc, char** argv) {
   }
 
   try {
+    ServiceNotifier service("based", monotonic_us());
     LcmBus bus(lcm_url);
     based::BasedNode node(bus, params);
     if (*circle_opt) {
@@ -77,9 +80,15 @@ int main(int argc, char** argv) {
     sigaction(SIGTERM, &sa, nullptr);
     pthread_sigmask(SIG_UNBLOCK, &set, nullptr);
 
+    service.ready();
     while (g_signal == 0 && !node.finished()) {
       bus.handle_timeout(100);
+      const int64_t now = monotonic_us();
+      service.keep_alive(now);  // sent when due; the loop wakes at least every 100 ms
+      // Test-only (WHISKEYE_FAULT_INJECT): a stuck main loop, to prove the watchdog notices.
+      service.stall_if_injected(now, [] { return g_signal != 0; });
     }
+    service.stopping();
     if (g_signal != 0) std::fprintf(stderr, "based: signal %d, stopping the base\n", static_cast<int>(g_signal));
     node.stop();
     std::fprintf(stderr, "based: stopped\n");

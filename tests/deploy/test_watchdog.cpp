@@ -1,0 +1,82 @@
+// The daemons under systemd's notify protocol, as real processes: READY=1, then WATCHDOG=1 from the main
+// loop at WATCHDOG_USEC/2, none once the loop is stuck (test-only fault injection). camerad runs
+// without a camera, based against the fake Robotino server, slamd on an empty bus; whiskerd needs a CAN
+// interface and has the same check in the VM (tests/deploy/scenario_whiskerd_watchdog.sh).
+// Runs in a private network namespace (LCM udpm:// on loopback).
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <thread>
+
+#include "fake_robotino.h"
+#include "notify_probe.h"
+#include "subprocess.h"
+
+using whiskeye::deploy_testing::check_watchdog;
+using whiskeye::deploy_testing::WatchdogCheck;
+using whiskeye::deploy_testing::WatchdogReport;
+
+namespace {
+
+void expect_watchdog_contract(const WatchdogReport& r) {
+  EXPECT_TRUE(r.ready) << r.summary() << "\n" << r.output;
+  EXPECT_TRUE(r.problems.empty()) << r.summary() << "\n" << r.output;
+  // The properties themselves, so a failure names the broken one.
+  EXPECT_GT(r.pings_in_window, 0) << r.summary();
+  EXPECT_TRUE(r.stall_logged) << r.summary();
+  EXPECT_EQ(r.pings_after_stall, 0) << r.summary();
+  EXPECT_GE(r.quiet_s, 3 * 0.4) << r.summary();
+  EXPECT_TRUE(r.alive_while_stalled) << r.summary();
+}
+
+std::string temp_dir(const std::string& name) {
+  const auto dir = std::filesystem::path(::testing::TempDir()) / ("deploy_" + name + "_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir.string();
+}
+
+}  // namespace
+
+TEST(Watchdog, CameradWithoutACameraPetsTheWatchdogFromItsLoopAndStopsWhenTheLoopStalls) {
+  const WatchdogReport r = check_watchdog({CAMERAD, "--device", "/dev/video-none"}, WatchdogCheck{});
+  expect_watchdog_contract(r);
+}
+
+TEST(Watchdog, BasedPetsTheWatchdogFromItsLoopAndStopsWhenTheLoopStalls) {
+  whiskeye::based::testing::FakeRobotino base;
+  const WatchdogReport r = check_watchdog({BASED, "--url", base.url()}, WatchdogCheck{});
+  expect_watchdog_contract(r);
+  EXPECT_GT(base.odometry_requests(), 0) << "based never talked to the base";
+}
+
+TEST(Watchdog, SlamdPetsTheWatchdogFromItsLoopAndStopsWhenTheLoopStalls) {
+  const std::string state = temp_dir("slamd_state");
+  const WatchdogReport r = check_watchdog({SLAMD, "--state-dir", state}, WatchdogCheck{});
+  expect_watchdog_contract(r);
+}
+
+TEST(Watchdog, WithoutWatchdogUsecADaemonSendsReadyButNoKeepAlives) {
+  whiskeye::deploy_testing::NotifyListener listener;
+  whiskeye::testing::Subprocess daemon({CAMERAD, "--device", "/dev/video-none"}, "",
+                                       {"NOTIFY_SOCKET=" + listener.path()});
+  ASSERT_TRUE(whiskeye::testing::wait_until([&] { return !listener.times_of("READY=1").empty(); }, 10.0))
+      << daemon.output();
+  std::this_thread::sleep_for(std::chrono::milliseconds(800));
+  EXPECT_TRUE(listener.times_of("WATCHDOG=1").empty());
+  EXPECT_EQ(daemon.stop(5.0), 0) << daemon.output();
+}
+
+TEST(Watchdog, AMalformedFaultInjectionSpecIsRejectedWithTheVariableNamed) {
+  whiskeye::testing::Subprocess cam({CAMERAD, "--device", "/dev/video-none"}, "",
+                                    {"WHISKEYE_FAULT_INJECT=stall-main-loop-after=soon"});
+  EXPECT_NE(cam.wait(10.0), 0);
+  EXPECT_NE(cam.output().find("WHISKEYE_FAULT_INJECT"), std::string::npos) << cam.output();
+  whiskeye::testing::Subprocess slam({SLAMD, "--state-dir", temp_dir("bad_spec")}, "",
+                                     {"WHISKEYE_FAULT_INJECT=crash"});
+  EXPECT_NE(slam.wait(10.0), 0);
+  EXPECT_NE(slam.output().find("WHISKEYE_FAULT_INJECT"), std::string::npos) << slam.output();
+}
