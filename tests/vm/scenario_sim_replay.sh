@@ -19,6 +19,12 @@ setup_vcan vcan0
 # The arena started where the robot passes box_north within 2 s: contacts and saturated deflections.
 sed 's/start_angle_deg: .*/start_angle_deg: 84/' "$SRC/config/worlds/aliased_arena.yaml" > /tmp/contact_world.yaml
 
+# wait_for FILE PATTERN: up to 30 s for a line (a TCG guest starts programs slowly).
+wait_for() {
+  for _ in $(seq 300); do grep -q "$2" "$1" 2>/dev/null && return 0; sleep 0.1; done
+  return 1
+}
+
 # run_mode MODE CONFIG PREFIX
 run_mode() {
   local mode=$1 config=$2 prefix=$3
@@ -33,12 +39,15 @@ run_mode() {
   fi
   pass "${prefix}vita_sim_writes_the_candump"
   head -n 3 "/tmp/sim_$mode.candump"
-  "$CHECK" --sim-log "/tmp/sim_$mode.lcmlog" --control-log "/tmp/control_$mode.lcmlog" --config "$config" --results "$RESULTS_DIR/results.txt" \
-    --prefix "$prefix" > "$RESULTS_DIR/check_$mode.log" 2>&1 &
+  "$CHECK" --sim-log "/tmp/sim_$mode.lcmlog" --control-log "/tmp/control_$mode.lcmlog" --config "$config" \
+    --results "$RESULTS_DIR/results.txt" --prefix "$prefix" > "$RESULTS_DIR/check_$mode.log" 2>&1 &
   local check_pid=$!
   "$WHISKERD" -c "$config" --no-gpio > "$RESULTS_DIR/whiskerd_$mode.log" 2>&1 &
   local wd_pid=$!
-  sleep 1
+  # Replay once the checker listens and whiskerd has opened the bus.
+  wait_for "$RESULTS_DIR/check_$mode.log" "^listening on" || echo "the checker did not start"
+  wait_for "$RESULTS_DIR/whiskerd_$mode.log" "^whiskerd: vcan0 (" || echo "whiskerd did not start"
+  sleep 0.3
   check "${prefix}canplayer_replays_the_candump_with_interface_mapping" \
     canplayer -I "/tmp/sim_$mode.candump" vcan0=can0
   wait $check_pid || echo "$mode checker reported failures"

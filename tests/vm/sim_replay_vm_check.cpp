@@ -147,6 +147,7 @@ int main(int argc, char** argv) {
         have_status = true;
       },
       decode_errors);
+  std::cout << "listening on " << params.channel_sample << std::endl;
   const int64_t start = monotonic_us();
   int64_t last_fresh = -1;
   while (true) {
