@@ -301,6 +301,32 @@ TEST(VitaSim, SameSeedGivesAByteIdenticalCandumpWithOrWithoutTheLcmLog) {
   for (const auto& p : {a, b, c, log}) fs::remove(p);
 }
 
+TEST(VitaSim, CandumpFollowsTheWhiskerdConfigsModeRateIdsAndInterface) {
+  const std::string config = temp_path("classic_whiskerd.yaml");
+  std::ofstream(config) << "can:\n  interface: can7\n  mode: classic\n  rate_hz: 50\n"
+                           "  ids: {sample_base: 0x280, heartbeat_base: 0x600}\n";
+  const std::string out = temp_path("classic50.candump");
+  ASSERT_EQ(vita_sim(arena() + " --duration 1 --candump " + out + " --whiskerd-config " + config), 0);
+  std::ifstream in(out);
+  std::map<uint32_t, std::vector<int64_t>> times;
+  std::string line, iface;
+  CanFrame f;
+  while (std::getline(in, line)) {
+    ASSERT_TRUE(parse_candump_line(line, f, iface)) << line;
+    EXPECT_EQ(iface, "can7");
+    EXPECT_FALSE(f.fd);
+    times[f.id].push_back(f.utime);
+  }
+  ASSERT_EQ(times.size(), 12u);
+  for (uint32_t id = 0x281; id <= 0x286; ++id) {
+    ASSERT_EQ(times[id].size(), 50u * 4) << "50 Hz, four whisker frames per board sample";
+    EXPECT_EQ(times[id][4] - times[id][0], 20000);
+  }
+  for (uint32_t id = 0x601; id <= 0x606; ++id) EXPECT_EQ(times[id].size(), 10u);
+  fs::remove(config);
+  fs::remove(out);
+}
+
 TEST(VitaSim, BadCandumpOptionsExitNonZero) {
   const std::string out = temp_path("bad.candump");
   const std::string bad_config = temp_path("bad_whiskerd.yaml");
