@@ -2,22 +2,18 @@
 # VM scenario: vita-sim's candump log replayed by can-utils' canplayer into vcan0 (interface mapping
 # vcan0=can0) in front of the real whiskerd; whiskerd's WHISKER_SAMPLE must be the simulated samples
 # (vita-sim's LCM log of the same run) within one count. CAN FD at 500 Hz, then classic CAN at 100 Hz.
-# whiskerd's motor commands are ignored: this is an open-loop replay.
-#   scenario_sim_replay.sh RESULTS_DIR WHISKERD VITA_SIM CHECK CONFIG SOURCE_DIR
+# whiskerd's motor commands are ignored: this is an open-loop replay. The logs and configs come from
+# the host (sim_replay_inputs.sh, a ctest fixture) in INPUTS.
+#   scenario_sim_replay.sh RESULTS_DIR WHISKERD CHECK INPUTS
 set -u
 RESULTS_DIR=$1
 WHISKERD=$2
-VITA_SIM=$3
-CHECK=$4
-CONFIG=$5
-SRC=$6
+CHECK=$3
+IN=$4
 source "$(dirname "$0")/lib.sh"
 
 setup_lcm_loopback
 setup_vcan vcan0
-
-# The arena started where the robot passes box_north within 2 s: contacts and saturated deflections.
-sed 's/start_angle_deg: .*/start_angle_deg: 84/' "$SRC/config/worlds/aliased_arena.yaml" > /tmp/contact_world.yaml
 
 # wait_for FILE PATTERN: up to 30 s for a line (a TCG guest starts programs slowly).
 wait_for() {
@@ -25,21 +21,11 @@ wait_for() {
   return 1
 }
 
-# run_mode MODE CONFIG PREFIX
+# run_mode MODE PREFIX
 run_mode() {
-  local mode=$1 config=$2 prefix=$3
-  # 2 simulated seconds; the log names the head's bus can0, as a recording on the robot would. The
-  # same run with another seed is the checker's negative control.
-  local sim=("$VITA_SIM" --world /tmp/contact_world.yaml --robot "$SRC/config/robot.yaml" --duration 2 -q)
-  if ! "${sim[@]}" --whiskerd-config "$config" --can-interface can0 --seed 11 \
-      -o "/tmp/sim_$mode.lcmlog" --candump "/tmp/sim_$mode.candump" > "$RESULTS_DIR/vita_sim_$mode.log" 2>&1 ||
-     ! "${sim[@]}" --seed 12 -o "/tmp/control_$mode.lcmlog" >> "$RESULTS_DIR/vita_sim_$mode.log" 2>&1; then
-    fail "${prefix}vita_sim_writes_the_candump" "$(tail -n 2 "$RESULTS_DIR/vita_sim_$mode.log" | tr '\n' ' ')"
-    return
-  fi
-  pass "${prefix}vita_sim_writes_the_candump"
-  head -n 3 "/tmp/sim_$mode.candump"
-  "$CHECK" --sim-log "/tmp/sim_$mode.lcmlog" --control-log "/tmp/control_$mode.lcmlog" --config "$config" \
+  local mode=$1 prefix=$2 config=$IN/whiskerd_$1.yaml
+  head -n 3 "$IN/sim_$mode.candump"
+  "$CHECK" --sim-log "$IN/sim.lcmlog" --control-log "$IN/control.lcmlog" --config "$config" \
     --results "$RESULTS_DIR/results.txt" --prefix "$prefix" > "$RESULTS_DIR/check_$mode.log" 2>&1 &
   local check_pid=$!
   "$WHISKERD" -c "$config" --no-gpio > "$RESULTS_DIR/whiskerd_$mode.log" 2>&1 &
@@ -49,7 +35,7 @@ run_mode() {
   wait_for "$RESULTS_DIR/whiskerd_$mode.log" "^whiskerd: vcan0 (" || echo "whiskerd did not start"
   sleep 0.3
   check "${prefix}canplayer_replays_the_candump_with_interface_mapping" \
-    canplayer -I "/tmp/sim_$mode.candump" vcan0=can0
+    canplayer -I "$IN/sim_$mode.candump" vcan0=can0
   wait $check_pid || echo "$mode checker reported failures"
   cat "$RESULTS_DIR/check_$mode.log"
   kill -TERM $wd_pid
@@ -57,8 +43,14 @@ run_mode() {
   check "${prefix}whiskerd_exits_cleanly_after_the_replay" test $? = 0
 }
 
-run_mode fd "$CONFIG" ""
+start=$SECONDS
+for f in sim.lcmlog control.lcmlog sim_fd.candump sim_classic.candump; do
+  check "input_${f//./_}_present" test -s "$IN/$f"
+done
+run_mode fd ""
+echo "CAN FD replay: $((SECONDS - start)) s"
 ip -s link show vcan0
-sed 's/^can:$/can:\n  mode: classic/' "$CONFIG" > /tmp/whiskerd_classic.yaml
-run_mode classic /tmp/whiskerd_classic.yaml classic_
+start=$SECONDS
+run_mode classic classic_
+echo "classic replay: $((SECONDS - start)) s"
 exit 0
