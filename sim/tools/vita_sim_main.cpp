@@ -1,9 +1,13 @@
 // vita-sim: a simulated WhiskEye in a YAML world, written as an LCM log with the drivers' channels
 // (WHISKER_SAMPLE, RCP_STATE, WHISK_CYCLE, CAMERA, ODOMETRY) plus GROUND_TRUTH and SIM_CONTACT_TRUTH.
-// Also draws a world's top-down map (--plot-world) and can save camera frames as PNG (--frames-dir).
+// Also draws a world's top-down map (--plot-world), can save camera frames as PNG (--frames-dir), and
+// writes the whisker boards' CAN traffic for the same samples as a `candump -l` log (--candump) for
+// can-utils' canplayer, using whiskerd's config for the bus mode, ids and (inverted) calibration.
 #include "whiskeye/common/bus.h"
+#include "whiskeye/sim/can_log.h"
 #include "whiskeye/sim/lcm_sink.h"
 #include "whiskeye/sim/simulator.h"
+#include "whiskerd_core.h"
 
 #include <whiskeye/rcp/params.h>
 
@@ -16,7 +20,9 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <memory>
 #include <limits>
 #include <string>
 
@@ -161,8 +167,21 @@ int main(int argc, char** argv) {
   int laps = 0;
   int64_t start_utime = SimParams{}.start_utime;
   bool quiet = false;
+  std::string candump_path;
+  std::string whiskerd_config = "config/whiskerd.yaml";
+  std::string can_mode;
+  std::string can_interface;
   app.add_option("--world", world_path, "World YAML file (e.g. config/worlds/aliased_arena.yaml)")->required()->check(CLI::ExistingFile);
   app.add_option("--output,-o", output, "LCM log to write");
+  app.add_option("--candump", candump_path,
+                 "Also (or only) write the whisker boards' CAN frames as a candump -l log, for canplayer");
+  app.add_option("--whiskerd-config", whiskerd_config,
+                 "whiskerd YAML giving --candump its bus mode, rate, ids and calibration (inverted)")
+      ->capture_default_str();
+  app.add_option("--can-mode", can_mode, "--candump bus mode, overrides the whiskerd config's can.mode")
+      ->check(CLI::IsMember({"fd", "classic"}));
+  app.add_option("--can-interface", can_interface,
+                 "Interface name in the --candump log (default: the whiskerd config's can.interface)");
   app.add_option("--robot", robot_path, "Robot geometry YAML")->capture_default_str();
   app.add_option("--rcp", rcp_path, "Whisking controller YAML (e.g. config/rcp.yaml; default: built-in defaults)")
       ->check(CLI::ExistingFile);
@@ -197,10 +216,32 @@ int main(int argc, char** argv) {
       plot_views(world, robot, view_angles, views_path);
       std::cerr << "vita-sim: wrote " << views_path << "\n";
     }
-    if (output.empty() && !(plot_path.empty() && views_path.empty())) return 0;
-    if (output.empty()) {
-      std::cerr << "vita-sim: --output is required (or --plot-world alone)\n";
+    if (output.empty() && candump_path.empty() && !(plot_path.empty() && views_path.empty())) return 0;
+    if (output.empty() && candump_path.empty()) {
+      std::cerr << "vita-sim: --output or --candump is required (or --plot-world alone)\n";
       return 2;
+    }
+    // The boards' traffic as whiskerd is configured to receive it.
+    BoardTrafficParams traffic;
+    if (!candump_path.empty()) {
+      whiskerd::Params wd;
+      {
+        const ParamNode root = ParamNode::from_file(whiskerd_config);
+        whiskerd::load(root, wd);
+      }
+      const wp::BusMode mode = can_mode.empty() ? wd.mode : can_mode == "fd" ? wp::BusMode::kFd : wp::BusMode::kClassic;
+      // Another mode than the config's runs at that mode's documented rate (FD 500 Hz, classic 100 Hz).
+      traffic.rate_hz = mode == wd.mode ? wd.rate_hz : mode == wp::BusMode::kFd ? 500.0 : 100.0;
+      traffic.mode = mode;
+      traffic.ids = wd.ids;
+      traffic.calibration = wd.calibration;
+      if (can_interface.empty()) can_interface = wd.interface;
+      const double sim_rate_hz = 1e6 / static_cast<double>(SimParams{}.period_us);
+      if (traffic.rate_hz > sim_rate_hz) {
+        std::cerr << "vita-sim: the board rate " << traffic.rate_hz << " Hz (" << whiskerd_config
+                  << ") exceeds the simulator's " << sim_rate_hz << " Hz\n";
+        return 2;
+      }
     }
     if (!frames_dir.empty()) std::filesystem::create_directories(frames_dir);
 
@@ -217,29 +258,56 @@ int main(int argc, char** argv) {
     const rcp::PlantParams plant;
     Simulator sim(world, robot, controller, plant, params);
 
-    LogWriterBus bus(output);
-    LcmSink lcm(bus, [&bus](int64_t t) { bus.set_time(t); }, world.camera.yuyv, plant.saturation);
-    // Saving frames is a side channel: a thin sink that forwards everything and writes PNGs.
+    std::unique_ptr<LogWriterBus> bus;
+    std::unique_ptr<LcmSink> lcm;
+    if (!output.empty()) {
+      bus = std::make_unique<LogWriterBus>(output);
+      lcm = std::make_unique<LcmSink>(*bus, [b = bus.get()](int64_t t) { b->set_time(t); }, world.camera.yuyv,
+                                      plant.saturation);
+    }
+    std::ofstream candump_file;
+    std::unique_ptr<CandumpWriter> candump;
+    if (!candump_path.empty()) {
+      candump_file.open(candump_path, std::ios::binary | std::ios::trunc);
+      if (!candump_file) throw std::runtime_error(candump_path + ": cannot write the candump log");
+      candump = std::make_unique<CandumpWriter>(candump_file, traffic, can_interface);
+    }
+    // The side channels (CAN frames, PNG frames): a thin sink that forwards everything to the LCM
+    // sink, if any.
     struct FrameTap : SimSink {
-      SimSink& next;
+      SimSink* next;
+      CandumpWriter* can;
       std::string dir;
       int every;
-      FrameTap(SimSink& n, std::string d, int e) : next(n), dir(std::move(d)), every(e) {}
-      void whisker_sample(const rcp::WhiskerSample& s) override { next.whisker_sample(s); }
-      void rcp_state(const rcp::ControlOutput& o) override { next.rcp_state(o); }
-      void whisk_cycle(const rcp::WhiskCycle& c) override { next.whisk_cycle(c); }
-      void contact_truth(const ContactTruth& t) override { next.contact_truth(t); }
-      void odometry(int64_t u, int64_t s, const OdometrySample& o) override { next.odometry(u, s, o); }
-      void ground_truth(int64_t u, const Pose2& p) override { next.ground_truth(u, p); }
+      FrameTap(SimSink* n, CandumpWriter* c, std::string d, int e) : next(n), can(c), dir(std::move(d)), every(e) {}
+      void whisker_sample(const rcp::WhiskerSample& s) override {
+        if (next) next->whisker_sample(s);
+        if (can) can->whisker_sample(s);
+      }
+      void rcp_state(const rcp::ControlOutput& o) override {
+        if (next) next->rcp_state(o);
+      }
+      void whisk_cycle(const rcp::WhiskCycle& c) override {
+        if (next) next->whisk_cycle(c);
+      }
+      void contact_truth(const ContactTruth& t) override {
+        if (next) next->contact_truth(t);
+      }
+      void odometry(int64_t u, int64_t s, const OdometrySample& o) override {
+        if (next) next->odometry(u, s, o);
+      }
+      void ground_truth(int64_t u, const Pose2& p) override {
+        if (next) next->ground_truth(u, p);
+      }
       void camera(int64_t u, int64_t s, const std::vector<uint8_t>& g, int w, int h) override {
-        next.camera(u, s, g, w, h);
+        if (next) next->camera(u, s, g, w, h);
         if (dir.empty() || s % every != 0) return;
         const cv::Mat m(h, w, CV_8UC1, const_cast<uint8_t*>(g.data()));
         char name[64];
         std::snprintf(name, sizeof name, "/frame_%06lld.png", static_cast<long long>(s));
         if (!cv::imwrite(dir + name, m)) throw std::runtime_error(dir + name + ": cannot write the PNG");
       }
-    } tap(lcm, frames_dir, frames_every);
+    } tap(lcm.get(), candump.get(), frames_dir, frames_every);
 
     const bool tty = isatty(STDERR_FILENO) != 0;
     const int64_t total = sim.total_steps();
@@ -263,9 +331,18 @@ int main(int argc, char** argv) {
       }
     }
     if (!quiet && tty) std::fprintf(stderr, "\n");
-    std::cerr << "vita-sim: " << sim.duration() << " s simulated, " << bus.events_written() << " events -> " << output
-              << "\n";
-    for (const auto& [channel, n] : lcm.counts()) std::cerr << "  " << channel << ": " << n << "\n";
+    std::cerr << "vita-sim: " << sim.duration() << " s simulated\n";
+    if (bus) {
+      std::cerr << "  " << bus->events_written() << " events -> " << output << "\n";
+      for (const auto& [channel, n] : lcm->counts()) std::cerr << "  " << channel << ": " << n << "\n";
+    }
+    if (candump) {
+      candump_file.flush();
+      if (!candump_file) throw std::runtime_error(candump_path + ": write failed");
+      std::cerr << "  " << candump->frames_written() << " CAN frames (" << candump->samples_sent() << " board samples, "
+                << (traffic.mode == wp::BusMode::kFd ? "CAN FD" : "classic CAN") << " at " << traffic.rate_hz
+                << " Hz) -> " << candump_path << "\n";
+    }
     std::cerr << "  whisk cycles with a true contact: " << sim.cycles_with_contact() << " of " << sim.cycles() << "\n";
     for (std::size_t i = 0; i < world.solids.size(); ++i) {
       std::cerr << "  contact onsets on " << world.solids[i].name << ": " << sim.onsets_per_solid()[i] << "\n";

@@ -209,6 +209,49 @@ TEST(WhiskerProtocol, CalibrationAppliesOffsetGainAndRotation) {
   EXPECT_EQ(theta_to_counts(10.0, c), kThetaLimit);  // clamped
 }
 
+TEST(WhiskerProtocol, UncalibrateInvertsCalibrationWithinOneCount) {
+  WhiskerCalibration c;
+  c.offset_x = 37;
+  c.offset_y = -12;
+  c.gain_x = 0.0007;
+  c.gain_y = -0.0011;
+  c.rotation = 0.7;
+  c.theta_offset = 25;
+  c.theta_gain = 0.0016;
+  const double cr = std::cos(c.rotation), sr = std::sin(c.rotation);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-0.9, 0.9);
+  for (int i = 0; i < 500; ++i) {
+    const double theta = u(rng), x = u(rng), y = u(rng);
+    const WhiskerRaw raw = uncalibrate(theta, x, y, c);
+    const CalibratedWhisker back = calibrate(raw, c);
+    // Half a count of rounding per axis, seen through the gain and the rotation.
+    const double step_x = 0.5 * (std::abs(cr * c.gain_x) + std::abs(sr * c.gain_y)) + 1e-6;
+    const double step_y = 0.5 * (std::abs(sr * c.gain_x) + std::abs(cr * c.gain_y)) + 1e-6;
+    EXPECT_NEAR(back.x, x, step_x);
+    EXPECT_NEAR(back.y, y, step_y);
+    EXPECT_NEAR(back.theta, theta, 0.5 * c.theta_gain + 1e-6);
+  }
+}
+
+TEST(WhiskerProtocol, UncalibrateSaturatesHallCountsAndClampsTheta) {
+  const WhiskerCalibration c;  // defaults: full scale 1 = 2047 counts
+  const WhiskerRaw big = uncalibrate(3.0, 1.5, -4.0, c);
+  EXPECT_EQ(big.x, kHallLimit);
+  EXPECT_EQ(big.y, -kHallLimit);
+  EXPECT_EQ(big.theta, kThetaLimit);
+  const WhiskerRaw exact = uncalibrate(-M_PI / 4, 0.5, 0.25, c);
+  EXPECT_EQ(exact.x, 1024);  // 0.5 * 2047 = 1023.5 rounds away from zero
+  EXPECT_EQ(exact.y, 512);   // 511.75
+  EXPECT_EQ(exact.theta, -512);
+  // The saturated counts decode as valid (|value| == 2047 is saturation, not out of range).
+  BoardSample s;
+  s.whiskers[0] = big;
+  std::array<uint8_t, kFdSampleBytes> buf{};
+  ASSERT_EQ(encode_sample_fd(s, buf), kFdSampleBytes);
+  EXPECT_EQ(decode_frame(sample_id({}, 0), true, buf, BusMode::kFd).kind, FrameKind::kSample);
+}
+
 TEST(WhiskerProtocol, BusLoadMatchesTheDocumentedTable) {
   // docs/can-protocol.md: FD 1/5 Mbit/s at 500 Hz, and classic 1 Mbit/s at 100 Hz, fit; classic at
   // 500 Hz does not.

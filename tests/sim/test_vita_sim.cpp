@@ -1,7 +1,11 @@
-// The vita-sim executable: reproducible logs, channels and rates in the log, time order, errors.
+// The vita-sim executable: reproducible logs, channels and rates in the log, time order, errors; the
+// candump log of the whisker boards' CAN frames decoded back against the LCM log of the same run.
 #include "sim_test_util.h"
 
 #include "whiskeye/common/bus.h"
+#include "whiskeye/sim/can_log.h"
+#include "whiskeye/sim/simulator.h"
+#include "whiskerd_core.h"
 
 #include <whiskeye/contact_truth_t.hpp>
 #include <whiskeye/image_t.hpp>
@@ -20,6 +24,7 @@
 #include <fstream>
 #include <iterator>
 #include <map>
+#include <sstream>
 
 namespace whiskeye::sim {
 namespace {
@@ -123,6 +128,219 @@ TEST(VitaSim, BadInputExitsNonZero) {
   EXPECT_NE(vita_sim("--world " + bad + " -o " + temp_path("x.lcmlog")), 0);
   EXPECT_NE(vita_sim(arena()), 0);  // no output
   fs::remove(bad);
+}
+
+
+// The arena started where the robot passes box_north within 2 s: contacts, large deflections.
+std::string contact_world() {
+  const std::string path = temp_path("contact_world.yaml");
+  std::ifstream in(test::source_path("config/worlds/aliased_arena.yaml"));
+  std::ofstream out(path);
+  std::string line;
+  int replaced = 0;
+  while (std::getline(in, line)) {
+    if (line.find("start_angle_deg:") != std::string::npos) {
+      line = line.substr(0, line.find("start_angle_deg:")) + "start_angle_deg: 84";
+      ++replaced;
+    }
+    out << line << "\n";
+  }
+  EXPECT_EQ(replaced, 1);
+  return path;
+}
+
+// A whiskerd config with non-trivial calibrations (offset, gain, rotation, theta offset and gain).
+std::string whiskerd_config() {
+  const std::string path = temp_path("whiskerd.yaml");
+  std::ofstream(path) << "can:\n  interface: vcan0\n"
+                         "calibration:\n  whiskers:\n"
+                         "    - {index: 23, offset_x: 50, gain_x: 0.002}\n"
+                         "    - {index: 22, rotation: 1.5707963267948966}\n"
+                         "    - {index: 3, offset_y: -40, gain_y: -0.0004, rotation: -0.3}\n"
+                         "    - {index: 9, theta_offset: 30, theta_gain: 0.0012}\n";
+  return path;
+}
+
+struct CandumpCheck {
+  int64_t frames = 0, heartbeats = 0, board_samples = 0, compared = 0, saturated = 0, contact_samples = 0;
+  std::array<std::vector<int64_t>, wp::kNumBoards> sample_times;
+};
+
+// Parses the candump log line by line, decodes and assembles it as whiskerd does, calibrates it with
+// whiskerd's calibration and compares every board sample with the WHISKER_SAMPLE of its utime.
+CandumpCheck check_candump(const std::string& candump, const std::string& lcmlog, const std::string& config,
+                           wp::BusMode mode) {
+  whiskerd::Params params;
+  whiskerd::load(ParamNode::from_file(config), params);
+  std::map<int64_t, whisker_sample_t> truth;
+  {
+    LogReader log(lcmlog);
+    LogEvent e;
+    while (log.next(e)) {
+      if (e.channel != "WHISKER_SAMPLE") continue;
+      whisker_sample_t m;
+      EXPECT_TRUE(decode_message(std::span<const uint8_t>(e.data), m));
+      truth[m.utime] = m;
+    }
+  }
+  CandumpCheck r;
+  wp::SampleAssembler assembler(mode);
+  std::ifstream in(candump);
+  std::string line;
+  std::string iface;
+  CanFrame f;
+  while (std::getline(in, line)) {
+    if (!parse_candump_line(line, f, iface)) {
+      ADD_FAILURE() << "unparsable line: " << line;
+      continue;
+    }
+    ++r.frames;
+    EXPECT_EQ(iface, "vcan0");
+    const wp::Decoded d = wp::decode_frame(f.id, f.fd, f.data, mode, params.ids);
+    int board = -1;
+    if (d.kind == wp::FrameKind::kHeartbeat) {
+      ++r.heartbeats;
+      continue;
+    }
+    if (d.kind == wp::FrameKind::kSample && assembler.add(d.sample)) board = d.sample.board;
+    if (d.kind == wp::FrameKind::kFragment && assembler.add(d.fragment)) board = d.fragment.board;
+    if (d.kind == wp::FrameKind::kRejected) ADD_FAILURE() << d.reason << ": " << line;
+    if (board < 0) continue;
+    ++r.board_samples;
+    r.sample_times[board].push_back(f.utime);
+    const auto it = truth.find(f.utime);
+    if (it == truth.end()) {
+      ADD_FAILURE() << "no WHISKER_SAMPLE at " << f.utime;
+      continue;
+    }
+    bool contact = false;
+    for (int k = 0; k < wp::kWhiskersPerBoard; ++k) {
+      const int w = board * wp::kWhiskersPerBoard + k;
+      const wp::WhiskerCalibration& c = params.calibration[w];
+      const wp::WhiskerRaw& raw = assembler.latest(board).whiskers[k];
+      const wp::CalibratedWhisker back = wp::calibrate(raw, c);
+      const auto& m = it->second;
+      EXPECT_NEAR(back.theta, m.theta[w], 0.5 * std::abs(c.theta_gain) + 1e-6) << "whisker " << w << " at " << f.utime;
+      contact = contact || std::hypot(m.deflection_x[w], m.deflection_y[w]) > 0.05;
+      if (std::abs(raw.x) == wp::kHallLimit || std::abs(raw.y) == wp::kHallLimit) {
+        ++r.saturated;
+        continue;  // clipped as the ADC would be: the true value lies beyond full scale
+      }
+      // One quantisation step: half a count per sensor axis, through the gains and the rotation.
+      const double step = 0.5 * (std::abs(c.gain_x) + std::abs(c.gain_y)) + 1e-6;
+      EXPECT_NEAR(back.x, m.deflection_x[w], step) << "whisker " << w << " at " << f.utime;
+      EXPECT_NEAR(back.y, m.deflection_y[w], step) << "whisker " << w << " at " << f.utime;
+      ++r.compared;
+    }
+    r.contact_samples += contact;
+  }
+  EXPECT_EQ(assembler.total_gaps(), 0);
+  EXPECT_EQ(assembler.incomplete(), 0);
+  return r;
+}
+
+struct CandumpMode {
+  const char* flag;
+  wp::BusMode mode;
+  int64_t period_us;
+  int frames_per_board_sample;
+};
+
+class VitaSimCandump : public ::testing::TestWithParam<CandumpMode> {};
+
+TEST_P(VitaSimCandump, DecodesBackToTheLogsWhiskerSamplesWithinOneCountAtTheBoardRate) {
+  const CandumpMode& p = GetParam();
+  const std::string world = contact_world();
+  const std::string config = whiskerd_config();
+  const std::string log = temp_path(std::string(p.flag) + ".lcmlog");
+  const std::string candump = temp_path(std::string(p.flag) + ".candump");
+  ASSERT_EQ(vita_sim("--world " + world + " --duration 4 --seed 9 -o " + log + " --candump " + candump +
+                     " --whiskerd-config " + config + " --can-mode " + p.flag),
+            0);
+  const CandumpCheck r = check_candump(candump, log, config, p.mode);
+  const int64_t board_samples = 4'000'000 / p.period_us;
+  EXPECT_EQ(r.board_samples, 6 * board_samples);
+  EXPECT_EQ(r.heartbeats, 6 * 40) << "10 Hz per board";
+  EXPECT_EQ(r.frames, r.heartbeats + 6 * board_samples * p.frames_per_board_sample);
+  for (const auto& times : r.sample_times) {
+    ASSERT_EQ(static_cast<int64_t>(times.size()), board_samples);
+    EXPECT_EQ(times.front(), SimParams{}.start_utime);
+    for (std::size_t i = 1; i < times.size(); ++i) ASSERT_EQ(times[i] - times[i - 1], p.period_us);
+  }
+  EXPECT_GT(r.compared, 24 * board_samples * 9 / 10);
+  EXPECT_GT(r.contact_samples, 10) << "the run must exercise real deflections, not only noise";
+  fs::remove(world);
+  fs::remove(config);
+  fs::remove(log);
+  fs::remove(candump);
+}
+
+INSTANTIATE_TEST_SUITE_P(Modes, VitaSimCandump,
+                         ::testing::Values(CandumpMode{"fd", wp::BusMode::kFd, 2000, 1},
+                                           CandumpMode{"classic", wp::BusMode::kClassic, 10000, 4}),
+                         [](const auto& info) { return std::string(info.param.flag); });
+
+TEST(VitaSim, SameSeedGivesAByteIdenticalCandumpWithOrWithoutTheLcmLog) {
+  const std::string a = temp_path("a.candump");
+  const std::string b = temp_path("b.candump");
+  const std::string c = temp_path("c.candump");
+  const std::string log = temp_path("ab.lcmlog");
+  const std::string cfg = "--whiskerd-config " + test::source_path("config/whiskerd.yaml");
+  ASSERT_EQ(vita_sim(arena() + " --duration 2 --seed 3 --candump " + a + " -o " + log + " " + cfg), 0);
+  ASSERT_EQ(vita_sim(arena() + " --duration 2 --seed 3 --candump " + b + " " + cfg), 0);
+  ASSERT_EQ(vita_sim(arena() + " --duration 2 --seed 4 --candump " + c + " " + cfg), 0);
+  const std::string sa = slurp(a);
+  EXPECT_GT(sa.size(), 100000u);
+  EXPECT_TRUE(sa == slurp(b));
+  EXPECT_FALSE(sa == slurp(c));
+  // The installed config: FD at 500 Hz on can0.
+  std::istringstream lines(sa);
+  std::string first;
+  std::getline(lines, first);
+  EXPECT_EQ(first.substr(0, 31), "(1700000000.000000) can0 181##1");
+  for (const auto& p : {a, b, c, log}) fs::remove(p);
+}
+
+TEST(VitaSim, CandumpFollowsTheWhiskerdConfigsModeRateIdsAndInterface) {
+  const std::string config = temp_path("classic_whiskerd.yaml");
+  std::ofstream(config) << "can:\n  interface: can7\n  mode: classic\n  rate_hz: 50\n"
+                           "  ids: {sample_base: 0x280, heartbeat_base: 0x600}\n";
+  const std::string out = temp_path("classic50.candump");
+  ASSERT_EQ(vita_sim(arena() + " --duration 1 --candump " + out + " --whiskerd-config " + config), 0);
+  std::ifstream in(out);
+  std::map<uint32_t, std::vector<int64_t>> times;
+  std::string line, iface;
+  CanFrame f;
+  while (std::getline(in, line)) {
+    ASSERT_TRUE(parse_candump_line(line, f, iface)) << line;
+    EXPECT_EQ(iface, "can7");
+    EXPECT_FALSE(f.fd);
+    times[f.id].push_back(f.utime);
+  }
+  ASSERT_EQ(times.size(), 12u);
+  for (uint32_t id = 0x281; id <= 0x286; ++id) {
+    ASSERT_EQ(times[id].size(), 50u * 4) << "50 Hz, four whisker frames per board sample";
+    EXPECT_EQ(times[id][4] - times[id][0], 20000);
+  }
+  for (uint32_t id = 0x601; id <= 0x606; ++id) EXPECT_EQ(times[id].size(), 10u);
+  fs::remove(config);
+  fs::remove(out);
+}
+
+TEST(VitaSim, BadCandumpOptionsExitNonZero) {
+  const std::string out = temp_path("bad.candump");
+  const std::string bad_config = temp_path("bad_whiskerd.yaml");
+  std::ofstream(bad_config) << "calibration:\n  default:\n    gain_z: 1\n";
+  EXPECT_NE(vita_sim(arena() + " --duration 1 --candump " + out + " --whiskerd-config " + bad_config), 0);
+  EXPECT_NE(vita_sim(arena() + " --duration 1 --candump " + out + " --whiskerd-config " + temp_path("missing.yaml")), 0);
+  EXPECT_NE(vita_sim(arena() + " --duration 1 --candump " + out + " --can-mode flexray --whiskerd-config " +
+                     test::source_path("config/whiskerd.yaml")),
+            0);
+  EXPECT_NE(vita_sim(arena() + " --duration 1 --candump /nonexistent/dir/x.candump --whiskerd-config " +
+                     test::source_path("config/whiskerd.yaml")),
+            0);
+  fs::remove(bad_config);
+  fs::remove(out);
 }
 
 }  // namespace

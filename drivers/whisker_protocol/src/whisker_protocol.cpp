@@ -285,6 +285,23 @@ int16_t theta_to_counts(double theta_rad, const WhiskerCalibration& c) {
   return static_cast<int16_t>(std::clamp(counts, -static_cast<double>(kThetaLimit), static_cast<double>(kThetaLimit)));
 }
 
+WhiskerRaw uncalibrate(double theta_rad, double x, double y, const WhiskerCalibration& c) {
+  // Whisker axes -> sensor axes: R(-rotation).
+  const double cr = std::cos(c.rotation), sr = std::sin(c.rotation);
+  const double sx = cr * x + sr * y;
+  const double sy = -sr * x + cr * y;
+  auto hall = [](double v, double gain, double offset) {
+    const double counts = gain == 0.0 ? offset : std::round(v / gain + offset);
+    const double limit = kHallLimit;
+    return static_cast<int16_t>(std::clamp(counts, -limit, limit));
+  };
+  WhiskerRaw raw;
+  raw.x = hall(sx, c.gain_x, c.offset_x);
+  raw.y = hall(sy, c.gain_y, c.offset_y);
+  raw.theta = theta_to_counts(theta_rad, c);
+  return raw;
+}
+
 double frame_time_us(BusMode mode, std::size_t n, double arb_bps, double data_bps) {
   const double data_bits = 8.0 * static_cast<double>(n);
   if (mode == BusMode::kClassic) {

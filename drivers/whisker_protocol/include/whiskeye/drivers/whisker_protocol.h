@@ -211,6 +211,12 @@ CalibratedWhisker calibrate(const WhiskerRaw& raw, const WhiskerCalibration& c);
 // Encoder counts for a target angle, clamped to the valid range.
 int16_t theta_to_counts(double theta_rad, const WhiskerCalibration& c);
 
+// The inverse of calibrate(): the counts a board reports for angle `theta_rad` and deflection (x, y)
+// in whisker axes, rounded to the nearest count; Hall values saturate at +-kHallLimit as the ADC
+// does, θ is clamped as in theta_to_counts. A zero gain maps to the offset (every count reads 0).
+// Used by simulators to produce bus traffic that whiskerd calibrates back to (theta, x, y).
+WhiskerRaw uncalibrate(double theta_rad, double x, double y, const WhiskerCalibration& c);
+
 // Time one frame occupies the bus, worst-case bit stuffing, in microseconds. Classic: 11-bit id at
 // `arb_bps`. FD: arbitration phase at `arb_bps`, data phase (with BRS) at `data_bps`.
 double frame_time_us(BusMode mode, std::size_t data_bytes, double arb_bps, double data_bps);
