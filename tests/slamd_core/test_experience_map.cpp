@@ -110,6 +110,69 @@ TEST(ExperienceMap, ActionRuleCreatesLinksAndRelocalises) {
   EXPECT_EQ(m.size(), 4);
 }
 
+TEST(ExperienceMap, ViewTurnedBeyondMaxViewShiftIsANewExperienceOfTheSameTemplate) {
+  const PoseCells cells{PoseCellParams{}};
+  ExperienceMapParams p;
+  p.max_view_shift = 2;
+  ExperienceMap m(p);
+  m.on_cycle(0, 0, -1, false, 10, 10, 0, cells, 1000);  // experience 0, template 0, shift 0
+  m.integrate(0.5, 0.0, 0.0, 1.0);
+  m.on_cycle(1, 1, -1, false, 15, 10, 0, cells, 2000);  // experience 1
+  // Template 0 again, pose cells at its experience, but the view is turned by 4 columns: the same
+  // place from another pose → a new experience of template 0 that remembers the shift.
+  m.integrate(-0.5, 0.0, 0.0, 1.0);
+  Event e = m.on_cycle(0, 0, -1, false, 10.2, 10, 0, cells, 3000, 4);
+  EXPECT_EQ(e.type, EventType::NewExperience);
+  EXPECT_EQ(e.to_id, 2);
+  EXPECT_EQ(m.experiences()[2].template_id, 0);
+  EXPECT_EQ(m.experiences()[2].view_shift, 4);
+  m.integrate(0.5, 0.0, 0.0, 1.0);
+  m.on_cycle(1, 1, -1, false, 15, 10, 0, cells, 4000);  // back to experience 1
+  // Seen again with shift 3: within 2 of experience 2's shift (4), not of experience 0's (0), so it
+  // re-localises onto experience 2 although experience 0 is as near in the pose cells.
+  m.integrate(-0.5, 0.0, 0.0, 1.0);
+  e = m.on_cycle(0, 0, -1, false, 10.1, 10, 0, cells, 5000, 3);
+  EXPECT_EQ(e.type, EventType::Relocalise);
+  EXPECT_EQ(e.to_id, 2);
+  // Within the limit of experience 0's shift: onto experience 0.
+  m.integrate(0.5, 0.0, 0.0, 1.0);
+  m.on_cycle(1, 1, -1, false, 15, 10, 0, cells, 6000);
+  m.integrate(-0.5, 0.0, 0.0, 1.0);
+  e = m.on_cycle(0, 0, -1, false, 10.0, 10, 0, cells, 7000, -1);
+  EXPECT_EQ(e.type, EventType::Relocalise);
+  EXPECT_EQ(e.to_id, 0);
+  // Frozen (localisation only): the shift does not matter, nothing is created.
+  m.set_frozen(true);
+  m.integrate(0.5, 0.0, 0.0, 1.0);
+  m.on_cycle(1, 1, -1, false, 15, 10, 0, cells, 8000);
+  m.integrate(-0.5, 0.0, 0.0, 1.0);
+  e = m.on_cycle(0, 0, -1, false, 10.0, 10, 0, cells, 9000, 5);
+  EXPECT_EQ(e.type, EventType::Relocalise);
+  EXPECT_EQ(m.size(), 3);
+}
+
+TEST(ExperienceMap, ReadsVersionOneCheckpointsWithoutViewShifts) {
+  const PoseCells cells{PoseCellParams{}};
+  ExperienceMap m;
+  m.on_cycle(0, 0, 0, true, 10, 10, 0, cells, 1);
+  std::vector<uint8_t> v2;
+  m.serialise(v2);
+  // Version 1 is version 2 without the i32 view shift after the dense flag: 8 bytes of count, then
+  // 7 f64, i64, 3 i32, u8 for the one experience.
+  std::vector<uint8_t> v1 = v2;
+  const size_t shift_at = 8 + 7 * 8 + 8 + 3 * 4 + 1;
+  v1.erase(v1.begin() + static_cast<std::ptrdiff_t>(shift_at), v1.begin() + static_cast<std::ptrdiff_t>(shift_at + 4));
+  ExperienceMap r;
+  size_t pos = 0;
+  r.deserialise(v1, pos, 1);
+  EXPECT_EQ(pos, v1.size());
+  ASSERT_EQ(r.size(), 1);
+  EXPECT_EQ(r.experiences()[0].view_shift, 0);
+  std::vector<uint8_t> again;
+  r.serialise(again);
+  EXPECT_EQ(again, v2);
+}
+
 TEST(ExperienceMap, SerialisationRoundTripsExactly) {
   const PoseCells cells{PoseCellParams{}};
   ExperienceMap m;
@@ -121,7 +184,7 @@ TEST(ExperienceMap, SerialisationRoundTripsExactly) {
   m.serialise(a);
   ExperienceMap r;
   size_t pos = 0;
-  r.deserialise(a, pos);
+  r.deserialise(a, pos, 2);
   EXPECT_EQ(pos, a.size());
   r.serialise(b);
   EXPECT_EQ(a, b);
@@ -130,7 +193,7 @@ TEST(ExperienceMap, SerialisationRoundTripsExactly) {
   a[7] = 0xff;  // corrupt the experience count (its most significant byte)
   pos = 0;
   ExperienceMap bad;
-  EXPECT_THROW(bad.deserialise(a, pos), std::runtime_error);
+  EXPECT_THROW(bad.deserialise(a, pos, 2), std::runtime_error);
 }
 
 }  // namespace

@@ -15,6 +15,7 @@ void load(const ParamNode& n, ExperienceMapParams& p) {
   n.get("delta_pc_threshold", p.delta_pc_threshold, 0.0, 1000.0);
   n.get("correction", p.correction, 0.0, 1.0);
   n.get("loops", p.loops, 0, 10000);
+  n.get("max_view_shift", p.max_view_shift, 0, 1000);
 }
 
 ExperienceMap::ExperienceMap(const ExperienceMapParams& params) : params_(params) {}
@@ -170,7 +171,8 @@ void ExperienceMap::relax(int loops) {
 }
 
 Event ExperienceMap::on_cycle(int template_id, int visual_template_id, int tactile_template_id, bool dense,
-                              double pc_x, double pc_y, double pc_theta, const PoseCells& cells, int64_t utime) {
+                              double pc_x, double pc_y, double pc_theta, const PoseCells& cells, int64_t utime,
+                              int view_shift) {
   Event ev;
   ev.type = EventType::SameExperience;
   ev.from_id = ev.to_id = current_;
@@ -185,6 +187,7 @@ Event ExperienceMap::on_cycle(int template_id, int visual_template_id, int tacti
   meta.visual_template_id = visual_template_id;
   meta.tactile_template_id = tactile_template_id;
   meta.dense = dense;
+  meta.view_shift = view_shift;
 
   auto create = [&]() {
     const Pose2 pose = current_pose();
@@ -205,13 +208,17 @@ Event ExperienceMap::on_cycle(int template_id, int visual_template_id, int tacti
     double dmin = 0.0;
     for (int id : *candidates) {
       const Experience& e = meta_[static_cast<size_t>(id)];
+      if (!frozen_ && std::abs(view_shift - e.view_shift) > params_.max_view_shift) continue;
       const double d = cells.distance(e.pc_x, e.pc_y, e.pc_theta, pc_x, pc_y, pc_theta);
       if (nearest < 0 || d < dmin) {
         nearest = id;
         dmin = d;
       }
     }
-    if (dmin > params_.delta_pc_threshold && !frozen_) {
+    if (nearest < 0) {
+      if (frozen_) return ev;
+      create();
+    } else if (dmin > params_.delta_pc_threshold && !frozen_) {
       create();
     } else if (nearest != current_) {
       const int from = current_;
@@ -246,6 +253,7 @@ void ExperienceMap::serialise(std::vector<uint8_t>& out) const {
     bin::put<int32_t>(out, e.visual_template_id);
     bin::put<int32_t>(out, e.tactile_template_id);
     bin::put<uint8_t>(out, e.dense ? 1 : 0);
+    bin::put<int32_t>(out, e.view_shift);
   }
   bin::put<uint64_t>(out, links_.size());
   for (size_t l = 0; l < links_.size(); ++l) {
@@ -262,7 +270,7 @@ void ExperienceMap::serialise(std::vector<uint8_t>& out) const {
   bin::put<double>(out, offset_.theta);
 }
 
-void ExperienceMap::deserialise(const std::vector<uint8_t>& in, size_t& pos) {
+void ExperienceMap::deserialise(const std::vector<uint8_t>& in, size_t& pos, uint32_t format_version) {
   ExperienceMap m(params_);
   const auto n = bin::get<uint64_t>(in, pos);
   if (n > in.size()) throw std::runtime_error("checkpoint: experience count is larger than the data");
@@ -278,6 +286,7 @@ void ExperienceMap::deserialise(const std::vector<uint8_t>& in, size_t& pos) {
     e.visual_template_id = bin::get<int32_t>(in, pos);
     e.tactile_template_id = bin::get<int32_t>(in, pos);
     e.dense = bin::get<uint8_t>(in, pos) != 0;
+    if (format_version >= 2) e.view_shift = bin::get<int32_t>(in, pos);
     if (e.template_id < -1 || e.template_id > (1 << 28)) throw std::runtime_error("checkpoint: bad template id");
     m.add_experience({x, y, std::atan2(s, c)}, e);
     // Restore the exact heading representation, not its round trip through an angle.

@@ -14,7 +14,8 @@ namespace whiskeye::slam {
 namespace {
 
 constexpr char kMagic[8] = {'V', 'I', 'T', 'A', 'S', 'L', 'A', 'M'};
-constexpr uint32_t kVersion = 1;
+constexpr uint32_t kVersion = 2;  // 2: experiences carry their view shift
+constexpr uint32_t kOldestReadable = 1;
 
 uint32_t fnv1a(const uint8_t* data, size_t n) {
   uint32_t h = 2166136261u;
@@ -142,7 +143,8 @@ CycleResult VitaSlam::process_cycle(const CycleInput& in) {
   // 4. Experience map.
   const int tid = m.template_id;
   out.event = map_.on_cycle(tid, tid >= 0 && store_.has_visual(tid) ? tid : -1,
-                            tid >= 0 && store_.has_tactile(tid) ? tid : -1, out.dense, pcx, pcy, pct, cells_, in.utime);
+                            tid >= 0 && store_.has_tactile(tid) ? tid : -1, out.dense, pcx, pcy, pct, cells_, in.utime,
+                            m.visual_used && !m.is_new ? m.visual_shift : 0);
   out.experience_id = map_.current_id();
   out.pose = map_.current_pose();
   out.pc_x = pcx;
@@ -183,7 +185,10 @@ VitaSlam VitaSlam::deserialise(std::span<const uint8_t> data, const SlamParams& 
   if (bin::get<uint32_t>(in, tail) != fnv1a(in.data(), end)) throw std::runtime_error("checkpoint: checksum mismatch");
   size_t pos = 8;
   const auto version = bin::get<uint32_t>(in, pos);
-  if (version != kVersion) throw std::runtime_error("checkpoint: version " + std::to_string(version) + " unsupported");
+  if (version < kOldestReadable || version > kVersion) {
+    throw std::runtime_error("checkpoint: version " + std::to_string(version) + " unsupported (this build reads " +
+                             std::to_string(kOldestReadable) + " to " + std::to_string(kVersion) + ")");
+  }
   const auto mode = bin::get<uint8_t>(in, pos);
   if (mode != static_cast<uint8_t>(params.mode)) {
     throw std::runtime_error("checkpoint: written in another mode than '" + to_string(params.mode) + "'");
@@ -205,7 +210,7 @@ VitaSlam VitaSlam::deserialise(std::span<const uint8_t> data, const SlamParams& 
                              std::to_string(params.visual.template_height));
   }
   s.cells_.deserialise(in, pos);
-  s.map_.deserialise(in, pos);
+  s.map_.deserialise(in, pos, version);
   if (pos != end) throw std::runtime_error("checkpoint: " + std::to_string(end - pos) + " unexpected trailing bytes");
   return s;
 }

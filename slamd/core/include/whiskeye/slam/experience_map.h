@@ -23,9 +23,15 @@ namespace whiskeye::slam {
 class PoseCells;
 
 struct ExperienceMapParams {
-  double delta_pc_threshold = 2.0;  // cells: farther than this from every experience of the template → new
+  double delta_pc_threshold = 1.0;  // cells: farther than this from every experience of the template → new
   double correction = 0.5;          // fraction of a link's error removed per loop
   int loops = 20;                   // relaxation loops per cycle
+  // Template columns. The visual match's column shift measures how far the view is turned from
+  // the template's (in the paper's arena 1 column ≈ 1.4°, ≈ 1.7 cm along the circle). Re-localising
+  // onto an experience needs the shift to be within this of the shift that experience was created
+  // with; a larger one is the same place seen from another pose: a new experience of the template.
+  // A value ≥ match.shift_max turns the rule off.
+  int max_view_shift = 2;
 };
 void load(const ParamNode& node, ExperienceMapParams& p);
 
@@ -38,6 +44,7 @@ struct Experience {
   int visual_template_id = -1;   // -1: the template has no visual part
   int tactile_template_id = -1;  // -1: no tactile part
   bool dense = false;            // tactile data present (contact) — the paper's dense node
+  int view_shift = 0;            // column shift of the view against its template at creation
 };
 
 struct Link {
@@ -63,8 +70,9 @@ class ExperienceMap {
   void integrate(double vx, double vy, double omega, double dt);
 
   // The action rule for one cycle; template_id < 0 means no template this cycle (nothing to do).
+  // view_shift: the visual match's column shift (0 for a new template or without vision).
   Event on_cycle(int template_id, int visual_template_id, int tactile_template_id, bool dense, double pc_x,
-                 double pc_y, double pc_theta, const PoseCells& cells, int64_t utime);
+                 double pc_y, double pc_theta, const PoseCells& cells, int64_t utime, int view_shift = 0);
 
   // Building blocks (public for tests and the benchmark).
   int add_experience(const Pose2& pose, const Experience& meta);
@@ -72,14 +80,15 @@ class ExperienceMap {
   void set_current(int id, const Pose2& offset = {});
   void relax(int loops);
   // Frozen: on_cycle never creates experiences or links; a matched template moves the current
-  // experience to its nearest (in pose cells) experience, whatever the distance.
+  // experience to its nearest (in pose cells) experience, whatever the distance or view shift.
   void set_frozen(bool frozen) { frozen_ = frozen; }
 
   const ExperienceMapParams& params() const { return params_; }
   void set_params(const ExperienceMapParams& p) { params_ = p; }
 
   void serialise(std::vector<uint8_t>& out) const;
-  void deserialise(const std::vector<uint8_t>& in, size_t& pos);
+  // format_version: the checkpoint's; version 1 had no view shifts (read as 0).
+  void deserialise(const std::vector<uint8_t>& in, size_t& pos, uint32_t format_version);
 
  private:
   void sync_poses() const;

@@ -30,7 +30,7 @@ struct PoseCellParams {
   double exc_sigma = 1.0;          // cells
   int inh_radius = 2;              // inhibition kernel 5³, σ = 2
   double inh_sigma = 2.0;
-  double global_inhibition = 2e-5;
+  double global_inhibition = 1e-4;
   double inject_energy = 0.1;      // energy a matched template injects (original ViTa: 0.1)
   double vt_active_decay = 0.5;    // decay added per match of a template
   double vt_restore = 0.04;        // decay relaxed per cycle
