@@ -146,7 +146,7 @@ int run_replay(const Loaded& cfg, const Options& o) {
     in.set_time(ev.utime);
     channel.assign(ev.channel);
     if (channel == "GROUND_TRUTH" || channel == "SIM_CONTACT_TRUTH") out.publish_raw(channel, ev.data);
-    in.publish_raw(channel, ev.data);
+    in.publish_shared(channel, ev.data, ev.owner);  // views into the mapped log, valid while it is
     if (next_status == INT64_MIN) next_status = ev.utime + kUtimePerSecond;
     if (ev.utime >= next_status) {
       node.publish_status(ev.utime);
