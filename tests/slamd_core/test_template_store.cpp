@@ -221,5 +221,74 @@ TEST(TemplateMatch, SerialisationRoundTripsExactly) {
   EXPECT_THROW(TemplateStore::deserialise(blob, pos), std::runtime_error);
 }
 
+void expect_same(const BestMatch& a, const BestMatch& b, const std::string& what) {
+  EXPECT_EQ(a.id, b.id) << what;
+  EXPECT_EQ(a.error, b.error) << what;  // bit-identical, not merely close
+  EXPECT_EQ(a.visual, b.visual) << what;
+  EXPECT_EQ(a.pfh, b.pfh) << what;
+  EXPECT_EQ(a.sda, b.sda) << what;
+  EXPECT_EQ(a.shift, b.shift) << what;
+}
+
+// A smooth view (as a camera sees it) block-averaged to a template.
+VisualTemplate smooth_template(uint32_t seed) {
+  const std::vector<uint8_t> img = test::random_image(64, 40, seed);
+  VisualTemplate t;
+  t.width = 64;
+  t.height = 40;
+  t.pixels = img;
+  double sum = 0;
+  for (uint8_t p : img) sum += p;
+  t.mean = static_cast<float>(sum / img.size() / 255.0);
+  return t;
+}
+
+TEST(TemplateMatch, LowerBoundPrefilterNeverChangesTheResult) {
+  // Near and exact ties on purpose: duplicates under later ids, shifted copies, smooth and noisy
+  // views, templates lacking a part; every query against every combination of terms and shifts.
+  TemplateStore s(64, 40);
+  std::vector<VisualTemplate> views;
+  std::vector<TactileTemplate> touches;
+  for (uint32_t i = 0; i < 60; ++i) {
+    views.push_back(i % 3 == 0 ? random_template(100 + i) : smooth_template(100 + i));
+    touches.push_back(random_tactile(200 + i));
+  }
+  for (uint32_t i = 0; i < 20; ++i) views.push_back(shifted(views[i], static_cast<int>(i % 7) - 3, 300 + i));
+  for (size_t i = 0; i < views.size(); ++i) {
+    const TactileTemplate& t = touches[i % touches.size()];
+    s.add({i % 11 == 5 ? nullptr : &views[i], i % 13 == 7 ? nullptr : &t}, 0, 0, 0);
+    if (i % 9 == 0) s.add({&views[i], &t}, 0, 0, 0);  // an exact duplicate, later id
+  }
+  std::vector<uint8_t> blob;
+  s.serialise(blob);
+  size_t pos = 0;
+  const TemplateStore restored = TemplateStore::deserialise(blob, pos);
+  std::vector<Query> queries;
+  for (size_t i = 0; i < views.size(); i += 3) queries.push_back({&views[i], &touches[(i + 1) % touches.size()]});
+  std::vector<VisualTemplate> fresh;
+  for (uint32_t i = 0; i < 10; ++i) fresh.push_back(i % 2 ? smooth_template(900 + i) : shifted(views[i], 2, 950 + i));
+  for (size_t i = 0; i < fresh.size(); ++i) queries.push_back({&fresh[i], &touches[i]});
+  int compared = 0;
+  for (const auto& [shift_max, shift_step] : {std::pair{5, 1}, std::pair{7, 2}, std::pair{0, 1}, std::pair{63, 4}}) {
+    MatchParams on;
+    on.shift_max = shift_max;
+    on.shift_step = shift_step;
+    MatchParams off = on;
+    off.lower_bound_prefilter = false;
+    for (const Terms terms : {Terms{true, false}, Terms{false, true}, Terms{true, true}}) {
+      for (size_t qi = 0; qi < queries.size(); ++qi) {
+        const std::string what = "query " + std::to_string(qi) + ", shifts ±" + std::to_string(shift_max) + "/" +
+                                 std::to_string(shift_step) + ", visual " + std::to_string(terms.visual) +
+                                 ", tactile " + std::to_string(terms.tactile);
+        const BestMatch plain = s.match(queries[qi], terms, off);
+        expect_same(s.match(queries[qi], terms, on), plain, what);
+        expect_same(restored.match(queries[qi], terms, on), plain, what + ", restored store");
+        ++compared;
+      }
+    }
+  }
+  EXPECT_EQ(compared, 4 * 3 * static_cast<int>(queries.size()));
+}
+
 }  // namespace
 }  // namespace whiskeye::slam
