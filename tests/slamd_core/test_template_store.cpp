@@ -290,5 +290,47 @@ TEST(TemplateMatch, LowerBoundPrefilterNeverChangesTheResult) {
   EXPECT_EQ(compared, 4 * 3 * static_cast<int>(queries.size()));
 }
 
+TEST(TemplateMatch, LowerBoundPrefilterNeverChangesTheResultWhileItSwitchesOnAndOff) {
+  // Enough templates for the prefilter to rest on noise it cannot prune (visual terms only) and
+  // to work again on smooth views, with the best match early, late and duplicated.
+  TemplateStore s(64, 40);
+  std::vector<VisualTemplate> views;
+  for (uint32_t i = 0; i < 900; ++i) views.push_back(i < 400 || i % 5 == 0 ? random_template(2000 + i) : smooth_template(2000 + i));
+  // Near-duplicates (±1 grey level of noise) of a few views, spread over the store: the best
+  // match is then one of several templates whose errors differ by a hair.
+  std::vector<VisualTemplate> noisy;
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> d(-1, 1);
+  for (int copy = 0; copy < 4; ++copy) {
+    for (size_t i : {3u, 450u, 899u, 600u}) {
+      VisualTemplate v = views[i];
+      for (uint8_t& px : v.pixels) px = static_cast<uint8_t>(std::clamp(px + d(rng), 0, 255));
+      noisy.push_back(v);
+    }
+  }
+  size_t next_noisy = 0;
+  for (size_t i = 0; i < views.size(); ++i) {
+    s.add({&views[i], nullptr}, 0, 0, 0);
+    if (i % 50 == 25 && next_noisy < noisy.size()) s.add({&noisy[next_noisy++], nullptr}, 0, 0, 0);
+  }
+  for (size_t i = 0; i < 900; i += 97) s.add({&views[i], nullptr}, 0, 0, 0);
+  std::vector<VisualTemplate> queries0 = {noisy[0], noisy[5], noisy[10]};
+  MatchParams on;
+  MatchParams off = on;
+  off.lower_bound_prefilter = false;
+  std::vector<VisualTemplate> queries = {views[3], views[450], views[899], shifted(views[600], 2, 7), smooth_template(77),
+                                         random_template(78)};
+  queries.insert(queries.end(), queries0.begin(), queries0.end());
+  for (size_t i : {3u, 450u, 899u, 600u}) {  // yet another noisy look at the four places
+    VisualTemplate v = views[i];
+    for (uint8_t& px : v.pixels) px = static_cast<uint8_t>(std::clamp(px + d(rng), 0, 255));
+    queries.push_back(v);
+  }
+  for (size_t qi = 0; qi < queries.size(); ++qi) {
+    const Query q{&queries[qi], nullptr};
+    expect_same(s.match(q, {true, false}, on), s.match(q, {true, false}, off), "query " + std::to_string(qi));
+  }
+}
+
 }  // namespace
 }  // namespace whiskeye::slam
