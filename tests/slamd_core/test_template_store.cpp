@@ -290,6 +290,19 @@ TEST(TemplateMatch, LowerBoundPrefilterNeverChangesTheResult) {
   EXPECT_EQ(compared, 4 * 3 * static_cast<int>(queries.size()));
 }
 
+TEST(TemplateMatch, LowerBoundPrefilterWorksOnTemplatesLowerThanOneBlock) {
+  // Three rows: no whole 4-row block, so the bound is 0 and prunes nothing, but must not break.
+  TemplateStore s(16, 3);
+  std::vector<VisualTemplate> views;
+  for (uint32_t i = 0; i < 5; ++i) views.push_back(random_template(500 + i, 16, 3));
+  for (const VisualTemplate& v : views) s.add({&v, nullptr}, 0, 0, 0);
+  MatchParams off;
+  off.lower_bound_prefilter = false;
+  for (const VisualTemplate& q : views) {
+    expect_same(s.match({&q, nullptr}, {true, false}, MatchParams{}), s.match({&q, nullptr}, {true, false}, off), "3 rows");
+  }
+}
+
 TEST(TemplateMatch, LowerBoundPrefilterNeverChangesTheResultWhileItSwitchesOnAndOff) {
   // Enough templates for the prefilter to rest on noise it cannot prune (visual terms only) and
   // to work again on smooth views, with the best match early, late and duplicated.

@@ -206,7 +206,7 @@ int TemplateStore::add(const Query& q, double pc_x, double pc_y, double pc_theta
   }
   const size_t nb = blocks();
   blocks_.resize(blocks_.size() + nb);
-  block_means(&visual_[visual_.size() - np], width_, height_, &blocks_[blocks_.size() - nb]);
+  block_means(&visual_[visual_.size() - np], width_, height_, blocks_.data() + (blocks_.size() - nb));  // nb may be 0
   has_visual_.push_back(q.visual != nullptr ? 1 : 0);
   if (q.tactile != nullptr) {
     pfh_.insert(pfh_.end(), q.tactile->pfh.begin(), q.tactile->pfh.end());
@@ -281,7 +281,7 @@ BestMatch TemplateStore::match(const Query& q, const Terms& terms, const MatchPa
       if (use_bound) {
         // ε with the visual term's lower bound, by the same operations as e below: ≤ e. (The
         // library is built with -ffp-contract=off so both sums round alike.)
-        const double lower = shift_bounds(cur_blocks.data(), &blocks_[iu * nb], width_, height_, p.shift_max,
+        const double lower = shift_bounds(cur_blocks.data(), blocks_.data() + iu * nb, width_, height_, p.shift_max,
                                           p.shift_step, bounds) *
                              inv_v;
         const bool pruned = best.id >= 0 && lower + ep + es >= best.error;  // e ≥ best.error: cannot replace it
@@ -377,7 +377,7 @@ TemplateStore TemplateStore::deserialise(const std::vector<uint8_t>& in, size_t&
     throw std::runtime_error("checkpoint: template arrays disagree in length");
   }
   s.blocks_.resize(n * s.blocks());
-  for (size_t i = 0; i < n; ++i) block_means(&s.visual_[i * s.pixels()], s.width_, s.height_, &s.blocks_[i * s.blocks()]);
+  for (size_t i = 0; i < n; ++i) block_means(&s.visual_[i * s.pixels()], s.width_, s.height_, s.blocks_.data() + i * s.blocks());
   return s;
 }
 
