@@ -4,6 +4,7 @@
 //                                  vita mode, every template passing the mean prefilter)
 //   BM_TemplateMatchReference/<n>  the same computation as a plain double-precision scalar loop (the
 //                                  way OpenRatSLAM / the original ViTa-SLAM code compute it)
+//   BM_TemplateMatchVisualOnly/<n>/<on>  visual terms only, random pixels, prefilter on (1) / off (0)
 //   BM_PoseCellUpdate              one pose-cell step (21×21×36) with motion
 //   BM_ExperienceRelax/<n>         20 relaxation loops over n experiences (chain + loop closures)
 //   BM_VisualTemplate, BM_TactileTemplate, BM_Cycle   per-cycle costs around them
@@ -167,6 +168,25 @@ void BM_TemplateMatch(benchmark::State& state) {
   per_template_counter(state, n);
 }
 BENCHMARK(BM_TemplateMatch)->Arg(100)->Arg(1000)->Arg(10000)->Unit(benchmark::kMicrosecond);
+
+// Visual terms only (a cycle without contact), uniformly random pixels: the lower-bound prefilter's
+// hardest case, as nothing but the image tells templates apart. Arg 1: prefilter on, 0: the plain
+// scan of every template and shift.
+void BM_TemplateMatchVisualOnly(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const Data d = random_data(n + 1, 11);
+  TemplateStore store(kW, kH);
+  for (int i = 0; i < n; ++i) store.add({&d.visual[static_cast<size_t>(i)], nullptr}, 0, 0, 0);
+  const Query q{&d.visual.back(), nullptr};
+  MatchParams p = bench_match_params();
+  p.lower_bound_prefilter = state.range(1) != 0;
+  for (auto _ : state) {
+    BestMatch m = store.match(q, {true, false}, p);
+    benchmark::DoNotOptimize(m);
+  }
+  per_template_counter(state, n);
+}
+BENCHMARK(BM_TemplateMatchVisualOnly)->Args({10000, 1})->Args({10000, 0})->Unit(benchmark::kMicrosecond);
 
 void BM_TemplateMatchReference(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));

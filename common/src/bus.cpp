@@ -2,8 +2,13 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include <cerrno>
+#include <cstring>
+#include <fcntl.h>
 #include <regex>
+#include <sys/mman.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 namespace whiskeye {
 
@@ -45,7 +50,12 @@ struct MemoryBus::Sub {
 };
 
 void MemoryBus::publish_raw(const std::string& channel, std::span<const uint8_t> data) {
-  const MessageInfo info{channel, now_utime_};
+  publish_shared(channel, data, nullptr);
+}
+
+void MemoryBus::publish_shared(const std::string& channel, std::span<const uint8_t> data,
+                               std::shared_ptr<const void> data_owner) {
+  const MessageInfo info{channel, now_utime_, std::move(data_owner)};
   // Copy: a handler may subscribe while we deliver.
   const auto subs = subs_;
   for (const auto& sub : subs) {
@@ -69,7 +79,7 @@ void MemoryBus::subscribe_raw(const std::string& channel, RawHandler handler) {
 struct LcmBus::Adapter {
   RawHandler handler;
   void handle(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-    const MessageInfo info{channel, rbuf->recv_utime};
+    const MessageInfo info{channel, rbuf->recv_utime, nullptr};
     handler(std::span<const uint8_t>(static_cast<const uint8_t*>(rbuf->data), rbuf->data_size), info);
   }
 };
@@ -100,37 +110,106 @@ int LcmBus::fileno() { return lcm_->getFileno(); }
 
 // ---- LogReader ----
 
-LogReader::LogReader(const std::string& path) : log_(std::make_unique<lcm::LogFile>(path, "r")) {
-  if (!log_->good()) throw std::runtime_error(path + ": cannot open the LCM log for reading");
+// The log file mapped read-only; unmapped when the reader and every view's owner are gone.
+struct LogReader::Mapping {
+  const uint8_t* bytes = nullptr;
+  std::size_t size = 0;
+  Mapping() = default;
+  Mapping(const Mapping&) = delete;
+  Mapping& operator=(const Mapping&) = delete;
+  ~Mapping() {
+    if (bytes != nullptr) ::munmap(const_cast<uint8_t*>(bytes), size);
+  }
+};
+
+namespace {
+
+// LCM log event header (lcm/eventlog.c): sync word, event number, timestamp, channel length, data
+// length, all big-endian; then the channel name and the data.
+constexpr uint32_t kLogSync = 0xEDA1DA01u;
+constexpr std::size_t kLogHeaderSize = 4 + 8 + 8 + 4 + 4;
+constexpr int32_t kMaxLogChannelLength = 1000;  // what lcm-logger's reader accepts
+
+uint64_t big_endian(const uint8_t* p, int bytes) {
+  uint64_t v = 0;
+  for (int i = 0; i < bytes; ++i) v = (v << 8) | p[i];
+  return v;
+}
+
+}  // namespace
+
+LogReader::LogReader(const std::string& path) : path_(path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw std::runtime_error(path + ": cannot open the LCM log for reading: " + std::strerror(errno));
+  auto map = std::make_shared<Mapping>();
   struct stat st {};
-  if (::stat(path.c_str(), &st) == 0) size_ = st.st_size;
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+    ::close(fd);
+    throw std::runtime_error(path + ": cannot open the LCM log for reading: not a regular file");
+  }
+  map->size = static_cast<std::size_t>(st.st_size);
+  if (map->size > 0) {
+    void* p = ::mmap(nullptr, map->size, PROT_READ, MAP_PRIVATE, fd, 0);
+    if (p == MAP_FAILED) {
+      const int err = errno;
+      ::close(fd);
+      throw std::runtime_error(path + ": cannot map the LCM log: " + std::strerror(err));
+    }
+    map->bytes = static_cast<const uint8_t*>(p);
+    ::madvise(p, map->size, MADV_SEQUENTIAL);
+  }
+  ::close(fd);  // the mapping keeps the file
+  map_ = std::move(map);
 }
 
 LogReader::~LogReader() = default;
 
 bool LogReader::next(LogEvent& event) {
-  const lcm::LogEvent* ev = log_->readNextEvent();
-  if (ev == nullptr) return false;
-  event.utime = ev->timestamp;
-  event.channel = ev->channel;
-  const auto* bytes = static_cast<const uint8_t*>(ev->data);
-  event.data.assign(bytes, bytes + ev->datalen);
+  EventView view;
+  if (!next(view)) return false;
+  event.utime = view.utime;
+  event.channel.assign(view.channel);
+  event.data.assign(view.data.begin(), view.data.end());
   return true;
 }
 
 bool LogReader::next(EventView& event) {
-  const lcm::LogEvent* ev = log_->readNextEvent();
-  if (ev == nullptr) return false;
-  event.utime = ev->timestamp;
-  event.channel = ev->channel;
-  event.data = std::span<const uint8_t>(static_cast<const uint8_t*>(ev->data), static_cast<std::size_t>(ev->datalen));
+  const std::size_t size = map_->size;
+  if (pos_ == size) return false;
+  const uint8_t* const base = map_->bytes;
+  const std::string at = " at byte " + std::to_string(pos_);
+  if (size - pos_ < kLogHeaderSize) {
+    throw std::runtime_error(path_ + ": truncated LCM log: incomplete event header" + at + " (file size " +
+                             std::to_string(size) + ")");
+  }
+  const uint8_t* h = base + pos_;
+  if (big_endian(h, 4) != kLogSync) throw std::runtime_error(path_ + ": corrupt LCM log: no event sync word" + at);
+  const auto utime = static_cast<int64_t>(big_endian(h + 12, 8));
+  const auto channel_len = static_cast<int32_t>(static_cast<uint32_t>(big_endian(h + 20, 4)));
+  const auto data_len = static_cast<int32_t>(static_cast<uint32_t>(big_endian(h + 24, 4)));
+  if (channel_len <= 0 || channel_len >= kMaxLogChannelLength) {
+    throw std::runtime_error(path_ + ": corrupt LCM log: channel length " + std::to_string(channel_len) + " in the event" + at);
+  }
+  if (data_len < 0) {
+    throw std::runtime_error(path_ + ": corrupt LCM log: data length " + std::to_string(data_len) + " in the event" + at);
+  }
+  const std::size_t total = kLogHeaderSize + static_cast<std::size_t>(channel_len) + static_cast<std::size_t>(data_len);
+  if (size - pos_ < total) {
+    throw std::runtime_error(path_ + ": truncated LCM log: the event" + at + " needs " + std::to_string(total) +
+                             " bytes, the file has " + std::to_string(size - pos_) + " left");
+  }
+  const auto* channel = reinterpret_cast<const char*>(h + kLogHeaderSize);
+  event.utime = utime;
+  event.channel = std::string_view(channel, static_cast<std::size_t>(channel_len));
+  event.data = std::span<const uint8_t>(h + kLogHeaderSize + channel_len, static_cast<std::size_t>(data_len));
+  if (event.owner != map_) event.owner = map_;
+  pos_ += total;
   return true;
 }
 
 double LogReader::progress() const {
-  if (size_ <= 0) return 0.0;
-  const long pos = std::ftell(log_->getFilePtr());
-  return pos < 0 ? 0.0 : static_cast<double>(pos) / static_cast<double>(size_);
+  if (map_->size == 0) return 0.0;
+  return static_cast<double>(pos_) / static_cast<double>(map_->size);
 }
 
 // ---- LogWriterBus ----

@@ -7,18 +7,69 @@
 
 namespace whiskeye::slamd {
 
+namespace {
+
+int64_t read_be(const uint8_t* p, int bytes) {
+  uint64_t v = 0;
+  for (int i = 0; i < bytes; ++i) v = (v << 8) | p[i];
+  return bytes == 4 ? static_cast<int32_t>(static_cast<uint32_t>(v)) : static_cast<int64_t>(v);
+}
+
+}  // namespace
+
+bool decode_camera_frame(std::span<const uint8_t> bytes, CameraFrame& out, std::string* reason) {
+  // LCM encoding of image_t: fingerprint (8), utime (8), seq (8), width, height, row_stride,
+  // pixelformat, size (4 each), then `size` bytes; all big-endian.
+  constexpr std::size_t kHeader = 8 + 8 + 8 + 5 * 4;
+  const auto fail = [&](const char* why) {
+    if (reason) {
+      *reason = "cannot decode " + std::to_string(bytes.size()) + " bytes as whiskeye." + image_t::getTypeName() + why;
+    }
+    return false;
+  };
+  if (bytes.size() < kHeader || read_be(bytes.data(), 8) != image_t::getHash()) {
+    return fail(" (wrong type fingerprint or truncated)");
+  }
+  const uint8_t* p = bytes.data() + 8;
+  const auto size = static_cast<int32_t>(read_be(p + 32, 4));
+  if (size < 0 || bytes.size() - kHeader < static_cast<std::size_t>(size)) {
+    return fail(" (wrong type fingerprint or truncated)");
+  }
+  if (bytes.size() - kHeader != static_cast<std::size_t>(size)) return fail(" (trailing bytes)");
+  out.utime = read_be(p, 8);
+  out.width = static_cast<int32_t>(read_be(p + 16, 4));
+  out.height = static_cast<int32_t>(read_be(p + 20, 4));
+  out.row_stride = static_cast<int32_t>(read_be(p + 24, 4));
+  out.pixelformat = static_cast<int32_t>(read_be(p + 28, 4));
+  out.data = bytes.subspan(kHeader);
+  return true;
+}
+
+CameraFrame camera_frame(const image_t& image) {
+  auto pixels = std::make_shared<const std::vector<uint8_t>>(image.data);
+  CameraFrame f;
+  f.utime = image.utime;
+  f.width = image.width;
+  f.height = image.height;
+  f.row_stride = image.row_stride;
+  f.pixelformat = image.pixelformat;
+  f.data = std::span<const uint8_t>(pixels->data(), pixels->size());
+  f.owner = std::move(pixels);
+  return f;
+}
+
 CycleSynchroniser::CycleSynchroniser(const SyncParams& params) : params_(params) {}
 
 void CycleSynchroniser::advance_data_time(int64_t utime) { data_time_ = std::max(data_time_, utime); }
 
-void CycleSynchroniser::add_camera(const image_t& image) {
-  if (image.utime < newest_camera_) {
+void CycleSynchroniser::add_camera(CameraFrame frame) {
+  if (frame.utime < newest_camera_) {
     ++counters_.out_of_order;
     return;
   }
-  newest_camera_ = image.utime;
-  advance_data_time(image.utime);
-  frames_.push_back(image);
+  newest_camera_ = frame.utime;
+  advance_data_time(frame.utime);
+  frames_.push_back(std::move(frame));
   while (static_cast<int>(frames_.size()) > params_.camera_buffer) frames_.pop_front();
 }
 
@@ -55,7 +106,7 @@ SyncedCycle CycleSynchroniser::assemble(const whisk_cycle_t& cycle) {
   out.whisk = cycle;
   const int64_t end = cycle.utime_end;
   const int64_t tolerance = seconds_to_utime(params_.camera_tolerance_s);
-  const image_t* best = nullptr;
+  const CameraFrame* best = nullptr;
   for (const auto& f : frames_) {
     const int64_t d = std::llabs(f.utime - end);
     if (d <= tolerance && (best == nullptr || d < std::llabs(best->utime - end))) best = &f;

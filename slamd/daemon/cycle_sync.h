@@ -15,11 +15,33 @@
 
 #include <cstdint>
 #include <deque>
+#include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
 namespace whiskeye::slamd {
+
+// A camera frame as the synchroniser keeps it: image_t's fields, with the pixels as a view kept
+// valid by `owner` (a replayed log's mapping, or one copy of a live message), so buffering and
+// handing out frames never copies pixels.
+struct CameraFrame {
+  int64_t utime = 0;
+  int32_t width = 0;
+  int32_t height = 0;
+  int32_t row_stride = 0;
+  int32_t pixelformat = 0;
+  std::span<const uint8_t> data;  // image_t::data (its `size` bytes)
+  std::shared_ptr<const void> owner;
+};
+
+// Decodes an encoded image_t without copying the pixels: out.data views `bytes` (out.owner is left
+// alone). False with a reason, as decode_message() would give, on a fingerprint mismatch,
+// truncation, a negative size or trailing bytes.
+bool decode_camera_frame(std::span<const uint8_t> bytes, CameraFrame& out, std::string* reason = nullptr);
+// A frame owning a copy of `image`'s pixels.
+CameraFrame camera_frame(const image_t& image);
 
 struct SyncParams {
   double camera_tolerance_s = 0.15;  // a frame farther than this from the cycle's end is not used
@@ -30,7 +52,7 @@ struct SyncParams {
 
 struct SyncedCycle {
   whisk_cycle_t whisk;
-  std::optional<image_t> image;        // nearest frame within tolerance, if any
+  std::optional<CameraFrame> image;    // nearest frame within tolerance, if any
   std::vector<odometry_t> odometry;    // samples with previous end < utime <= this end, time order
 };
 
@@ -44,7 +66,8 @@ class CycleSynchroniser {
  public:
   explicit CycleSynchroniser(const SyncParams& params);
 
-  void add_camera(const image_t& image);
+  void add_camera(CameraFrame frame);
+  void add_camera(const image_t& image) { add_camera(camera_frame(image)); }
   void add_odometry(const odometry_t& odometry);
   void add_whisk_cycle(const whisk_cycle_t& cycle);
 
@@ -62,7 +85,7 @@ class CycleSynchroniser {
   void advance_data_time(int64_t utime);
 
   SyncParams params_;
-  std::deque<image_t> frames_;
+  std::deque<CameraFrame> frames_;
   std::deque<odometry_t> odometry_;
   std::deque<whisk_cycle_t> pending_;
   int64_t data_time_ = INT64_MIN;

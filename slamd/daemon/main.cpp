@@ -139,14 +139,25 @@ int run_replay(const Loaded& cfg, const Options& o) {
   int64_t first_utime = INT64_MIN;
   const int64_t t0 = monotonic_us();
   std::string channel;
-  while (reader.next(ev)) {
+  // A truncated or corrupt log: replay what comes before the bad event, finish as at the end of the
+  // log (pending cycles, final map), then fail naming the file and offset.
+  std::string log_error;
+  const auto next = [&] {
+    try {
+      return reader.next(ev);
+    } catch (const std::runtime_error& e) {
+      log_error = e.what();
+      return false;
+    }
+  };
+  while (next()) {
     if (first_utime == INT64_MIN) first_utime = ev.utime;
     last_utime = ev.utime;
     out.set_time(ev.utime);
     in.set_time(ev.utime);
     channel.assign(ev.channel);
     if (channel == "GROUND_TRUTH" || channel == "SIM_CONTACT_TRUTH") out.publish_raw(channel, ev.data);
-    in.publish_raw(channel, ev.data);
+    in.publish_shared(channel, ev.data, ev.owner);  // views into the mapped log, valid while it is
     if (next_status == INT64_MIN) next_status = ev.utime + kUtimePerSecond;
     if (ev.utime >= next_status) {
       node.publish_status(ev.utime);
@@ -165,6 +176,10 @@ int run_replay(const Loaded& cfg, const Options& o) {
                "%lld rejected, %lld undecodable\n",
                data, wall, wall > 0 ? data / wall : 0.0, static_cast<long long>(st.cycles), st.num_templates,
                st.num_experiences, static_cast<long long>(st.validation_errors), static_cast<long long>(st.decode_errors));
+  if (!log_error.empty()) {
+    std::fprintf(stderr, "slamd: %s (the output holds everything before it)\n", log_error.c_str());
+    return 1;
+  }
   return 0;
 }
 

@@ -54,16 +54,16 @@ int bytes_per_pixel(int32_t fourcc) {
   return -1;
 }
 
-std::string check_image(const image_t& m) {
+std::string check_image(const CameraFrame& m) {
   if (m.width <= 0 || m.height <= 0 || m.width > 10000 || m.height > 10000) {
     return "CAMERA: bad size " + std::to_string(m.width) + "x" + std::to_string(m.height);
   }
   const int bpp = bytes_per_pixel(m.pixelformat);
   if (bpp < 0) return "CAMERA: unsupported pixel format " + std::to_string(m.pixelformat);
-  if (bpp == 0) return m.size > 0 ? "" : "CAMERA: empty compressed frame";
+  if (bpp == 0) return !m.data.empty() ? "" : "CAMERA: empty compressed frame";
   if (m.row_stride < m.width * bpp) return "CAMERA: row_stride " + std::to_string(m.row_stride) + " < width × bytes per pixel";
-  if (static_cast<int64_t>(m.size) < static_cast<int64_t>(m.row_stride) * m.height) {
-    return "CAMERA: " + std::to_string(m.size) + " bytes < row_stride × height";
+  if (static_cast<int64_t>(m.data.size()) < static_cast<int64_t>(m.row_stride) * m.height) {
+    return "CAMERA: " + std::to_string(m.data.size()) + " bytes < row_stride × height";
   }
   return "";
 }
@@ -127,7 +127,8 @@ bool has_contact(const whisk_cycle_t& m) {
 SlamNode::SlamNode(Bus& in, Bus& out, std::unique_ptr<slam::VitaSlam> slam, const NodeParams& params,
                    DecodeErrors& decode_errors)
     : out_(out), slam_(std::move(slam)), params_(params), decode_errors_(decode_errors), sync_(params.sync) {
-  subscribe<image_t>(in, "CAMERA", [this](const image_t& m) { on_camera(m); }, decode_errors_);
+  // Camera frames are the bulk of the input: decoded as views (no pixel copy), see on_camera().
+  in.subscribe_raw("CAMERA", [this](std::span<const uint8_t> data, const MessageInfo& info) { on_camera(data, info); });
   subscribe<odometry_t>(in, "ODOMETRY", [this](const odometry_t& m) { on_odometry(m); }, decode_errors_);
   subscribe<whisk_cycle_t>(in, "WHISK_CYCLE", [this](const whisk_cycle_t& m) { on_whisk_cycle(m); }, decode_errors_);
 }
@@ -141,11 +142,21 @@ void SlamNode::reject(const std::string& what) {
   ++rejects_in_burst_;
 }
 
-void SlamNode::on_camera(const image_t& msg) {
-  const std::string err = check_image(msg);
+void SlamNode::on_camera(std::span<const uint8_t> data, const MessageInfo& info) {
+  CameraFrame frame;
+  std::string reason;
+  if (!decode_camera_frame(data, frame, &reason)) return decode_errors_.record(info.channel, reason);
+  const std::string err = check_image(frame);
   if (!err.empty()) return reject(err);
   rejects_in_burst_ = 0;
-  sync_.add_camera(msg);
+  if (info.data_owner) {
+    frame.owner = info.data_owner;  // the bytes outlive this call: keep a view
+  } else {
+    auto copy = std::make_shared<const std::vector<uint8_t>>(frame.data.begin(), frame.data.end());
+    frame.data = std::span<const uint8_t>(copy->data(), copy->size());
+    frame.owner = std::move(copy);
+  }
+  sync_.add_camera(std::move(frame));
   process(sync_.take_ready());
 }
 
@@ -189,9 +200,8 @@ void SlamNode::process_one(const SyncedCycle& cycle) {
   const bool contact = has_contact(cycle.whisk);
   slam::ImageView view{};
   if (cycle.image) {
-    const image_t& im = *cycle.image;
-    view = slam::ImageView{im.utime, im.width, im.height, im.row_stride, static_cast<uint32_t>(im.pixelformat),
-                           std::span<const uint8_t>(im.data.data(), im.data.size())};
+    const CameraFrame& im = *cycle.image;
+    view = slam::ImageView{im.utime, im.width, im.height, im.row_stride, static_cast<uint32_t>(im.pixelformat), im.data};
   }
   slam::CycleInput input;
   input.utime = cycle.whisk.utime_end;

@@ -64,7 +64,7 @@ class SlamNode {
   const NodeCounters& counters() const { return counters_; }
 
  private:
-  void on_camera(const image_t& msg);
+  void on_camera(std::span<const uint8_t> data, const MessageInfo& info);
   void on_odometry(const odometry_t& msg);
   void on_whisk_cycle(const whisk_cycle_t& msg);
   void process(std::vector<SyncedCycle> cycles);

@@ -6,6 +6,9 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <fstream>
+#include <iterator>
+#include <tuple>
 
 namespace whiskeye {
 namespace {
@@ -117,6 +120,119 @@ TEST(LogFiles, ViewsReadTheSameEventsWithoutCopying) {
   EXPECT_EQ(channels, (std::vector<std::string>{"A", "B", "A"}));
   EXPECT_EQ(xs, (std::vector<double>{0, 1, 2}));
   std::remove(path.c_str());
+}
+
+// Writes three pose2d_t events on "A" and returns the file's bytes.
+std::vector<char> three_event_log(const std::string& path) {
+  {
+    LogWriterBus out(path);
+    for (int i = 0; i < 3; ++i) {
+      out.set_time(i);
+      pose2d_t p{};
+      p.x = i;
+      publish(out, "A", p);
+    }
+  }
+  std::ifstream f(path, std::ios::binary);
+  return std::vector<char>(std::istreambuf_iterator<char>(f), {});
+}
+
+void write_bytes(const std::string& path, const std::vector<char>& bytes) {
+  std::ofstream(path, std::ios::binary | std::ios::trunc).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+// Reads every event; returns how many were read before the error, and the error text.
+std::pair<int, std::string> read_all(const std::string& path) {
+  LogReader in(path);
+  LogReader::EventView ev;
+  int n = 0;
+  try {
+    while (in.next(ev)) ++n;
+  } catch (const std::runtime_error& e) {
+    return {n, e.what()};
+  }
+  return {n, ""};
+}
+
+TEST(LogFiles, TruncatedLogIsAnErrorNamingTheFileAndOffset) {
+  const std::string path = ::testing::TempDir() + "truncated.lcmlog";
+  std::vector<char> bytes = three_event_log(path);
+  const size_t event = bytes.size() / 3;  // equal events
+  bytes.resize(bytes.size() - 5);         // the last event loses 5 bytes of data
+  write_bytes(path, bytes);
+  auto [n, err] = read_all(path);
+  EXPECT_EQ(n, 2);
+  EXPECT_NE(err.find(path), std::string::npos) << err;
+  EXPECT_NE(err.find("truncated"), std::string::npos) << err;
+  EXPECT_NE(err.find("at byte " + std::to_string(2 * event)), std::string::npos) << err;
+  bytes.resize(2 * event + 10);  // and in the middle of a header
+  write_bytes(path, bytes);
+  std::tie(n, err) = read_all(path);
+  EXPECT_EQ(n, 2);
+  EXPECT_NE(err.find("truncated"), std::string::npos) << err;
+  std::remove(path.c_str());
+}
+
+TEST(LogFiles, CorruptEventHeaderIsAnErrorNamingTheFileAndOffset) {
+  const std::string path = ::testing::TempDir() + "corrupt.lcmlog";
+  const std::vector<char> good = three_event_log(path);
+  const size_t event = good.size() / 3;
+  std::vector<char> bad = good;
+  bad[event] = 0x00;  // the second event's sync word
+  write_bytes(path, bad);
+  auto [n, err] = read_all(path);
+  EXPECT_EQ(n, 1);
+  EXPECT_NE(err.find(path), std::string::npos) << err;
+  EXPECT_NE(err.find("sync word at byte " + std::to_string(event)), std::string::npos) << err;
+  bad = good;
+  bad[event + 24] = static_cast<char>(0x80);  // the second event's data length: negative
+  write_bytes(path, bad);
+  std::tie(n, err) = read_all(path);
+  EXPECT_EQ(n, 1);
+  EXPECT_NE(err.find("data length"), std::string::npos) << err;
+  bad = good;
+  bad[event + 20] = 0x7f;  // channel length far beyond the file
+  write_bytes(path, bad);
+  std::tie(n, err) = read_all(path);
+  EXPECT_EQ(n, 1);
+  EXPECT_NE(err.find("channel length"), std::string::npos) << err;
+  std::remove(path.c_str());
+}
+
+TEST(LogFiles, EmptyLogHasNoEvents) {
+  const std::string path = ::testing::TempDir() + "empty.lcmlog";
+  write_bytes(path, {});
+  auto [n, err] = read_all(path);
+  EXPECT_EQ(n, 0);
+  EXPECT_EQ(err, "");
+  std::remove(path.c_str());
+}
+
+TEST(LogFiles, ViewOwnerKeepsTheDataAfterTheReaderIsGone) {
+  const std::string path = ::testing::TempDir() + "owner.lcmlog";
+  three_event_log(path);
+  LogReader::EventView ev;
+  {
+    LogReader in(path);
+    ASSERT_TRUE(in.next(ev));
+    ASSERT_TRUE(in.next(ev));
+  }
+  std::remove(path.c_str());
+  ASSERT_TRUE(ev.owner);
+  pose2d_t p;
+  ASSERT_TRUE(decode_message(ev.data, p));
+  EXPECT_EQ(p.x, 1.0);
+  EXPECT_EQ(ev.channel, "A");
+}
+
+TEST(MemoryBus, PublishSharedHandsTheOwnerToHandlers) {
+  MemoryBus bus;
+  std::vector<const void*> owners;
+  bus.subscribe_raw("X", [&](std::span<const uint8_t>, const MessageInfo& info) { owners.push_back(info.data_owner.get()); });
+  const auto owner = std::make_shared<const std::vector<uint8_t>>(3, 7);
+  bus.publish_shared("X", *owner, owner);
+  bus.publish_raw("X", *owner);
+  EXPECT_EQ(owners, (std::vector<const void*>{owner.get(), nullptr}));
 }
 
 TEST(LogFiles, MissingFileIsAnErrorNamingIt) {

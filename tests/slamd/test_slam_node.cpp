@@ -80,12 +80,26 @@ class SlamNodeTest : public ::testing::Test {
         odometry_t o{};
         o.utime = t;
         publish(in_, "ODOMETRY", o);
-        if (periods[sec] > 0 && k % 10 == 0) publish(in_, "CAMERA", stripes(t, periods[sec]));
+        if (periods[sec] > 0 && k % 10 == 0) publish_camera(stripes(t, periods[sec]));
         if (k == 50) publish(in_, "WHISK_CYCLE", free_cycle(static_cast<int64_t>(sec), t));
       }
     }
   }
 
+  // With share_frames_, as in a replay: the bytes come with an owner, which the node must hold for
+  // as long as it keeps the frame (the publisher lets go at once; the owner's deleter overwrites
+  // the bytes, so a frame kept without its owner would show a different image).
+  void publish_camera(const image_t& im) {
+    if (!share_frames_) return publish(in_, "CAMERA", im);
+    auto* bytes = new std::vector<uint8_t>(encode_message(im));
+    const std::shared_ptr<const std::vector<uint8_t>> owner(bytes, [](const std::vector<uint8_t>* b) {
+      std::fill(const_cast<std::vector<uint8_t>*>(b)->begin() + 44, const_cast<std::vector<uint8_t>*>(b)->end(), 0);
+      delete b;
+    });
+    in_.publish_shared("CAMERA", *owner, owner);
+  }
+
+  bool share_frames_ = false;
   MemoryBus in_;
   MemoryBus out_;
   DecodeErrors errors_;
@@ -119,6 +133,18 @@ TEST_F(SlamNodeTest, PublishesOneEventAndMatchPerCycleAndPosesAfterTheFirst) {
   EXPECT_GE(maps_.back().num_experiences, 2);
   EXPECT_EQ(node_->counters().cycles, 4);
   EXPECT_EQ(node_->counters().cycles_without_contact, 4);
+}
+
+TEST_F(SlamNodeTest, KeepsTheOwnerOfSharedCameraFramesInsteadOfCopying) {
+  share_frames_ = true;
+  stream({8, 40, 8, 8});
+  node_->flush();
+  ASSERT_EQ(matches_.size(), 4u);
+  EXPECT_TRUE(matches_[1].is_new) << "a different view is a new template";
+  EXPECT_FALSE(matches_[2].is_new) << "the first view again matches its template";
+  EXPECT_EQ(matches_[2].template_id, matches_[0].template_id);
+  EXPECT_EQ(matches_[2].visual_error, 0.0);
+  EXPECT_EQ(node_->counters().cycles_without_camera, 0);
 }
 
 TEST_F(SlamNodeTest, RejectsBadMessagesCountsThemAndCarriesOn) {

@@ -107,6 +107,20 @@ TEST_F(SlamdBinary, ReplayIsByteIdenticalAndCopiesGroundTruth) {
   EXPECT_GE(o.maps.back().num_experiences, 2);
 }
 
+TEST_F(SlamdBinary, TruncatedLogIsReplayedUpToTheBreakThenFailsNamingIt) {
+  const std::string cut = (dir_ / "cut.lcmlog").string();
+  const std::string full = slurp(sim_log_);
+  std::ofstream(cut, std::ios::binary).write(full.data(), static_cast<std::streamsize>(full.size() * 2 / 3));
+  const std::string out = (dir_ / "cut_out.lcmlog").string();
+  std::vector<std::string> argv{kSlamd, "--replay", cut, "--output", out, "--config", kConfig};
+  Subprocess p(argv);
+  EXPECT_EQ(p.wait(120), 1);
+  EXPECT_THAT(p.output(), HasSubstr(cut + ": truncated LCM log: the event at byte "));
+  const Output o = read_output(out);
+  EXPECT_GE(o.events.size(), 6u) << "the cycles before the break were processed";
+  ASSERT_FALSE(o.maps.empty()) << "and the final map written";
+}
+
 TEST_F(SlamdBinary, ModesDifferInWhatTheyCompare) {
   for (const std::string mode : {"visual", "tactile"}) {
     const std::string out = (dir_ / ("mode_" + mode + ".lcmlog")).string();

@@ -117,6 +117,38 @@ TEST(PoseCells, RepeatedInjectionMovesTheBestEstimate) {
   EXPECT_NEAR(b.t, 20.0, 0.5);
 }
 
+// best() is cached; a restored copy computes it afresh, so the two must agree after every kind of
+// change — including a sub-cell step, which moves no activity but the carried remainder.
+TEST(PoseCells, CachedBestFollowsEveryChange) {
+  PoseCells pc = settled();
+  auto expect_fresh = [&](const char* after) {
+    std::vector<uint8_t> blob;
+    pc.serialise(blob);
+    PoseCells fresh{pc.params()};
+    size_t pos = 0;
+    fresh.deserialise(blob, pos);
+    const Best cached = best(pc), recomputed = best(fresh);
+    EXPECT_EQ(cached.x, recomputed.x) << after;
+    EXPECT_EQ(cached.y, recomputed.y) << after;
+    EXPECT_EQ(cached.t, recomputed.t) << after;
+  };
+  expect_fresh("settling");
+  const Best before = best(pc);
+  pc.step(0.01, 0.0, 0.0, 0.1);  // 0.1 cell: the grid does not move, the estimate does
+  EXPECT_NE(best(pc).x, before.x);
+  expect_fresh("a sub-cell step");
+  pc.step(0.2, 0.1, 0.3, 0.5);
+  expect_fresh("a step with motion");
+  pc.inject(3, 15, 20, 5.0);
+  expect_fresh("an injection");
+  pc.settle();
+  expect_fresh("settling after the injection");
+  PoseCellParams wider;
+  wider.best_radius = 6;
+  pc.set_params(wider);
+  expect_fresh("a new best_radius");
+}
+
 TEST(PoseCells, DistanceWrapsOnEveryAxis) {
   const PoseCells pc{PoseCellParams{}};
   EXPECT_NEAR(pc.distance(0.5, 0, 0, 20.5, 0, 0), 1.0, 1e-12);

@@ -59,6 +59,24 @@ TEST(ContactEstimation, NoiseBelowTheFloorIsNoContact) {
   for (float v : t.sda) EXPECT_EQ(v, 0.0f);
 }
 
+TEST(ContactEstimation, DiagonalDeflectionJustAboveTheFloorIsContact) {
+  // |deflection| is compared with the floor as a 2-D magnitude: equal x and y components of 1 %
+  // above floor/√2 are above it (the cheap max-component pre-check must not drop them), 1 % below
+  // are not.
+  const RobotGeometry g = default_robot_geometry();
+  WhiskCycleInput cycle = test::whisk_cycle(g, {}, 0.0, 13);
+  TactileParams p;
+  p.speed_gain = 0.0;
+  const double component = p.contact_threshold / std::sqrt(2.0);
+  for (WhiskSample& s : cycle.samples) {
+    s.deflection_x[3] = s.deflection_y[3] = static_cast<float>(1.01 * component);
+    s.deflection_x[7] = s.deflection_y[7] = static_cast<float>(0.99 * component);
+  }
+  const std::vector<ContactEstimate> est = estimate_contacts(cycle, g, p);
+  ASSERT_EQ(est.size(), 1u);
+  EXPECT_EQ(est[0].whisker, 3);
+}
+
 TEST(ContactEstimation, RadiusIsClampedToTheWhiskerLength) {
   const RobotGeometry g = default_robot_geometry();
   // A "contact" beyond the tip (weak slope) must not be placed past the whisker's end.

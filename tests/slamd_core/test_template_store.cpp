@@ -221,5 +221,129 @@ TEST(TemplateMatch, SerialisationRoundTripsExactly) {
   EXPECT_THROW(TemplateStore::deserialise(blob, pos), std::runtime_error);
 }
 
+void expect_same(const BestMatch& a, const BestMatch& b, const std::string& what) {
+  EXPECT_EQ(a.id, b.id) << what;
+  EXPECT_EQ(a.error, b.error) << what;  // bit-identical, not merely close
+  EXPECT_EQ(a.visual, b.visual) << what;
+  EXPECT_EQ(a.pfh, b.pfh) << what;
+  EXPECT_EQ(a.sda, b.sda) << what;
+  EXPECT_EQ(a.shift, b.shift) << what;
+}
+
+// A smooth view (as a camera sees it) block-averaged to a template.
+VisualTemplate smooth_template(uint32_t seed) {
+  const std::vector<uint8_t> img = test::random_image(64, 40, seed);
+  VisualTemplate t;
+  t.width = 64;
+  t.height = 40;
+  t.pixels = img;
+  double sum = 0;
+  for (uint8_t p : img) sum += p;
+  t.mean = static_cast<float>(sum / img.size() / 255.0);
+  return t;
+}
+
+TEST(TemplateMatch, LowerBoundPrefilterNeverChangesTheResult) {
+  // Near and exact ties on purpose: duplicates under later ids, shifted copies, smooth and noisy
+  // views, templates lacking a part; every query against every combination of terms and shifts.
+  TemplateStore s(64, 40);
+  std::vector<VisualTemplate> views;
+  std::vector<TactileTemplate> touches;
+  for (uint32_t i = 0; i < 60; ++i) {
+    views.push_back(i % 3 == 0 ? random_template(100 + i) : smooth_template(100 + i));
+    touches.push_back(random_tactile(200 + i));
+  }
+  for (uint32_t i = 0; i < 20; ++i) views.push_back(shifted(views[i], static_cast<int>(i % 7) - 3, 300 + i));
+  for (size_t i = 0; i < views.size(); ++i) {
+    const TactileTemplate& t = touches[i % touches.size()];
+    s.add({i % 11 == 5 ? nullptr : &views[i], i % 13 == 7 ? nullptr : &t}, 0, 0, 0);
+    if (i % 9 == 0) s.add({&views[i], &t}, 0, 0, 0);  // an exact duplicate, later id
+  }
+  std::vector<uint8_t> blob;
+  s.serialise(blob);
+  size_t pos = 0;
+  const TemplateStore restored = TemplateStore::deserialise(blob, pos);
+  std::vector<Query> queries;
+  for (size_t i = 0; i < views.size(); i += 3) queries.push_back({&views[i], &touches[(i + 1) % touches.size()]});
+  std::vector<VisualTemplate> fresh;
+  for (uint32_t i = 0; i < 10; ++i) fresh.push_back(i % 2 ? smooth_template(900 + i) : shifted(views[i], 2, 950 + i));
+  for (size_t i = 0; i < fresh.size(); ++i) queries.push_back({&fresh[i], &touches[i]});
+  int compared = 0;
+  for (const auto& [shift_max, shift_step] : {std::pair{5, 1}, std::pair{7, 2}, std::pair{0, 1}, std::pair{63, 4}}) {
+    MatchParams on;
+    on.shift_max = shift_max;
+    on.shift_step = shift_step;
+    MatchParams off = on;
+    off.lower_bound_prefilter = false;
+    for (const Terms terms : {Terms{true, false}, Terms{false, true}, Terms{true, true}}) {
+      for (size_t qi = 0; qi < queries.size(); ++qi) {
+        const std::string what = "query " + std::to_string(qi) + ", shifts ±" + std::to_string(shift_max) + "/" +
+                                 std::to_string(shift_step) + ", visual " + std::to_string(terms.visual) +
+                                 ", tactile " + std::to_string(terms.tactile);
+        const BestMatch plain = s.match(queries[qi], terms, off);
+        expect_same(s.match(queries[qi], terms, on), plain, what);
+        expect_same(restored.match(queries[qi], terms, on), plain, what + ", restored store");
+        ++compared;
+      }
+    }
+  }
+  EXPECT_EQ(compared, 4 * 3 * static_cast<int>(queries.size()));
+}
+
+TEST(TemplateMatch, LowerBoundPrefilterWorksOnTemplatesLowerThanOneBlock) {
+  // Three rows: no whole 4-row block, so the bound is 0 and prunes nothing, but must not break.
+  TemplateStore s(16, 3);
+  std::vector<VisualTemplate> views;
+  for (uint32_t i = 0; i < 5; ++i) views.push_back(random_template(500 + i, 16, 3));
+  for (const VisualTemplate& v : views) s.add({&v, nullptr}, 0, 0, 0);
+  MatchParams off;
+  off.lower_bound_prefilter = false;
+  for (const VisualTemplate& q : views) {
+    expect_same(s.match({&q, nullptr}, {true, false}, MatchParams{}), s.match({&q, nullptr}, {true, false}, off), "3 rows");
+  }
+}
+
+TEST(TemplateMatch, LowerBoundPrefilterNeverChangesTheResultWhileItSwitchesOnAndOff) {
+  // Enough templates for the prefilter to rest on noise it cannot prune (visual terms only) and
+  // to work again on smooth views, with the best match early, late and duplicated.
+  TemplateStore s(64, 40);
+  std::vector<VisualTemplate> views;
+  for (uint32_t i = 0; i < 900; ++i) views.push_back(i < 400 || i % 5 == 0 ? random_template(2000 + i) : smooth_template(2000 + i));
+  // Near-duplicates (±1 grey level of noise) of a few views, spread over the store: the best
+  // match is then one of several templates whose errors differ by a hair.
+  std::vector<VisualTemplate> noisy;
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> d(-1, 1);
+  for (int copy = 0; copy < 4; ++copy) {
+    for (size_t i : {3u, 450u, 899u, 600u}) {
+      VisualTemplate v = views[i];
+      for (uint8_t& px : v.pixels) px = static_cast<uint8_t>(std::clamp(px + d(rng), 0, 255));
+      noisy.push_back(v);
+    }
+  }
+  size_t next_noisy = 0;
+  for (size_t i = 0; i < views.size(); ++i) {
+    s.add({&views[i], nullptr}, 0, 0, 0);
+    if (i % 50 == 25 && next_noisy < noisy.size()) s.add({&noisy[next_noisy++], nullptr}, 0, 0, 0);
+  }
+  for (size_t i = 0; i < 900; i += 97) s.add({&views[i], nullptr}, 0, 0, 0);
+  std::vector<VisualTemplate> queries0 = {noisy[0], noisy[5], noisy[10]};
+  MatchParams on;
+  MatchParams off = on;
+  off.lower_bound_prefilter = false;
+  std::vector<VisualTemplate> queries = {views[3], views[450], views[899], shifted(views[600], 2, 7), smooth_template(77),
+                                         random_template(78)};
+  queries.insert(queries.end(), queries0.begin(), queries0.end());
+  for (size_t i : {3u, 450u, 899u, 600u}) {  // yet another noisy look at the four places
+    VisualTemplate v = views[i];
+    for (uint8_t& px : v.pixels) px = static_cast<uint8_t>(std::clamp(px + d(rng), 0, 255));
+    queries.push_back(v);
+  }
+  for (size_t qi = 0; qi < queries.size(); ++qi) {
+    const Query q{&queries[qi], nullptr};
+    expect_same(s.match(q, {true, false}, on), s.match(q, {true, false}, off), "query " + std::to_string(qi));
+  }
+}
+
 }  // namespace
 }  // namespace whiskeye::slam

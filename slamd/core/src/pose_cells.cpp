@@ -50,6 +50,7 @@ void PoseCells::set_params(const PoseCellParams& params) {
   }
   params_ = params;
   build_kernels();
+  best_valid_ = false;
 }
 
 void PoseCells::build_kernels() {
@@ -290,6 +291,7 @@ void PoseCells::rotate(double dtheta_cells) {
 }
 
 void PoseCells::step(double vx, double vy, double omega, double dt) {
+  best_valid_ = false;
   dynamics();
   if (dt <= 0.0) return;
   const double trans = std::hypot(vx, vy) * dt / params_.cell_size;
@@ -301,10 +303,14 @@ void PoseCells::step(double vx, double vy, double omega, double dt) {
   }
 }
 
-void PoseCells::settle() { dynamics(); }
+void PoseCells::settle() {
+  best_valid_ = false;
+  dynamics();
+}
 
 void PoseCells::inject(double x, double y, double theta, double energy) {
   if (!(energy > 0.0)) return;
+  best_valid_ = false;
   const int ix = wrap(static_cast<int>(std::lround(x)), n_);
   const int iy = wrap(static_cast<int>(std::lround(y)), n_);
   const int it = wrap(static_cast<int>(std::lround(theta)), nt_);
@@ -321,6 +327,16 @@ void PoseCells::argmax(int& x, int& y, int& t) const {
 }
 
 void PoseCells::best(double& bx, double& by, double& bt) const {
+  if (!best_valid_) {
+    compute_best(best_x_, best_y_, best_t_);
+    best_valid_ = true;
+  }
+  bx = best_x_;
+  by = best_y_;
+  bt = best_t_;
+}
+
+void PoseCells::compute_best(double& bx, double& by, double& bt) const {
   int x0 = 0, y0 = 0, t0 = 0;
   argmax(x0, y0, t0);
   const int r = params_.best_radius;
@@ -407,6 +423,7 @@ void PoseCells::deserialise(const std::vector<uint8_t>& in, size_t& pos) {
     throw std::runtime_error("checkpoint: pose-cell remainders have the wrong length");
   }
   res_t_ = bin::get<double>(in, pos);
+  best_valid_ = false;
   p_ = std::move(p);
   support_dirty_ = true;
   t_mask_valid_ = false;

@@ -47,6 +47,127 @@ void to_column_major(const uint8_t* rm, int w, int h, uint8_t* cm) {
     for (int x = 0; x < w; ++x) cm[static_cast<size_t>(x) * static_cast<size_t>(h) + static_cast<size_t>(y)] = rm[static_cast<size_t>(y) * static_cast<size_t>(w) + static_cast<size_t>(x)];
 }
 
+// The matcher's lower bound works on a coarse copy of each template: every column's rows in
+// blocks of kBlockRows, each block's floored mean as one byte (a last partial block is left out).
+// For one block of k pixels with floored means ā, b̄:  Σ|a − b| ≥ |Σa − Σb| ≥ k·|ā − b̄| − (k − 1).
+// Summed over a shift's overlap this bounds its SAD from below, and is a SAD of 1/k as many bytes.
+constexpr int kBlockRows = 4;
+
+int blocks_per_column(int h) { return h / kBlockRows; }
+
+void block_means(const uint8_t* cm, int w, int h, uint8_t* out) {
+  const int hb = blocks_per_column(h);
+  for (int x = 0; x < w; ++x) {
+    const uint8_t* c = cm + static_cast<size_t>(x) * static_cast<size_t>(h);
+    for (int b = 0; b < hb; ++b) {
+      uint32_t s = 0;
+      for (int y = 0; y < kBlockRows; ++y) s += c[b * kBlockRows + y];
+      out[static_cast<size_t>(x) * static_cast<size_t>(hb) + static_cast<size_t>(b)] = static_cast<uint8_t>(s / kBlockRows);
+    }
+  }
+}
+
+// The bound pays only where it prunes; where it cannot (e.g. uniformly random pixels with visual
+// terms only) it would add ~45 % to the scan for nothing. So it is used in blocks of kBlock
+// templates and, after a block in which it pruned fewer than half, left out for the next kRest
+// blocks (worst case ~6 % added, vita-bench BM_TemplateMatchVisualOnly). Which templates are
+// bounded changes only the speed, never the result.
+class BoundProbe {
+ public:
+  bool use() const { return rest_ == 0; }
+  void record(bool pruned) {
+    pruned_ += pruned ? 1 : 0;
+    if (++seen_ < kBlock) return;
+    rest_ = 2 * pruned_ < seen_ ? kRest * kBlock : 0;
+    seen_ = pruned_ = 0;
+  }
+  // Called for each template compared without the bound while it rests.
+  void skip() {
+    if (rest_ > 0) --rest_;
+  }
+
+ private:
+  static constexpr int kBlock = 64;
+  static constexpr int kRest = 7;
+  int seen_ = 0, pruned_ = 0, rest_ = 0;
+};
+
+// Calls f(s) for the shifts s = 0, +step, −step, +2·step, ... within ±min(shift_max, w − 1): the
+// order in which ties go to the smallest |shift|.
+template <typename F>
+void for_each_shift(int w, int shift_max, int shift_step, F f) {
+  const int smax = std::min(shift_max, w - 1);
+  for (int k = 0; k * shift_step <= smax; ++k) {
+    for (int sign = 1; sign >= -1; sign -= 2) {
+      if (k == 0 && sign < 0) continue;
+      f(sign * k * shift_step);
+    }
+  }
+}
+
+// The block-mean bound of shift s's SAD (current column c against stored column c − s); hb blocks
+// per column.
+uint32_t shift_bound(const uint8_t* cur_blocks, const uint8_t* st_blocks, int w, int hb, int s) {
+  const size_t off = static_cast<size_t>(std::abs(s)) * static_cast<size_t>(hb);
+  const size_t len = static_cast<size_t>(w - std::abs(s)) * static_cast<size_t>(hb);
+  const uint64_t sad = s >= 0 ? sad_u8(cur_blocks + off, st_blocks, len) : sad_u8(cur_blocks, st_blocks + off, len);
+  const uint64_t raw = kBlockRows * sad;
+  const uint64_t slack = len * (kBlockRows - 1);
+  return raw > slack ? static_cast<uint32_t>(raw - slack) : 0;
+}
+
+// visual_distance(), optionally skipping a shift whose bound (`bounds`, from shift_bounds(), in
+// for_each_shift() order; nullptr: none) shows it cannot beat the best shift so far: the same
+// result either way.
+double visual_distance_impl(const uint8_t* cur, const uint8_t* st, const uint32_t* bounds, int w, int h,
+                            int shift_max, int shift_step, int* best_shift) {
+  constexpr uint64_t kNone = std::numeric_limits<uint64_t>::max();
+  uint64_t best_num = kNone;
+  uint64_t best_den = 1;
+  int best_s = 0;
+  size_t j = 0;
+  for_each_shift(w, shift_max, shift_step, [&](int s) {
+    const size_t off = static_cast<size_t>(std::abs(s)) * static_cast<size_t>(h);
+    const size_t len = static_cast<size_t>(w - std::abs(s)) * static_cast<size_t>(h);
+    const uint64_t den = len;
+    // SAD ≥ bound, so bound·best_den ≥ best_num·den rules out the strict improvement below.
+    const bool hopeless = bounds != nullptr && best_num != kNone && bounds[j] * best_den >= best_num * den;
+    ++j;
+    if (hopeless) return;
+    // Current column c against stored column c − s.
+    const uint32_t sad = s >= 0 ? sad_u8(cur + off, st, len) : sad_u8(cur, st + off, len);
+    // Compare sad/den exactly (cross-multiplied) so the choice never depends on rounding.
+    if (best_num == kNone || static_cast<uint64_t>(sad) * best_den < best_num * den) {
+      best_num = sad;
+      best_den = den;
+      best_s = s;
+    }
+  });
+  if (best_shift != nullptr) *best_shift = best_s;
+  return static_cast<double>(best_num) / static_cast<double>(best_den) / 255.0;
+}
+
+// The block-mean bound of every shift, in for_each_shift() order, into `bounds`; returns a lower
+// bound of visual_distance() computed the same way from them: the exact minimum over shifts of
+// bound/den ≤ the minimum of SAD/den, and the conversions and the division by 255 are monotone, so
+// the double returned is ≤ visual_distance()'s.
+double shift_bounds(const uint8_t* cur_blocks, const uint8_t* st_blocks, int w, int h, int shift_max, int shift_step,
+                    std::vector<uint32_t>& bounds) {
+  uint64_t best_num = std::numeric_limits<uint64_t>::max();
+  uint64_t best_den = 1;
+  bounds.clear();
+  for_each_shift(w, shift_max, shift_step, [&](int s) {
+    const uint32_t b = shift_bound(cur_blocks, st_blocks, w, blocks_per_column(h), s);
+    const uint64_t den = static_cast<uint64_t>(w - std::abs(s)) * static_cast<uint64_t>(h);
+    if (bounds.empty() || static_cast<uint64_t>(b) * best_den < best_num * den) {
+      best_num = b;
+      best_den = den;
+    }
+    bounds.push_back(b);
+  });
+  return static_cast<double>(best_num) / static_cast<double>(best_den) / 255.0;
+}
+
 uint32_t l1_u16(const uint16_t* __restrict a, const uint16_t* __restrict b, size_t n) {
   uint32_t s = 0;
   for (size_t i = 0; i < n; ++i) s += static_cast<uint32_t>(std::abs(static_cast<int>(a[i]) - static_cast<int>(b[i])));
@@ -62,6 +183,10 @@ float l1_f32(const float* __restrict a, const float* __restrict b, size_t n) {
 }  // namespace
 
 TemplateStore::TemplateStore(int visual_width, int visual_height) : width_(visual_width), height_(visual_height) {}
+
+size_t TemplateStore::blocks() const {
+  return static_cast<size_t>(width_) * static_cast<size_t>(blocks_per_column(height_));
+}
 
 int TemplateStore::add(const Query& q, double pc_x, double pc_y, double pc_theta) {
   const int id = size();
@@ -79,6 +204,9 @@ int TemplateStore::add(const Query& q, double pc_x, double pc_y, double pc_theta
     visual_.resize(visual_.size() + np, 0);
     visual_mean_.push_back(0.0f);
   }
+  const size_t nb = blocks();
+  blocks_.resize(blocks_.size() + nb);
+  block_means(&visual_[visual_.size() - np], width_, height_, blocks_.data() + (blocks_.size() - nb));  // nb may be 0
   has_visual_.push_back(q.visual != nullptr ? 1 : 0);
   if (q.tactile != nullptr) {
     pfh_.insert(pfh_.end(), q.tactile->pfh.begin(), q.tactile->pfh.end());
@@ -99,31 +227,7 @@ int TemplateStore::add(const Query& q, double pc_x, double pc_y, double pc_theta
 
 double TemplateStore::visual_distance(const uint8_t* cur, const uint8_t* st, int w, int h, int shift_max,
                                       int shift_step, int* best_shift) {
-  uint64_t best_num = std::numeric_limits<uint64_t>::max();
-  uint64_t best_den = 1;
-  int best_s = 0;
-  const int smax = std::min(shift_max, w - 1);
-  // Shifts in the order 0, +step, −step, +2·step, ...: ties go to the smallest |shift|.
-  for (int k = 0; k * shift_step <= smax; ++k) {
-    for (int sign = 1; sign >= -1; sign -= 2) {
-      if (k == 0 && sign < 0) continue;
-      const int s = sign * k * shift_step;
-      // Current column c against stored column c − s.
-      const size_t off = static_cast<size_t>(std::abs(s)) * static_cast<size_t>(h);
-      const size_t len = static_cast<size_t>(w - std::abs(s)) * static_cast<size_t>(h);
-      const uint32_t sad = s >= 0 ? sad_u8(cur + off, st, len) : sad_u8(cur, st + off, len);
-      const uint64_t den = len;
-      // Compare sad/den exactly (cross-multiplied) so the choice never depends on rounding.
-      if (static_cast<uint64_t>(sad) * best_den < best_num * den ||
-          best_num == std::numeric_limits<uint64_t>::max()) {
-        best_num = sad;
-        best_den = den;
-        best_s = s;
-      }
-    }
-  }
-  if (best_shift != nullptr) *best_shift = best_s;
-  return static_cast<double>(best_num) / static_cast<double>(best_den) / 255.0;
+  return visual_distance_impl(cur, st, nullptr, w, h, shift_max, shift_step, best_shift);
 }
 
 BestMatch TemplateStore::match(const Query& q, const Terms& terms, const MatchParams& p) const {
@@ -143,6 +247,15 @@ BestMatch TemplateStore::match(const Query& q, const Terms& terms, const MatchPa
     cur.resize(np);
     to_column_major(q.visual->pixels.data(), width_, height_, cur.data());
   }
+  const bool bound = terms.visual && p.lower_bound_prefilter;
+  std::vector<uint8_t> cur_blocks;
+  std::vector<uint32_t> bounds;  // per shift, of the template being compared
+  if (bound) {
+    cur_blocks.resize(blocks());
+    block_means(cur.data(), width_, height_, cur_blocks.data());
+  }
+  const size_t nb = blocks();
+  BoundProbe probe;
   const double inv_v = 1.0 / p.sigma_visual;
   const double inv_pfh = 1.0 / (65535.0 * p.sigma_pfh);
   const double inv_sda = 1.0 / p.sigma_sda;
@@ -161,9 +274,23 @@ BestMatch TemplateStore::match(const Query& q, const Terms& terms, const MatchPa
       es = l1_f32(q.tactile->sda.data(), &sda_[iu * kSdaSize], kSdaSize) * inv_sda;
     }
     if (terms.visual) {
+      // ε ≥ (0 + ep) + es whatever the visual term: the tactile terms alone may rule it out.
+      if (bound && best.id >= 0 && 0.0 + ep + es >= best.error) continue;
+      const bool use_bound = bound && probe.use();
+      if (bound && !use_bound) probe.skip();
+      if (use_bound) {
+        // ε with the visual term's lower bound, by the same operations as e below: ≤ e. (The
+        // library is built with -ffp-contract=off so both sums round alike.)
+        const double lower = shift_bounds(cur_blocks.data(), blocks_.data() + iu * nb, width_, height_, p.shift_max,
+                                          p.shift_step, bounds) *
+                             inv_v;
+        const bool pruned = best.id >= 0 && lower + ep + es >= best.error;  // e ≥ best.error: cannot replace it
+        probe.record(pruned);
+        if (pruned) continue;
+      }
       // A fresh minimum per stored template (the original code carried it across templates).
-      ev = visual_distance(cur.data(), &visual_[iu * np], width_, height_, p.shift_max, p.shift_step,
-                           &shift) *
+      ev = visual_distance_impl(cur.data(), &visual_[iu * np], use_bound ? bounds.data() : nullptr, width_, height_,
+                                p.shift_max, p.shift_step, &shift) *
            inv_v;
     }
     const double e = ev + ep + es;
@@ -249,6 +376,8 @@ TemplateStore TemplateStore::deserialise(const std::vector<uint8_t>& in, size_t&
       s.pc_.size() != 3 * n || s.decay_.size() != n) {
     throw std::runtime_error("checkpoint: template arrays disagree in length");
   }
+  s.blocks_.resize(n * s.blocks());
+  for (size_t i = 0; i < n; ++i) block_means(&s.visual_[i * s.pixels()], s.width_, s.height_, s.blocks_.data() + i * s.blocks());
   return s;
 }
 

@@ -29,6 +29,9 @@ namespace whiskeye {
 struct MessageInfo {
   std::string channel;
   int64_t recv_utime = 0;  // when the transport received it (log event time on a log)
+  // Set when the bytes outlive the handler call: holding it keeps `data` valid (e.g. a replayed
+  // log's mapping), so a handler may keep a view instead of a copy. Null: copy what you keep.
+  std::shared_ptr<const void> data_owner;
 };
 
 class Bus {
@@ -113,6 +116,9 @@ void subscribe(Bus& bus, const std::string& channel, Handler handler, DecodeErro
 class MemoryBus : public Bus {
  public:
   void publish_raw(const std::string& channel, std::span<const uint8_t> data) override;
+  // Same, telling handlers that `data` stays valid while `data_owner` is held (MessageInfo).
+  void publish_shared(const std::string& channel, std::span<const uint8_t> data,
+                      std::shared_ptr<const void> data_owner);
   void subscribe_raw(const std::string& channel, RawHandler handler) override;
   // Time stamped on delivered messages (recv_utime).
   void set_time(int64_t utime) { now_utime_ = utime; }
@@ -154,7 +160,10 @@ struct LogEvent {
   std::vector<uint8_t> data;
 };
 
-// Reads an LCM log (as written by lcm-logger) directly, in file order.
+// Reads an LCM log (as written by lcm-logger) directly, in file order. The file is memory-mapped:
+// events are views into the mapping, and pages of payloads nobody reads are never loaded. Every
+// event header is checked (sync word, lengths within the file); a truncated or corrupt log is a
+// std::runtime_error naming the file and the byte offset, never a silent early end.
 class LogReader {
  public:
   explicit LogReader(const std::string& path);  // throws std::runtime_error naming the file
@@ -163,20 +172,23 @@ class LogReader {
   LogReader& operator=(const LogReader&) = delete;
   // False at the end of the log.
   bool next(LogEvent& event);
-  // Same without copying: channel and data point into the reader's buffer and stay valid until the
-  // next call. For replaying large logs (camera frames) fast.
+  // Same without copying: channel and data point into the mapped file and stay valid while the
+  // reader lives, or while `owner` is held. For replaying large logs (camera frames) fast.
   struct EventView {
     int64_t utime = 0;
     std::string_view channel;
     std::span<const uint8_t> data;
+    std::shared_ptr<const void> owner;
   };
   bool next(EventView& event);
   // Fraction of the file read, 0..1 (for progress bars).
   double progress() const;
 
  private:
-  std::unique_ptr<lcm::LogFile> log_;
-  long size_ = 0;
+  struct Mapping;
+  std::string path_;
+  std::shared_ptr<const Mapping> map_;
+  std::size_t pos_ = 0;
 };
 
 // A Bus that appends every published message to an LCM log file, stamped with set_time().

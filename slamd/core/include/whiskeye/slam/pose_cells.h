@@ -52,6 +52,7 @@ class PoseCells {
   // Adds energy at the cell nearest to (x, y, θ) in cells.
   void inject(double x, double y, double theta, double energy);
   // Best estimate in cells: argmax, then circular means of the marginals in a box around it.
+  // Cached until the network next changes (slamd asks for it at every odometry sample).
   void best(double& x, double& y, double& theta) const;
   // Wrapped Euclidean distance in cells between two (x, y, θ).
   double distance(double x1, double y1, double t1, double x2, double y2, double t2) const;
@@ -80,6 +81,7 @@ class PoseCells {
   void translate_layers(double vx_cells, double vy_cells);
   void rotate(double dtheta_cells);
   void build_kernels();
+  void compute_best(double& x, double& y, double& theta) const;
   size_t idx(int t, int y, int x) const {
     return (static_cast<size_t>(t) * static_cast<size_t>(n_) + static_cast<size_t>(y)) * static_cast<size_t>(n_) +
            static_cast<size_t>(x);
@@ -102,6 +104,9 @@ class PoseCells {
   Support support_;            // rows/columns that may hold activity
   bool support_dirty_ = true;  // recompute before use
   bool t_mask_valid_ = false;  // support_.t is exact (translations keep it; rotations shift it)
+  // best() of the current state; every public mutator clears best_valid_.
+  mutable bool best_valid_ = false;
+  mutable double best_x_ = 0.0, best_y_ = 0.0, best_t_ = 0.0;
 };
 
 }  // namespace whiskeye::slam

@@ -7,7 +7,8 @@
 // template that lacks a part in use is not a candidate. The result is the argmin over templates.
 //
 // Storage is contiguous (one byte per visual pixel, 16 bits per PFH bin, one float per SDA entry):
-// 64×40 + 125·2 + 24·4 = 2,906 bytes per template, plus 32 bytes of bookkeeping.
+// 64×40 + 125·2 + 24·4 = 2,906 bytes per template, plus 32 bytes of bookkeeping; in memory only,
+// a 4-row block-mean copy of the visual part for the matcher's lower bound (640 bytes at 64×40).
 #pragma once
 
 #include "whiskeye/common/params.h"
@@ -38,6 +39,9 @@ struct MatchParams {
   // Skip templates whose mean intensity differs by more than this (≥ 1: never skip). Visual terms
   // only; with global normalisation all means are equal, so it is off by default.
   double prefilter_mean_diff = 1.0;
+  // Exact lower-bound pruning (see match()): the result is bit-identical either way, so it is not
+  // a configuration key; off only to measure the plain scan (benchmarks) and to test the identity.
+  bool lower_bound_prefilter = true;
 };
 void load(const ParamNode& node, MatchParams& p);
 
@@ -76,6 +80,14 @@ class TemplateStore {
   // Appends; returns the new id. Parts absent are stored as zeros and flagged missing.
   int add(const Query& q, double pc_x, double pc_y, double pc_theta);
 
+  // The argmin of ε over the candidates (the first one on ties). With p.lower_bound_prefilter, a
+  // template's visual term is first bounded from below on a coarse copy (each column's rows in
+  // blocks of 4, floored block means): per block of k = 4 pixels Σ|a − b| ≥ k·|ā − b̄| − (k − 1), so
+  //   k·SAD(coarse overlap of shift s) − (k − 1)·(blocks in it) ≤ SAD_s,
+  // a quarter of the work. A template whose ε computed with that bound (same floating-point
+  // operations, all monotone) is already ≥ the best ε so far cannot win and is skipped; within a
+  // compared template, a shift whose bound cannot beat its best shift so far is skipped. Neither
+  // changes the result.
   BestMatch match(const Query& q, const Terms& terms, const MatchParams& p) const;
 
   bool has_visual(int id) const { return has_visual_[static_cast<size_t>(id)] != 0; }
@@ -113,10 +125,12 @@ class TemplateStore {
 
  private:
   size_t pixels() const { return static_cast<size_t>(width_) * static_cast<size_t>(height_); }
+  size_t blocks() const;
 
   int width_ = 0;
   int height_ = 0;
   std::vector<uint8_t> visual_;
+  std::vector<uint8_t> blocks_;  // blocks() per template: 4-row block means of visual_ (not serialised)
   std::vector<float> visual_mean_;
   std::vector<uint8_t> has_visual_;
   std::vector<uint16_t> pfh_;
