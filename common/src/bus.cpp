@@ -173,38 +173,88 @@ bool LogReader::next(LogEvent& event) {
   return true;
 }
 
-bool LogReader::next(EventView& event) {
-  const std::size_t size = map_->size;
-  if (pos_ == size) return false;
-  const uint8_t* const base = map_->bytes;
-  const std::string at = " at byte " + std::to_string(pos_);
-  if (size - pos_ < kLogHeaderSize) {
-    throw std::runtime_error(path_ + ": truncated LCM log: incomplete event header" + at + " (file size " +
-                             std::to_string(size) + ")");
+// Where a plausible event starts at `at`: sync word, channel length in (0, 1000), data length ≥ 0,
+// and the whole event inside the file. Returns the event's size, 0 if implausible.
+static std::size_t plausible_event(const uint8_t* base, std::size_t size, std::size_t at, std::string* why) {
+  const std::string where = " at byte " + std::to_string(at);
+  if (size - at < kLogHeaderSize) {
+    if (why) *why = "truncated LCM log: incomplete event header" + where + " (file size " + std::to_string(size) + ")";
+    return 0;
   }
-  const uint8_t* h = base + pos_;
-  if (big_endian(h, 4) != kLogSync) throw std::runtime_error(path_ + ": corrupt LCM log: no event sync word" + at);
-  const auto utime = static_cast<int64_t>(big_endian(h + 12, 8));
+  const uint8_t* h = base + at;
+  if (big_endian(h, 4) != kLogSync) {
+    if (why) *why = "corrupt LCM log: no event sync word" + where;
+    return 0;
+  }
   const auto channel_len = static_cast<int32_t>(static_cast<uint32_t>(big_endian(h + 20, 4)));
   const auto data_len = static_cast<int32_t>(static_cast<uint32_t>(big_endian(h + 24, 4)));
   if (channel_len <= 0 || channel_len >= kMaxLogChannelLength) {
-    throw std::runtime_error(path_ + ": corrupt LCM log: channel length " + std::to_string(channel_len) + " in the event" + at);
+    if (why) *why = "corrupt LCM log: channel length " + std::to_string(channel_len) + " in the event" + where;
+    return 0;
   }
   if (data_len < 0) {
-    throw std::runtime_error(path_ + ": corrupt LCM log: data length " + std::to_string(data_len) + " in the event" + at);
+    if (why) *why = "corrupt LCM log: data length " + std::to_string(data_len) + " in the event" + where;
+    return 0;
   }
   const std::size_t total = kLogHeaderSize + static_cast<std::size_t>(channel_len) + static_cast<std::size_t>(data_len);
-  if (size - pos_ < total) {
-    throw std::runtime_error(path_ + ": truncated LCM log: the event" + at + " needs " + std::to_string(total) +
-                             " bytes, the file has " + std::to_string(size - pos_) + " left");
+  if (size - at < total) {
+    if (why) {
+      *why = "truncated LCM log: the event" + where + " needs " + std::to_string(total) + " bytes, the file has " +
+             std::to_string(size - at) + " left";
+    }
+    return 0;
   }
-  const auto* channel = reinterpret_cast<const char*>(h + kLogHeaderSize);
-  event.utime = utime;
-  event.channel = std::string_view(channel, static_cast<std::size_t>(channel_len));
-  event.data = std::span<const uint8_t>(h + kLogHeaderSize + channel_len, static_cast<std::size_t>(data_len));
+  return total;
+}
+
+bool LogReader::next(EventView& event) {
+  const std::size_t size = map_->size;
+  const uint8_t* const base = map_->bytes;
+  if (pos_ >= size) return false;
+  std::string why;
+  std::size_t total = plausible_event(base, size, pos_, &why);
+  if (total == 0) {
+    // Damaged: note the first problem, then look for the next plausible event, as LCM's own reader
+    // resynchronises on the sync word. Whatever cannot be read is skipped and counted.
+    if (damage_.first_problem.empty()) damage_.first_problem = path_ + ": " + why;
+    ++damage_.damaged_places;
+    const uint8_t sync[4] = {0xED, 0xA1, 0xDA, 0x01};
+    std::size_t at = pos_ + 1;
+    for (;;) {
+      const auto* found = static_cast<const uint8_t*>(
+          at < size ? ::memmem(base + at, size - at, sync, sizeof sync) : nullptr);
+      if (found == nullptr) {
+        damage_.skipped_bytes += size - pos_;
+        if (why.rfind("truncated", 0) == 0) damage_.truncated_tail = true;
+        pos_ = size;
+        return false;
+      }
+      at = static_cast<std::size_t>(found - base);
+      total = plausible_event(base, size, at, nullptr);
+      if (total != 0) break;
+      ++at;
+    }
+    damage_.skipped_bytes += at - pos_;
+    pos_ = at;
+  }
+  const uint8_t* h = base + pos_;
+  const auto channel_len = static_cast<std::size_t>(big_endian(h + 20, 4));
+  const auto data_len = static_cast<std::size_t>(big_endian(h + 24, 4));
+  event.utime = static_cast<int64_t>(big_endian(h + 12, 8));
+  event.channel = std::string_view(reinterpret_cast<const char*>(h + kLogHeaderSize), channel_len);
+  event.data = std::span<const uint8_t>(h + kLogHeaderSize + channel_len, data_len);
   if (event.owner != map_) event.owner = map_;
   pos_ += total;
   return true;
+}
+
+std::string LogReader::Damage::summary() const {
+  if (!damaged()) return "";
+  std::string s = first_problem;
+  s += "; " + std::to_string(skipped_bytes) + " bytes skipped in " + std::to_string(damaged_places) +
+       (damaged_places == 1 ? " place" : " places");
+  if (truncated_tail) s += ", the last event cut off";
+  return s;
 }
 
 double LogReader::progress() const {

@@ -141,70 +141,88 @@ void write_bytes(const std::string& path, const std::vector<char>& bytes) {
   std::ofstream(path, std::ios::binary | std::ios::trunc).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
 }
 
-// Reads every event; returns how many were read before the error, and the error text.
-std::pair<int, std::string> read_all(const std::string& path) {
+// Reads every event; returns the x of each (pose2d_t on "A") and the reader's damage report.
+std::pair<std::vector<double>, LogReader::Damage> read_all(const std::string& path) {
   LogReader in(path);
   LogReader::EventView ev;
-  int n = 0;
-  try {
-    while (in.next(ev)) ++n;
-  } catch (const std::runtime_error& e) {
-    return {n, e.what()};
+  std::vector<double> xs;
+  while (in.next(ev)) {
+    pose2d_t p{};
+    EXPECT_EQ(p.decode(ev.data.data(), 0, static_cast<int>(ev.data.size())), static_cast<int>(ev.data.size()));
+    xs.push_back(p.x);
   }
-  return {n, ""};
+  EXPECT_FALSE(in.next(ev)) << "stays at the end";
+  return {xs, in.damage()};
 }
 
-TEST(LogFiles, TruncatedLogIsAnErrorNamingTheFileAndOffset) {
+TEST(LogFiles, ALogCutOffInsideItsLastEventYieldsEveryCompleteEventAndSaysWhere) {
   const std::string path = ::testing::TempDir() + "truncated.lcmlog";
   std::vector<char> bytes = three_event_log(path);
   const size_t event = bytes.size() / 3;  // equal events
-  bytes.resize(bytes.size() - 5);         // the last event loses 5 bytes of data
+  auto [xs, damage] = read_all(path);
+  EXPECT_EQ(xs, (std::vector<double>{0, 1, 2}));
+  EXPECT_FALSE(damage.damaged());
+  EXPECT_EQ(damage.summary(), "");
+  bytes.resize(bytes.size() - 5);  // the last event loses 5 bytes of data (a logger killed mid-write)
   write_bytes(path, bytes);
-  auto [n, err] = read_all(path);
-  EXPECT_EQ(n, 2);
-  EXPECT_NE(err.find(path), std::string::npos) << err;
-  EXPECT_NE(err.find("truncated"), std::string::npos) << err;
-  EXPECT_NE(err.find("at byte " + std::to_string(2 * event)), std::string::npos) << err;
+  std::tie(xs, damage) = read_all(path);
+  EXPECT_EQ(xs, (std::vector<double>{0, 1}));
+  EXPECT_TRUE(damage.truncated_tail);
+  EXPECT_EQ(damage.skipped_bytes, event - 5);
+  EXPECT_EQ(damage.damaged_places, 1);
+  const std::string s = damage.summary();
+  EXPECT_NE(s.find(path + ": truncated LCM log: the event at byte " + std::to_string(2 * event)), std::string::npos) << s;
+  EXPECT_NE(s.find("the last event cut off"), std::string::npos) << s;
   bytes.resize(2 * event + 10);  // and in the middle of a header
   write_bytes(path, bytes);
-  std::tie(n, err) = read_all(path);
-  EXPECT_EQ(n, 2);
-  EXPECT_NE(err.find("truncated"), std::string::npos) << err;
+  std::tie(xs, damage) = read_all(path);
+  EXPECT_EQ(xs, (std::vector<double>{0, 1}));
+  EXPECT_TRUE(damage.truncated_tail);
+  EXPECT_NE(damage.summary().find("incomplete event header"), std::string::npos) << damage.summary();
   std::remove(path.c_str());
 }
 
-TEST(LogFiles, CorruptEventHeaderIsAnErrorNamingTheFileAndOffset) {
+TEST(LogFiles, ACorruptEventIsSkippedAndReadingResumesAtTheNextEvent) {
   const std::string path = ::testing::TempDir() + "corrupt.lcmlog";
   const std::vector<char> good = three_event_log(path);
   const size_t event = good.size() / 3;
-  std::vector<char> bad = good;
-  bad[event] = 0x00;  // the second event's sync word
+  struct Case {
+    size_t byte;
+    char value;
+    std::string problem;
+  };
+  for (const Case& c : {Case{event, 0x00, "no event sync word at byte " + std::to_string(event)},
+                        Case{event + 24, static_cast<char>(0x80), "data length"},  // negative
+                        Case{event + 20, 0x7f, "channel length"}}) {          // far beyond the file
+    std::vector<char> bad = good;
+    bad[c.byte] = c.value;  // the second event's header
+    write_bytes(path, bad);
+    auto [xs, damage] = read_all(path);
+    EXPECT_EQ(xs, (std::vector<double>{0, 2})) << c.problem << ": the first and third events survive";
+    EXPECT_EQ(damage.skipped_bytes, event) << c.problem;
+    EXPECT_EQ(damage.damaged_places, 1);
+    EXPECT_FALSE(damage.truncated_tail);
+    EXPECT_NE(damage.summary().find(path + ": corrupt LCM log: "), std::string::npos) << damage.summary();
+    EXPECT_NE(damage.summary().find(c.problem), std::string::npos) << damage.summary();
+  }
+  // Garbage between events (a sync word inside it that starts no plausible event is passed over).
+  std::vector<char> bad(good.begin(), good.begin() + static_cast<std::ptrdiff_t>(event));
+  const char junk[] = {1, 2, static_cast<char>(0xED), static_cast<char>(0xA1), static_cast<char>(0xDA), 1, 0, 0, 0};
+  bad.insert(bad.end(), junk, junk + sizeof junk);
+  bad.insert(bad.end(), good.begin() + static_cast<std::ptrdiff_t>(event), good.end());
   write_bytes(path, bad);
-  auto [n, err] = read_all(path);
-  EXPECT_EQ(n, 1);
-  EXPECT_NE(err.find(path), std::string::npos) << err;
-  EXPECT_NE(err.find("sync word at byte " + std::to_string(event)), std::string::npos) << err;
-  bad = good;
-  bad[event + 24] = static_cast<char>(0x80);  // the second event's data length: negative
-  write_bytes(path, bad);
-  std::tie(n, err) = read_all(path);
-  EXPECT_EQ(n, 1);
-  EXPECT_NE(err.find("data length"), std::string::npos) << err;
-  bad = good;
-  bad[event + 20] = 0x7f;  // channel length far beyond the file
-  write_bytes(path, bad);
-  std::tie(n, err) = read_all(path);
-  EXPECT_EQ(n, 1);
-  EXPECT_NE(err.find("channel length"), std::string::npos) << err;
+  auto [xs, damage] = read_all(path);
+  EXPECT_EQ(xs, (std::vector<double>{0, 1, 2}));
+  EXPECT_EQ(damage.skipped_bytes, sizeof junk);
   std::remove(path.c_str());
 }
 
 TEST(LogFiles, EmptyLogHasNoEvents) {
   const std::string path = ::testing::TempDir() + "empty.lcmlog";
   write_bytes(path, {});
-  auto [n, err] = read_all(path);
-  EXPECT_EQ(n, 0);
-  EXPECT_EQ(err, "");
+  auto [xs, damage] = read_all(path);
+  EXPECT_TRUE(xs.empty());
+  EXPECT_FALSE(damage.damaged());
   std::remove(path.c_str());
 }
 

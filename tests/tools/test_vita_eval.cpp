@@ -223,6 +223,34 @@ TEST_F(VitaEvalBinary, ComputesTheExpectedMetricsAndWritesJsonAndPlots) {
   EXPECT_GT(count_colour(reloc_png, 40, 160, 40), 100);  // correct ones (green)
 }
 
+TEST_F(VitaEvalBinary, ADamagedLogIsEvaluatedFromWhatCanBeReadAndTheDamageReported) {
+  write_log(file("vita.lcmlog"), Script{});
+  std::string bytes = read_text(file("vita.lcmlog"));
+  // Ten bytes of garbage before an event in the middle (a disk error), and half an event at the end
+  // (a logger that died mid-write): 40 bytes in 2 places.
+  const size_t middle = bytes.size() / 2;
+  const size_t sync = bytes.find("\xED\xA1\xDA\x01", middle);
+  ASSERT_NE(sync, std::string::npos);
+  bytes.insert(sync, "JUNK!JUNK!");
+  const std::string half_event = bytes.substr(sync + 10, 30);
+  bytes += half_event;
+  std::ofstream(file("damaged.lcmlog"), std::ios::binary) << bytes;
+  ASSERT_EQ(run_vita_eval("--input " + file("damaged.lcmlog") + " --json " + file("out.json"), file("stdout.txt")),
+            0)
+      << read_text(file("stdout.txt"));
+  const std::string out = read_text(file("stdout.txt"));
+  EXPECT_NE(out.find(file("damaged.lcmlog") + ": corrupt LCM log: no event sync word at byte " + std::to_string(sync)),
+            std::string::npos)
+      << out;
+  EXPECT_NE(out.find("40 bytes skipped in 2 places, the last event cut off"), std::string::npos) << out;
+  const nlohmann::json j = nlohmann::json::parse(read_text(file("out.json")));
+  EXPECT_NE(j["runs"][0]["log_damage"].get<std::string>().find("corrupt LCM log"), std::string::npos);
+  EXPECT_EQ(j["runs"][0]["counts"]["map_experiences"], 21) << "the map after the damage was read";
+  // An undamaged log says so with null.
+  ASSERT_EQ(run_vita_eval("--input " + file("vita.lcmlog") + " --json " + file("out2.json"), file("stdout2.txt")), 0);
+  EXPECT_TRUE(nlohmann::json::parse(read_text(file("out2.json")))["runs"][0]["log_damage"].is_null());
+}
+
 TEST_F(VitaEvalBinary, PrintsOneRowPerInputAndNullArcrWithoutReLocalisations) {
   write_log(file("vita.lcmlog"), Script{});
   write_log(file("tactile.lcmlog"), Script{vita_pose_t::MODE_TACTILE, false});

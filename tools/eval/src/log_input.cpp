@@ -69,6 +69,7 @@ LoadedRun load_run(const std::string& path) {
       run.input.ground_truth.push_back({m.utime, {m.x, m.y, m.theta}});
     }
   }
+  run.log_damage = reader.damage().summary();
   if (run.input.ground_truth.empty()) {
     throw std::runtime_error(path + ": no GROUND_TRUTH messages (the metrics need the simulator's ground truth)");
   }

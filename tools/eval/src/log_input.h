@@ -15,10 +15,12 @@ struct LoadedRun {
   EvalInput input;
   std::map<std::string, int64_t> decode_errors;  // per channel
   int64_t map_messages = 0;
+  std::string log_damage;  // LogReader::Damage::summary(): empty unless the log was damaged
 };
 
 // Throws std::runtime_error with a one-line reason if the file cannot be read or lacks the
-// channels the metrics need (GROUND_TRUTH, VITA_MAP).
+// channels the metrics need (GROUND_TRUTH, VITA_MAP). A damaged log (a corrupt event, a cut-off
+// end) is evaluated from the events that could be read, and `log_damage` says what was skipped.
 LoadedRun load_run(const std::string& path);
 
 }  // namespace whiskeye::eval

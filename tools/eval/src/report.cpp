@@ -137,6 +137,7 @@ std::string format_table(const std::vector<RunReport>& runs, const std::vector<P
         << r.ground_truth_samples << " GROUND_TRUTH; final map " << r.map_experiences << " experiences, "
         << r.map_links << " links\n";
     for (const auto& [ch, n] : r.decode_errors) out << "  undecodable messages on " << ch << ": " << n << "\n";
+    if (!r.log_damage.empty()) out << "  damaged log: " << r.log_damage << "\n";
     if (e.alignment.valid) {
       const Pose2& t = e.alignment.T_world_map;
       out << "  alignment (first experience onto ground truth): T_world_map = (" << fmt("%.4f", t.x) << ", "
@@ -195,6 +196,7 @@ nlohmann::json to_json(const std::vector<RunReport>& runs, const EvalParams& par
                            {"map_links", r.map_links},
                            {"ground_truth_samples", r.ground_truth_samples}}},
                          {"decode_errors", decode},
+                         {"log_damage", r.log_damage.empty() ? nlohmann::json(nullptr) : nlohmann::json(r.log_damage)},
                          {"alignment", alignment_json(e.alignment)},
                          {"best_fit_alignment", alignment_json(e.best_fit)},
                          {"lem", lem_json(e.lem)},

@@ -166,7 +166,11 @@ struct LogEvent {
 // std::runtime_error naming the file and the byte offset, never a silent early end.
 class LogReader {
  public:
-  explicit LogReader(const std::string& path);  // throws std::runtime_error naming the file
+  // Throws std::runtime_error naming the file if it cannot be opened. A damaged log (a corrupt
+  // event header, a last event cut off by a crash or a full disk) does not throw: next() skips what
+  // cannot be read, resynchronising on the next event's sync word as LCM's own reader does, and
+  // damage() says what was skipped, where first.
+  explicit LogReader(const std::string& path);
   ~LogReader();
   LogReader(const LogReader&) = delete;
   LogReader& operator=(const LogReader&) = delete;
@@ -183,12 +187,22 @@ class LogReader {
   bool next(EventView& event);
   // Fraction of the file read, 0..1 (for progress bars).
   double progress() const;
+  struct Damage {
+    std::string first_problem;    // "FILE: corrupt LCM log: … at byte N", empty if none
+    std::size_t skipped_bytes = 0;
+    int damaged_places = 0;
+    bool truncated_tail = false;  // the log ends inside an event
+    bool damaged() const { return damaged_places > 0; }
+    std::string summary() const;  // one line for the user; empty if undamaged
+  };
+  const Damage& damage() const { return damage_; }
 
  private:
   struct Mapping;
   std::string path_;
   std::shared_ptr<const Mapping> map_;
   std::size_t pos_ = 0;
+  Damage damage_;
 };
 
 // A Bus that appends every published message to an LCM log file, stamped with set_time().
