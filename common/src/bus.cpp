@@ -130,10 +130,43 @@ constexpr uint32_t kLogSync = 0xEDA1DA01u;
 constexpr std::size_t kLogHeaderSize = 4 + 8 + 8 + 4 + 4;
 constexpr int32_t kMaxLogChannelLength = 1000;  // what lcm-logger's reader accepts
 
-uint64_t big_endian(const uint8_t* p, int bytes) {
-  uint64_t v = 0;
-  for (int i = 0; i < bytes; ++i) v = (v << 8) | p[i];
-  return v;
+// Checks that a plausible event starts at byte `at`: sync word, channel length in (0, 1000), data
+// length ≥ 0, the whole event inside the file. `size` 0: implausible, then `truncated` says whether
+// the file ends first, and `why` (if given) gets the reason; nothing is formatted for a good event.
+struct EventCheck {
+  std::size_t size = 0;
+  bool truncated = false;
+};
+EventCheck check_event(const uint8_t* base, std::size_t size, std::size_t at, std::string* why) {
+  const auto at_byte = [at] { return " at byte " + std::to_string(at); };
+  if (size - at < kLogHeaderSize) {
+    if (why) *why = "truncated LCM log: incomplete event header" + at_byte() + " (file size " + std::to_string(size) + ")";
+    return {0, true};
+  }
+  const uint8_t* h = base + at;
+  if (static_cast<uint32_t>(read_be_i32(h)) != kLogSync) {
+    if (why) *why = "corrupt LCM log: no event sync word" + at_byte();
+    return {0, false};
+  }
+  const int32_t channel_len = read_be_i32(h + 20);
+  const int32_t data_len = read_be_i32(h + 24);
+  if (channel_len <= 0 || channel_len >= kMaxLogChannelLength) {
+    if (why) *why = "corrupt LCM log: channel length " + std::to_string(channel_len) + " in the event" + at_byte();
+    return {0, false};
+  }
+  if (data_len < 0) {
+    if (why) *why = "corrupt LCM log: data length " + std::to_string(data_len) + " in the event" + at_byte();
+    return {0, false};
+  }
+  const std::size_t total = kLogHeaderSize + static_cast<std::size_t>(channel_len) + static_cast<std::size_t>(data_len);
+  if (size - at < total) {
+    if (why) {
+      *why = "truncated LCM log: the event" + at_byte() + " needs " + std::to_string(total) + " bytes, the file has " +
+             std::to_string(size - at) + " left";
+    }
+    return {0, true};
+  }
+  return {total, false};
 }
 
 }  // namespace
@@ -173,64 +206,31 @@ bool LogReader::next(LogEvent& event) {
   return true;
 }
 
-// Where a plausible event starts at `at`: sync word, channel length in (0, 1000), data length ≥ 0,
-// and the whole event inside the file. Returns the event's size, 0 if implausible.
-static std::size_t plausible_event(const uint8_t* base, std::size_t size, std::size_t at, std::string* why) {
-  const std::string where = " at byte " + std::to_string(at);
-  if (size - at < kLogHeaderSize) {
-    if (why) *why = "truncated LCM log: incomplete event header" + where + " (file size " + std::to_string(size) + ")";
-    return 0;
-  }
-  const uint8_t* h = base + at;
-  if (big_endian(h, 4) != kLogSync) {
-    if (why) *why = "corrupt LCM log: no event sync word" + where;
-    return 0;
-  }
-  const auto channel_len = static_cast<int32_t>(static_cast<uint32_t>(big_endian(h + 20, 4)));
-  const auto data_len = static_cast<int32_t>(static_cast<uint32_t>(big_endian(h + 24, 4)));
-  if (channel_len <= 0 || channel_len >= kMaxLogChannelLength) {
-    if (why) *why = "corrupt LCM log: channel length " + std::to_string(channel_len) + " in the event" + where;
-    return 0;
-  }
-  if (data_len < 0) {
-    if (why) *why = "corrupt LCM log: data length " + std::to_string(data_len) + " in the event" + where;
-    return 0;
-  }
-  const std::size_t total = kLogHeaderSize + static_cast<std::size_t>(channel_len) + static_cast<std::size_t>(data_len);
-  if (size - at < total) {
-    if (why) {
-      *why = "truncated LCM log: the event" + where + " needs " + std::to_string(total) + " bytes, the file has " +
-             std::to_string(size - at) + " left";
-    }
-    return 0;
-  }
-  return total;
-}
-
 bool LogReader::next(EventView& event) {
   const std::size_t size = map_->size;
   const uint8_t* const base = map_->bytes;
   if (pos_ >= size) return false;
-  std::string why;
-  std::size_t total = plausible_event(base, size, pos_, &why);
+  std::string why;  // stays empty (no allocation) for a good event
+  const EventCheck check = check_event(base, size, pos_, &why);
+  std::size_t total = check.size;
   if (total == 0) {
     // Damaged: note the first problem, then look for the next plausible event, as LCM's own reader
     // resynchronises on the sync word. Whatever cannot be read is skipped and counted.
     if (damage_.first_problem.empty()) damage_.first_problem = path_ + ": " + why;
     ++damage_.damaged_places;
-    const uint8_t sync[4] = {0xED, 0xA1, 0xDA, 0x01};
+    const uint8_t sync[4] = {kLogSync >> 24, (kLogSync >> 16) & 0xff, (kLogSync >> 8) & 0xff, kLogSync & 0xff};
     std::size_t at = pos_ + 1;
     for (;;) {
       const auto* found = static_cast<const uint8_t*>(
           at < size ? ::memmem(base + at, size - at, sync, sizeof sync) : nullptr);
       if (found == nullptr) {
         damage_.skipped_bytes += size - pos_;
-        if (why.rfind("truncated", 0) == 0) damage_.truncated_tail = true;
+        damage_.truncated_tail = check.truncated;
         pos_ = size;
         return false;
       }
       at = static_cast<std::size_t>(found - base);
-      total = plausible_event(base, size, at, nullptr);
+      total = check_event(base, size, at, nullptr).size;
       if (total != 0) break;
       ++at;
     }
@@ -238,9 +238,9 @@ bool LogReader::next(EventView& event) {
     pos_ = at;
   }
   const uint8_t* h = base + pos_;
-  const auto channel_len = static_cast<std::size_t>(big_endian(h + 20, 4));
-  const auto data_len = static_cast<std::size_t>(big_endian(h + 24, 4));
-  event.utime = static_cast<int64_t>(big_endian(h + 12, 8));
+  const auto channel_len = static_cast<std::size_t>(read_be_i32(h + 20));
+  const auto data_len = static_cast<std::size_t>(read_be_i32(h + 24));
+  event.utime = read_be_i64(h + 12);
   event.channel = std::string_view(reinterpret_cast<const char*>(h + kLogHeaderSize), channel_len);
   event.data = std::span<const uint8_t>(h + kLogHeaderSize + channel_len, data_len);
   if (event.owner != map_) event.owner = map_;

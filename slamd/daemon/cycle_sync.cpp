@@ -1,21 +1,12 @@
 #include "cycle_sync.h"
 
+#include "whiskeye/common/bus.h"
 #include "whiskeye/common/utime.h"
 
 #include <algorithm>
 #include <cstdlib>
 
 namespace whiskeye::slamd {
-
-namespace {
-
-int64_t read_be(const uint8_t* p, int bytes) {
-  uint64_t v = 0;
-  for (int i = 0; i < bytes; ++i) v = (v << 8) | p[i];
-  return bytes == 4 ? static_cast<int32_t>(static_cast<uint32_t>(v)) : static_cast<int64_t>(v);
-}
-
-}  // namespace
 
 bool decode_camera_frame(std::span<const uint8_t> bytes, CameraFrame& out, std::string* reason) {
   // LCM encoding of image_t: fingerprint (8), utime (8), seq (8), width, height, row_stride,
@@ -27,34 +18,34 @@ bool decode_camera_frame(std::span<const uint8_t> bytes, CameraFrame& out, std::
     }
     return false;
   };
-  if (bytes.size() < kHeader || read_be(bytes.data(), 8) != image_t::getHash()) {
+  if (bytes.size() < kHeader || read_be_i64(bytes.data()) != image_t::getHash()) {
     return fail(" (wrong type fingerprint or truncated)");
   }
   const uint8_t* p = bytes.data() + 8;
-  const auto size = static_cast<int32_t>(read_be(p + 32, 4));
+  const auto size = read_be_i32(p + 32);
   if (size < 0 || bytes.size() - kHeader < static_cast<std::size_t>(size)) {
     return fail(" (wrong type fingerprint or truncated)");
   }
   if (bytes.size() - kHeader != static_cast<std::size_t>(size)) return fail(" (trailing bytes)");
-  out.utime = read_be(p, 8);
-  out.width = static_cast<int32_t>(read_be(p + 16, 4));
-  out.height = static_cast<int32_t>(read_be(p + 20, 4));
-  out.row_stride = static_cast<int32_t>(read_be(p + 24, 4));
-  out.pixelformat = static_cast<int32_t>(read_be(p + 28, 4));
+  out.utime = read_be_i64(p);
+  out.width = read_be_i32(p + 16);
+  out.height = read_be_i32(p + 20);
+  out.row_stride = read_be_i32(p + 24);
+  out.pixelformat = read_be_i32(p + 28);
   out.data = bytes.subspan(kHeader);
   return true;
 }
 
+void own_pixels(CameraFrame& frame) {
+  auto copy = std::make_shared<const std::vector<uint8_t>>(frame.data.begin(), frame.data.end());
+  frame.data = std::span<const uint8_t>(copy->data(), copy->size());
+  frame.owner = std::move(copy);
+}
+
 CameraFrame camera_frame(const image_t& image) {
-  auto pixels = std::make_shared<const std::vector<uint8_t>>(image.data);
-  CameraFrame f;
-  f.utime = image.utime;
-  f.width = image.width;
-  f.height = image.height;
-  f.row_stride = image.row_stride;
-  f.pixelformat = image.pixelformat;
-  f.data = std::span<const uint8_t>(pixels->data(), pixels->size());
-  f.owner = std::move(pixels);
+  CameraFrame f{image.utime, image.width, image.height, image.row_stride, image.pixelformat,
+                std::span<const uint8_t>(image.data.data(), image.data.size()), nullptr};
+  own_pixels(f);
   return f;
 }
 

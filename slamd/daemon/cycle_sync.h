@@ -40,6 +40,8 @@ struct CameraFrame {
 // alone). False with a reason, as decode_message() would give, on a fingerprint mismatch,
 // truncation, a negative size or trailing bytes.
 bool decode_camera_frame(std::span<const uint8_t> bytes, CameraFrame& out, std::string* reason = nullptr);
+// Makes `frame` own a copy of the pixels it views (for bytes that do not outlive the caller).
+void own_pixels(CameraFrame& frame);
 // A frame owning a copy of `image`'s pixels.
 CameraFrame camera_frame(const image_t& image);
 

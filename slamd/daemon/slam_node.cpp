@@ -152,9 +152,7 @@ void SlamNode::on_camera(std::span<const uint8_t> data, const MessageInfo& info)
   if (info.data_owner) {
     frame.owner = info.data_owner;  // the bytes outlive this call: keep a view
   } else {
-    auto copy = std::make_shared<const std::vector<uint8_t>>(frame.data.begin(), frame.data.end());
-    frame.data = std::span<const uint8_t>(copy->data(), copy->size());
-    frame.owner = std::move(copy);
+    own_pixels(frame);
   }
   sync_.add_camera(std::move(frame));
   process(sync_.take_ready());

@@ -60,6 +60,16 @@ class DecodeErrors {
   Callback callback_;
 };
 
+// LCM's wire format and its log files are big-endian: a signed integer read from there.
+inline int64_t read_be_i64(const uint8_t* p) {
+  uint64_t v = 0;
+  for (int i = 0; i < 8; ++i) v = (v << 8) | p[i];
+  return static_cast<int64_t>(v);
+}
+inline int32_t read_be_i32(const uint8_t* p) {
+  return static_cast<int32_t>((uint32_t{p[0]} << 24) | (uint32_t{p[1]} << 16) | (uint32_t{p[2]} << 8) | p[3]);
+}
+
 // Encodes an LCM message. The caller keeps every array as long as its length field says: LCM's
 // generated encoders index arrays by those fields without checking.
 template <typename T>
@@ -162,8 +172,8 @@ struct LogEvent {
 
 // Reads an LCM log (as written by lcm-logger) directly, in file order. The file is memory-mapped:
 // events are views into the mapping, and pages of payloads nobody reads are never loaded. Every
-// event header is checked (sync word, lengths within the file); a truncated or corrupt log is a
-// std::runtime_error naming the file and the byte offset, never a silent early end.
+// event header is checked (sync word, lengths within the file); damage is skipped and reported by
+// damage(), never a silent early end.
 class LogReader {
  public:
   // Throws std::runtime_error naming the file if it cannot be opened. A damaged log (a corrupt
