@@ -215,10 +215,8 @@ Event ExperienceMap::on_cycle(int template_id, int visual_template_id, int tacti
         dmin = d;
       }
     }
-    if (nearest < 0) {
-      if (frozen_) return ev;
-      create();
-    } else if (dmin > params_.delta_pc_threshold && !frozen_) {
+    // No candidate left by the view-shift rule (never when frozen, which ignores it), or none near.
+    if (nearest < 0 || (dmin > params_.delta_pc_threshold && !frozen_)) {
       create();
     } else if (nearest != current_) {
       const int from = current_;
