@@ -1,4 +1,4 @@
-// sd_notify wrapper and the test-only main-loop stall; see service.h.
+// sd_notify wrapper and the test-only stalls; see service.h.
 #include "whiskeye/common/service.h"
 
 #include <systemd/sd-daemon.h>
@@ -14,12 +14,15 @@ namespace whiskeye {
 FaultInjection parse_fault_injection(const std::string& spec) {
   FaultInjection f;
   if (spec.empty()) return f;
-  const std::string key = "stall-main-loop-after=";
-  if (spec.compare(0, key.size(), key) != 0) {
-    throw std::invalid_argument(std::string(kFaultInjectEnv) + "='" + spec + "': unknown fault (known: " + key +
-                                "<duration>)");
+  const std::string main_loop = "stall-main-loop-after=";
+  const std::string worker = "stall-worker-after=";
+  const bool is_main = spec.compare(0, main_loop.size(), main_loop) == 0;
+  const bool is_worker = spec.compare(0, worker.size(), worker) == 0;
+  if (!is_main && !is_worker) {
+    throw std::invalid_argument(std::string(kFaultInjectEnv) + "='" + spec + "': unknown fault (known: " + main_loop +
+                                "<duration>, " + worker + "<duration>)");
   }
-  const std::string value = spec.substr(key.size());
+  const std::string value = spec.substr(is_main ? main_loop.size() : worker.size());
   std::size_t used = 0;
   double number = 0.0;
   try {
@@ -35,7 +38,7 @@ FaultInjection parse_fault_injection(const std::string& spec) {
     throw std::invalid_argument(std::string(kFaultInjectEnv) + "='" + spec +
                                 "': duration must be a non-negative number followed by s or ms");
   }
-  f.stall_main_loop_after_us = static_cast<int64_t>(number * scale);
+  (is_main ? f.stall_main_loop_after_us : f.stall_worker_after_us) = static_cast<int64_t>(number * scale);
   return f;
 }
 

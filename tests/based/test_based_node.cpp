@@ -300,6 +300,46 @@ TEST_F(BasedNodeTest, UnreachableBaseIsAFaultWithAMessageAndRecovers) {
   node.stop();
 }
 
+TEST_F(BasedNodeTest, AnUnreachableBaseIsNotAStalledThread) {
+  // Connect failures and the retry backoff are a thread doing its job: the watchdog must not fire.
+  int port = 0;
+  {
+    FakeRobotino probe;
+    port = probe.port();
+  }
+  BasedNode& node = start(test_params("http://127.0.0.1:" + std::to_string(port)));
+  const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(2500);
+  while (std::chrono::steady_clock::now() < end) {
+    ASSERT_EQ(node.check_workers(monotonic_us()), "");
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  EXPECT_GE(node.counter("connect_failures"), 5);
+  EXPECT_EQ(node.counter("worker_stalls"), 0);
+  node.stop();
+}
+
+TEST_F(BasedNodeTest, AStalledOdometryThreadIsReportedOnceWhileTheOthersRun) {
+  BasedNode& node = make(test_params(base.url()));
+  node.inject_poll_stall_at(monotonic_us() + 300000);
+  node.start();
+  ASSERT_TRUE(samples(5));
+  EXPECT_EQ(node.check_workers(monotonic_us()), "");
+  // Limit with test_params: backoff 0.1 + connect 0.05 + 2 x reply 0.05 + period 0.01 + 1 s slack.
+  std::string stalled;
+  ASSERT_TRUE(wait_for([&] { return !(stalled = node.check_workers(monotonic_us())).empty(); }, 4.0));
+  EXPECT_NE(stalled.find("odometry thread silent for"), std::string::npos) << stalled;
+  EXPECT_NE(stalled.find("limit 1.26 s"), std::string::npos) << stalled;
+  const int64_t requests = base.odometry_requests();
+  const int64_t sent = node.counter("commands_sent");
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_NE(node.check_workers(monotonic_us()), "");
+  EXPECT_EQ(node.counter("worker_stalls"), 1) << "counted once per stall, not per check";
+  EXPECT_EQ(base.odometry_requests(), requests) << "the stalled thread still polls";
+  EXPECT_GT(node.counter("commands_sent"), sent) << "the command thread stopped too";
+  EXPECT_EQ(status_counter(node.make_status(), "worker_stalls"), 1);
+  node.stop();  // ends the stall
+}
+
 TEST_F(BasedNodeTest, PublishesDriverStatusOncePerSecond) {
   BasedParams p = test_params(base.url());
   p.connection.degraded_hold_s = 1.5;  // longer than the status period: every fault shows in one status

@@ -82,10 +82,6 @@ std::string WatchdogReport::summary() const {
   return s.str();
 }
 
-namespace {
-constexpr const char* kStallLog = "fault injection: main loop stalled";
-}
-
 WatchdogReport check_watchdog(const std::vector<std::string>& argv, const WatchdogCheck& c,
                               const std::vector<std::string>& extra_env) {
   using whiskeye::testing::Subprocess;
@@ -96,7 +92,7 @@ WatchdogReport check_watchdog(const std::vector<std::string>& argv, const Watchd
   env.push_back("NOTIFY_SOCKET=" + listener.path());
   env.push_back("WATCHDOG_USEC=" + std::to_string(c.watchdog_usec));
   std::ostringstream stall;
-  stall << "WHISKEYE_FAULT_INJECT=stall-main-loop-after=" << c.stall_after_s << "s";
+  stall << "WHISKEYE_FAULT_INJECT=" << c.fault << "=" << c.stall_after_s << "s";
   env.push_back(stall.str());
   const int64_t interval_us = c.watchdog_usec / 2;
 
@@ -145,22 +141,23 @@ WatchdogReport check_watchdog(const std::vector<std::string>& argv, const Watchd
                          std::to_string(c.watchdog_usec * 1e-6) + " s)");
   }
 
-  // Phase 2: the stall. Keep-alives may still be in flight for one interval after the log line.
-  r.stall_logged = wait_until([&] { return daemon.output().find(kStallLog) != std::string::npos; },
+  // Phase 2: the stall. Keep-alives may still be in flight for one interval after the log line, and
+  // for the grace a worker thread's stall needs to be noticed.
+  r.stall_logged = wait_until([&] { return daemon.output().find(c.stall_log) != std::string::npos; },
                               c.stall_after_s + 10.0);
   if (!r.stall_logged) {
     r.problems.push_back("the daemon never logged the injected stall");
   } else {
-    const int64_t stalled_us = monotonic_us() + interval_us;
+    const int64_t stalled_us = monotonic_us() + interval_us + static_cast<int64_t>(c.stall_grace_s * 1e6);
     const int64_t quiet_us = 3 * c.watchdog_usec;
-    std::this_thread::sleep_for(std::chrono::microseconds(interval_us + quiet_us));
+    std::this_thread::sleep_for(std::chrono::microseconds(stalled_us - monotonic_us() + quiet_us));
     r.quiet_s = static_cast<double>(monotonic_us() - stalled_us) * 1e-6;
     for (int64_t t : listener.times_of("WATCHDOG=1")) {
       if (t > stalled_us) ++r.pings_after_stall;
     }
     r.alive_while_stalled = daemon.running();
     if (r.pings_after_stall > 0) {
-      r.problems.push_back(std::to_string(r.pings_after_stall) + " keep-alives while the main loop was stalled");
+      r.problems.push_back(std::to_string(r.pings_after_stall) + " keep-alives while stalled (" + c.fault + ")");
     }
     if (!r.alive_while_stalled) r.problems.push_back("the daemon died instead of stalling");
   }

@@ -1,7 +1,7 @@
 // Stands in for systemd's side of the sd_notify protocol in tests: a unix datagram socket the test
 // owns (NOTIFY_SOCKET), every message received timestamped, and the check that a daemon started with
 // WATCHDOG_USEC sends READY=1, then WATCHDOG=1 about every WATCHDOG_USEC/2, and stops sending once its
-// main loop is stalled by the test-only fault injection (docs/deployment.md, "Watchdog").
+// main loop or a worker thread is stalled by the test-only fault injection (docs/deployment.md, "Watchdog").
 #pragma once
 
 #include <atomic>
@@ -42,7 +42,10 @@ class NotifyListener {
 
 struct WatchdogCheck {
   int64_t watchdog_usec = 400000;
-  double stall_after_s = 4.0;   // WHISKEYE_FAULT_INJECT=stall-main-loop-after=<this>s
+  std::string fault = "stall-main-loop-after";          // WHISKEYE_FAULT_INJECT=<fault>=<stall_after_s>s
+  std::string stall_log = "fault injection: main loop stalled";  // what the daemon logs when it stalls
+  double stall_grace_s = 0.0;   // keep-alives allowed this long after stall_log (a worker's limit)
+  double stall_after_s = 4.0;
   double ready_timeout_s = 15.0;
   double window_s = 1.6;        // regular keep-alives are measured over this window after READY=1
   double max_gap_factor = 1.5;  // largest gap allowed in the window, in WATCHDOG_USEC (1.0 = systemd's limit)

@@ -6,11 +6,13 @@
 #include <stdexcept>
 #include <thread>
 
+#include <whiskeye/common/heartbeats.h>
 #include <whiskeye/common/service.h>
 
 #include "notify_probe.h"
 #include "subprocess.h"
 
+using whiskeye::FaultInjection;
 using whiskeye::parse_fault_injection;
 using whiskeye::ServiceNotifier;
 
@@ -96,4 +98,38 @@ TEST(ServiceNotifier, InjectedStallBlocksOnceDueUntilStopIsRequested) {
   // Once released it never stalls again, so the daemon can shut down.
   service.stall_if_injected(7'000'000, [&] { return ++polls > 100; });
   EXPECT_EQ(polls, 3);
+}
+
+TEST(FaultInjection, ParsesBothStallsAndRejectsAnUnknownFaultNamingTheKnownOnes) {
+  const FaultInjection main_loop = parse_fault_injection("stall-main-loop-after=2s");
+  EXPECT_EQ(main_loop.stall_main_loop_after_us, 2'000'000);
+  EXPECT_EQ(main_loop.stall_worker_after_us, -1);
+  const FaultInjection worker = parse_fault_injection("stall-worker-after=250ms");
+  EXPECT_EQ(worker.stall_worker_after_us, 250'000);
+  EXPECT_EQ(worker.stall_main_loop_after_us, -1);
+  EXPECT_TRUE(worker.any());
+  EXPECT_FALSE(parse_fault_injection("").any());
+  try {
+    parse_fault_injection("stall-everything-after=1s");
+    FAIL() << "accepted an unknown fault";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("stall-worker-after="), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("stall-main-loop-after="), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(parse_fault_injection("stall-worker-after=soon"), std::invalid_argument);
+}
+
+TEST(WorkerHeartbeats, AWorkerIsStalledOnlyAfterItsOwnLimitAndAliveAgainOnceItBeats) {
+  whiskeye::WorkerHeartbeats beats;
+  const int fast = beats.add("poll", 1'000'000, 0);
+  const int slow = beats.add("status", 3'000'000, 0);
+  EXPECT_EQ(beats.stalled(1'000'000), "") << "exactly at the limit is still alive";
+  EXPECT_EQ(beats.stalled(1'500'000), "poll thread silent for 1.50 s (limit 1.00 s)");
+  beats.beat(fast, 1'400'000);
+  EXPECT_EQ(beats.stalled(1'500'000), "");
+  beats.beat(fast, 3'200'000);
+  EXPECT_EQ(beats.stalled(3'200'001), "status thread silent for 3.20 s (limit 3.00 s)");
+  beats.beat(slow, 3'300'000);
+  EXPECT_EQ(beats.stalled(3'300'000), "");
+  EXPECT_THROW(beats.add("bad", 0, 0), std::invalid_argument);
 }

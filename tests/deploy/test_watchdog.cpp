@@ -1,5 +1,6 @@
 // The daemons under systemd's notify protocol, as real processes: READY=1, then WATCHDOG=1 from the main
-// loop at WATCHDOG_USEC/2, none once the loop is stuck (test-only fault injection). camerad runs
+// loop at WATCHDOG_USEC/2, none once the loop (or based's odometry thread) is stuck (test-only fault
+// injection). camerad runs
 // without a camera, based against the fake Robotino server, slamd on an empty bus; whiskerd needs a CAN
 // interface and has the same check in the VM (tests/deploy/scenario_whiskerd_watchdog.sh).
 // Runs in a private network namespace (LCM udpm:// on loopback).
@@ -9,6 +10,7 @@
 
 #include <chrono>
 #include <filesystem>
+#include <fstream>
 #include <thread>
 
 #include "fake_robotino.h"
@@ -51,6 +53,25 @@ TEST(Watchdog, BasedPetsTheWatchdogFromItsLoopAndStopsWhenTheLoopStalls) {
   const WatchdogReport r = check_watchdog({BASED, "--url", base.url()}, WatchdogCheck{});
   expect_watchdog_contract(r);
   EXPECT_GT(base.odometry_requests(), 0) << "based never talked to the base";
+}
+
+TEST(Watchdog, BasedStopsPettingTheWatchdogWhenItsOdometryThreadStalls) {
+  // The main loop keeps turning; the keep-alives must stop because a worker does not. Short timeouts
+  // make the odometry thread's limit 0.2 + 0.2 + 2 x 0.05 + 0.02 + 1 = 1.52 s.
+  whiskeye::based::testing::FakeRobotino base;
+  const std::string dir = temp_dir("based_worker");
+  const std::string config = dir + "/based.yaml";
+  {
+    std::ofstream out(config);
+    out << "odometry: {connect_timeout_s: 0.2, reply_timeout_s: 0.05}\nconnection: {backoff_max_s: 0.2}\n";
+  }
+  WatchdogCheck check;
+  check.fault = "stall-worker-after";
+  check.stall_log = "fault injection: odometry thread stalled";
+  check.stall_grace_s = 1.52 + 0.3;
+  const WatchdogReport r = check_watchdog({BASED, "--url", base.url(), "--config", config}, check);
+  expect_watchdog_contract(r);
+  EXPECT_NE(r.output.find("worker_stalls: odometry thread silent for"), std::string::npos) << r.output;
 }
 
 TEST(Watchdog, SlamdPetsTheWatchdogFromItsLoopAndStopsWhenTheLoopStalls) {

@@ -56,7 +56,8 @@ int main(int argc, char** argv) {
   }
 
   try {
-    ServiceNotifier service("based", monotonic_us());
+    const int64_t start_us = monotonic_us();
+    ServiceNotifier service("based", start_us);
     LcmBus bus(lcm_url);
     based::BasedNode node(bus, params);
     if (*circle_opt) {
@@ -72,6 +73,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "based: base %s, odometry %.0f Hz, commands %.0f Hz, deadman %.2f s%s\n",
                  params.url.c_str(), params.odometry.poll_rate_hz, params.command.rate_hz,
                  params.command.deadman_s, *circle_opt ? ", driving a circle" : ", following BASE_CMD");
+    if (const int64_t after = service.fault_injection().stall_worker_after_us; after >= 0) {
+      node.inject_poll_stall_at(start_us + after);
+    }
     node.start();
     struct sigaction sa {};
     sa.sa_handler = on_signal;
@@ -84,7 +88,9 @@ int main(int argc, char** argv) {
     while (g_signal == 0 && !node.finished()) {
       bus.handle_timeout(100);
       const int64_t now = monotonic_us();
-      service.keep_alive(now);  // sent when due; the loop wakes at least every 100 ms
+      // Sent when due (the loop wakes at least every 100 ms), and only while the odometry, command
+      // and status threads all run: the main loop alone vouches for none of the base's I/O.
+      if (node.check_workers(now).empty()) service.keep_alive(now);
       // Test-only (WHISKEYE_FAULT_INJECT): a stuck main loop, to prove the watchdog notices.
       service.stall_if_injected(now, [] { return g_signal != 0; });
     }

@@ -20,8 +20,13 @@ const char* const kCounterNames[] = {
     "connect_failures",   "http_errors",       "replies_malformed", "repeated_seq",
     "seq_backwards",      "odometry_jumps",    "odometry_resets", "stale_events",
     "connections_opened", "commands_received", "commands_rejected", "commands_sent",
-    "command_failures",   "deadman_stops",     "decode_errors",
+    "command_failures",   "deadman_stops",     "decode_errors",     "worker_stalls",
 };
+
+// Added to each thread's longest legitimate block before it counts as stalled.
+constexpr double kWorkerSlackS = 1.0;
+
+int64_t to_us(double s) { return static_cast<int64_t>(s * 1e6); }
 
 void log_line(const std::string& line) { std::fprintf(stderr, "based: %s\n", line.c_str()); }
 
@@ -66,6 +71,16 @@ void BasedNode::start() {
       handle_command(Velocity{m.vx, m.vy, m.omega});
     }, decode_errors_);
   }
+  const BasedParams& p = params_;
+  const int64_t now = monotonic_us();
+  // A GET or POST blocks at most connect + write + read timeouts; the odometry thread also waits out
+  // its reconnect backoff.
+  poll_beat_ = beats_.add("odometry", to_us(p.connection.backoff_max_s + p.odometry.connect_timeout_s +
+                                            2.0 * p.odometry.reply_timeout_s + 1.0 / p.odometry.poll_rate_hz +
+                                            kWorkerSlackS), now);
+  command_beat_ = beats_.add("command", to_us(p.odometry.connect_timeout_s + 2.0 * p.command.reply_timeout_s +
+                                              1.0 / p.command.rate_hz + kWorkerSlackS), now);
+  status_beat_ = beats_.add("status", to_us(1.0 + kWorkerSlackS), now);
   poll_thread_ = std::thread([this] { poll_loop(); });
   command_thread_ = std::thread([this] { command_loop(); });
   status_thread_ = std::thread([this] { status_loop(); });
@@ -80,6 +95,17 @@ void BasedNode::stop() {
   for (std::thread* t : {&poll_thread_, &command_thread_, &status_thread_}) {
     if (t->joinable()) t->join();
   }
+}
+
+std::string BasedNode::check_workers(int64_t now_mono_us) {
+  std::string stalled = beats_.stalled(now_mono_us);
+  if (!stalled.empty() && !stall_reported_) {
+    count_fault("worker_stalls", stalled + "; watchdog keep-alives withheld");
+  } else if (stalled.empty() && stall_reported_) {
+    log_line("every thread runs again; watchdog keep-alives resume");
+  }
+  stall_reported_ = !stalled.empty();
+  return stalled;
 }
 
 bool BasedNode::wait_until(std::chrono::steady_clock::time_point t) {
@@ -135,6 +161,14 @@ void BasedNode::poll_loop() {
   auto next = std::chrono::steady_clock::now();
   int64_t connections_seen = 0;
   while (!stopping_) {
+    beats_.beat(poll_beat_, monotonic_us());
+    if (poll_stall_at_us_ >= 0 && monotonic_us() >= poll_stall_at_us_) {
+      poll_stall_at_us_ = -1;
+      log_line("fault injection: odometry thread stalled");
+      while (wait_until(std::chrono::steady_clock::now() + std::chrono::seconds(1))) {
+      }
+      break;
+    }
     const Reply reply = client.get(kOdometryPath);
     const int64_t now = monotonic_us();
     if (const int64_t c = client.connections_opened(); c != connections_seen) {
@@ -242,6 +276,7 @@ void BasedNode::command_loop() {
   int64_t trips_seen = 0;
   while (!stopping_) {
     const int64_t now = monotonic_us();
+    beats_.beat(command_beat_, now);
     Velocity out;
     bool circle_done = false;
     {
@@ -343,6 +378,7 @@ void BasedNode::status_loop() {
   auto next = std::chrono::steady_clock::now() + std::chrono::seconds(1);
   HealthState last_state = HealthState::kStarting;
   while (wait_until(next)) {
+    beats_.beat(status_beat_, monotonic_us());
     next += std::chrono::seconds(1);
     const driver_status_t s = make_status();
     const auto state = static_cast<HealthState>(s.state);

@@ -1,7 +1,7 @@
 // The systemd service protocol shared by the daemons (whiskerd, camerad, based, slamd): READY=1 once
 // the main loop runs, WATCHDOG=1 keep-alives from that loop, STOPPING=1 on the way out (all no-ops
-// when not started by systemd), and a TEST-ONLY fault injection that stalls the main loop so tests can
-// prove the keep-alives stop when the loop is stuck (docs/deployment.md, "Watchdog").
+// when not started by systemd), and a TEST-ONLY fault injection that stalls the main loop or a worker
+// thread so tests can prove the keep-alives stop when either is stuck (docs/deployment.md, "Watchdog").
 #pragma once
 
 #include <cstdint>
@@ -16,11 +16,15 @@ inline constexpr const char* kFaultInjectEnv = "WHISKEYE_FAULT_INJECT";
 struct FaultInjection {
   // The main loop blocks once this long has passed since the daemon started; < 0: never.
   int64_t stall_main_loop_after_us = -1;
-  bool any() const { return stall_main_loop_after_us >= 0; }
+  // A worker thread blocks once this long has passed since the daemon started; < 0: never. Only a
+  // daemon with worker threads outside its main loop acts on it (based: its odometry thread).
+  int64_t stall_worker_after_us = -1;
+  bool any() const { return stall_main_loop_after_us >= 0 || stall_worker_after_us >= 0; }
 };
 
-// Parses the spec: "" (off) or "stall-main-loop-after=<number><s|ms>", e.g. "stall-main-loop-after=2s".
-// Throws std::invalid_argument naming what was wrong, so a typo cannot silently disable a test.
+// Parses the spec: "" (off), "stall-main-loop-after=<number><s|ms>" (e.g. "stall-main-loop-after=2s")
+// or "stall-worker-after=<number><s|ms>". Throws std::invalid_argument naming what was wrong, so a
+// typo cannot silently disable a test.
 FaultInjection parse_fault_injection(const std::string& spec);
 
 class ServiceNotifier {

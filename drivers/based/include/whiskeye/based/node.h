@@ -5,7 +5,9 @@
 //                   command.rate_hz over a second connection (a slow odometry reply must not delay a
 //                   command: the base stops itself 200 ms after the last one); zero on exit
 //   status thread:  DRIVER_STATUS at 1 Hz, driver "based"
-// Faults are counted, logged once per burst to stderr, and never stop the daemon.
+// Faults are counted, logged once per burst to stderr, and never stop the daemon. Each thread beats a
+// heartbeat per iteration; check_workers() tells the main loop, which sends the watchdog keep-alive,
+// whether all three still run.
 #pragma once
 
 #include "whiskeye/based/circle.h"
@@ -16,6 +18,7 @@
 #include "whiskeye/based/robotino_client.h"
 #include "whiskeye/based/tracker.h"
 #include "whiskeye/common/bus.h"
+#include "whiskeye/common/heartbeats.h"
 
 #include <whiskeye/driver_status_t.hpp>
 
@@ -58,6 +61,15 @@ class BasedNode {
   // Builds the status message and starts a new statistics interval.
   driver_status_t make_status();
 
+  // Empty while every thread has run within its limit (its longest legitimate block: the retry
+  // backoff, the connect and reply timeouts, its period, plus a second); otherwise which thread is
+  // silent and for how long. The first call that finds a stall counts `worker_stalls` and logs it.
+  // For the loop that sends WATCHDOG=1: withhold it while this is not empty. Call after start().
+  std::string check_workers(int64_t now_mono_us);
+  // TEST-ONLY (WHISKEYE_FAULT_INJECT=stall-worker-after=T): the odometry thread blocks, once, from
+  // this monotonic time until stop(). Call before start().
+  void inject_poll_stall_at(int64_t mono_us) { poll_stall_at_us_ = mono_us; }
+
  private:
   void poll_loop();
   void command_loop();
@@ -96,6 +108,12 @@ class BasedNode {
   std::atomic<bool> stopping_{false};
   std::atomic<bool> finished_{false};
   bool started_ = false;
+  WorkerHeartbeats beats_;
+  int poll_beat_ = -1;
+  int command_beat_ = -1;
+  int status_beat_ = -1;
+  bool stall_reported_ = false;  // check_workers()' caller only
+  int64_t poll_stall_at_us_ = -1;
   std::thread poll_thread_;
   std::thread command_thread_;
   std::thread status_thread_;
