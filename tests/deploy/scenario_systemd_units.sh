@@ -7,13 +7,13 @@
 # and restarted by systemd when a worker thread stalls, and whiskerd's control thread gets SCHED_FIFO.
 # The hardware-specific parts are replaced by drop-ins, as a user would: based talks to the fake
 # Robotino server, whiskerd uses a vcan named can0 without GPIO, camerad the vivid test camera.
-#   scenario_systemd_units.sh RESULTS_DIR STAGE FAKE_ROBOTINO_SERVER WHISKERD_VM_YAML
-# STAGE is a DESTDIR into which the project was installed with --prefix /opt/whiskeye.
+#   scenario_systemd_units.sh RESULTS_DIR STAGE FAKE_ROBOTINO_SERVER
+# STAGE is a DESTDIR into which the project was installed with --prefix /opt/whiskeye, plus
+# etc/whiskeye/whiskerd-vm.yaml (tests/vm/whiskerd_vm.yaml).
 set -u
 RESULTS_DIR=$1
 STAGE=$2
 FAKE_ROBOTINO=$3
-WHISKERD_YAML=$4
 source "$(dirname "$0")/../vm/lib.sh"
 P=/opt/whiskeye
 U=/run/systemd/system
@@ -54,7 +54,7 @@ EOF
 cat > $U/whiskerd.service.d/vm.conf <<EOF
 [Service]
 ExecStart=
-ExecStart=$P/bin/whiskerd --config $WHISKERD_YAML -i can0 --no-gpio
+ExecStart=$P/bin/whiskerd --config $P/etc/whiskeye/whiskerd-vm.yaml -i can0 --no-gpio
 EOF
 systemctl daemon-reload
 

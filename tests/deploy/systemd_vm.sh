@@ -10,4 +10,7 @@ here=$(cd "$(dirname "$0")" && pwd)
 stage=$(realpath -m "$work-stage")
 rm -rf "$stage"
 DESTDIR="$stage" cmake --install "$build" --prefix /opt/whiskeye >/dev/null
-exec "$here/../vm/run-vm" --systemd "$work" "$here/scenario_systemd_units.sh" 420 "$stage" "$3" "$4"
+# whiskerd's VM config goes into the staged config folder: a checkout under /tmp would be hidden from
+# the service by its PrivateTmp=yes.
+cp "$4" "$stage/opt/whiskeye/etc/whiskeye/whiskerd-vm.yaml"
+exec "$here/../vm/run-vm" --systemd "$work" "$here/scenario_systemd_units.sh" 420 "$stage" "$3"
