@@ -114,6 +114,7 @@ TEST(ExperienceMap, ViewTurnedBeyondMaxViewShiftIsANewExperienceOfTheSameTemplat
   const PoseCells cells{PoseCellParams{}};
   ExperienceMapParams p;
   p.max_view_shift = 2;
+  p.distinct_places = 0;  // every template counts as aliased: max_view_shift applies throughout
   ExperienceMap m(p);
   m.on_cycle(0, 0, -1, false, 10, 10, 0, cells, 1000);  // experience 0, template 0, shift 0
   m.integrate(0.5, 0.0, 0.0, 1.0);
@@ -149,6 +150,47 @@ TEST(ExperienceMap, ViewTurnedBeyondMaxViewShiftIsANewExperienceOfTheSameTemplat
   e = m.on_cycle(0, 0, -1, false, 10.0, 10, 0, cells, 9000, 5);
   EXPECT_EQ(e.type, EventType::Relocalise);
   EXPECT_EQ(m.size(), 3);
+}
+
+TEST(ExperienceMap, ADistinctiveTemplateReLocalisesFromAWiderViewShiftThanAnAliasedOne) {
+  const PoseCells cells{PoseCellParams{}};
+  ExperienceMapParams p;
+  p.max_view_shift = 2;
+  p.max_view_shift_distinct = 4;
+  p.distinct_places = 1;
+  ExperienceMap m(p);
+  // Template 0 at one place (distinctive), template 1 at two places (aliased), template 2 elsewhere.
+  m.on_cycle(0, 0, -1, false, 10, 10, 0, cells, 1000);  // experience 0, template 0
+  m.integrate(0.5, 0.0, 0.0, 1.0);
+  m.on_cycle(1, 1, -1, false, 15, 10, 0, cells, 2000);  // experience 1, template 1
+  m.integrate(0.5, 0.0, 0.0, 1.0);
+  m.on_cycle(2, 2, -1, false, 20, 10, 0, cells, 3000);  // experience 2, template 2
+  m.integrate(0.5, 0.0, 0.0, 1.0);
+  m.on_cycle(1, 1, -1, false, 10, 18, 9, cells, 4000);  // experience 3: template 1 again, far away
+  ASSERT_EQ(m.size(), 4);
+  // Back near experience 0 with the view turned by 4 columns: distinctive, so it re-localises.
+  m.integrate(-0.5, 0.0, 0.0, 1.0);
+  Event e = m.on_cycle(0, 0, -1, false, 10.1, 10, 0, cells, 5000, 4);
+  EXPECT_EQ(e.type, EventType::Relocalise);
+  EXPECT_EQ(e.to_id, 0);
+  // 5 columns is beyond even the distinctive limit: a new experience of template 0.
+  m.integrate(0.5, 0.0, 0.0, 1.0);
+  m.on_cycle(2, 2, -1, false, 20, 10, 0, cells, 6000);
+  m.integrate(-0.5, 0.0, 0.0, 1.0);
+  e = m.on_cycle(0, 0, -1, false, 10.1, 10, 0, cells, 7000, 5);
+  EXPECT_EQ(e.type, EventType::NewExperience);
+  ASSERT_EQ(m.size(), 5);  // experience 4; template 0 now has two places
+  // Template 1 (two places: aliased) at experience 1 with 3 columns: beyond max_view_shift → new.
+  m.integrate(0.5, 0.0, 0.0, 1.0);
+  e = m.on_cycle(1, 1, -1, false, 15, 10, 0, cells, 8000, 3);
+  EXPECT_EQ(e.type, EventType::NewExperience);
+  // ... and with 2 columns it re-localises onto experience 1.
+  m.integrate(0.5, 0.0, 0.0, 1.0);
+  m.on_cycle(2, 2, -1, false, 20, 10, 0, cells, 9000);
+  m.integrate(-0.5, 0.0, 0.0, 1.0);
+  e = m.on_cycle(1, 1, -1, false, 15, 10, 0, cells, 10000, 2);
+  EXPECT_EQ(e.type, EventType::Relocalise);
+  EXPECT_EQ(e.to_id, 1);
 }
 
 TEST(ExperienceMap, ReadsVersionOneCheckpointsWithoutViewShifts) {

@@ -16,6 +16,8 @@ void load(const ParamNode& n, ExperienceMapParams& p) {
   n.get("correction", p.correction, 0.0, 1.0);
   n.get("loops", p.loops, 0, 10000);
   n.get("max_view_shift", p.max_view_shift, 0, 1000);
+  n.get("max_view_shift_distinct", p.max_view_shift_distinct, 0, 1000);
+  n.get("distinct_places", p.distinct_places, 0, 1000000);
 }
 
 ExperienceMap::ExperienceMap(const ExperienceMapParams& params) : params_(params) {}
@@ -206,9 +208,11 @@ Event ExperienceMap::on_cycle(int template_id, int visual_template_id, int tacti
   } else {
     int nearest = -1;
     double dmin = 0.0;
+    const int max_shift = static_cast<int>(candidates->size()) <= params_.distinct_places ? params_.max_view_shift_distinct
+                                                                                        : params_.max_view_shift;
     for (int id : *candidates) {
       const Experience& e = meta_[static_cast<size_t>(id)];
-      if (!frozen_ && std::abs(view_shift - e.view_shift) > params_.max_view_shift) continue;
+      if (!frozen_ && std::abs(view_shift - e.view_shift) > max_shift) continue;
       const double d = cells.distance(e.pc_x, e.pc_y, e.pc_theta, pc_x, pc_y, pc_theta);
       if (nearest < 0 || d < dmin) {
         nearest = id;

@@ -32,6 +32,11 @@ struct ExperienceMapParams {
   // with; a larger one is the same place seen from another pose: a new experience of the template.
   // A value ≥ match.shift_max turns the rule off.
   int max_view_shift = 2;
+  // The same for a distinctive template: one with at most distinct_places experiences. A template
+  // recognised at many places (a blank wall, a corner) is aliased and its shift poorly determined, so
+  // it keeps the strict max_view_shift; a distinctive one may re-localise from a little farther.
+  int max_view_shift_distinct = 4;
+  int distinct_places = 2;
 };
 void load(const ParamNode& node, ExperienceMapParams& p);
 

@@ -29,8 +29,8 @@ struct MatchParams {
   // SDA an L1 distance of slopes (deflection/s) summed over 24 whiskers. estimate_sigmas() gives
   // data-driven values.
   double sigma_visual = 0.25;
-  double sigma_pfh = 0.5;
-  double sigma_sda = 5.0;
+  double sigma_pfh = 1.5;
+  double sigma_sda = 15.0;
   // Match if ε ≤ threshold; one threshold per combination of terms in use this cycle, as a
   // visual-only ε and a three-term ε have different scales.
   double threshold_visual = 0.1;
