@@ -41,12 +41,10 @@ const char* to_string(HealthState state) {
   return "?";
 }
 
-static int64_t to_us(double s) { return static_cast<int64_t>(s * 1e6); }
-
 Health::Health(const ConnectionParams& connection, const OdometryParams& odometry, int64_t start_us)
-    : fault_after_us_(to_us(connection.fault_after_s)),
-      degraded_hold_us_(to_us(connection.degraded_hold_s)),
-      stale_after_us_(to_us(odometry.stale_after_s)),
+    : fault_after_us_(seconds_to_utime(connection.fault_after_s)),
+      degraded_hold_us_(seconds_to_utime(connection.degraded_hold_s)),
+      stale_after_us_(seconds_to_utime(odometry.stale_after_s)),
       start_us_(start_us) {}
 
 void Health::new_sample(int64_t now_us) { last_sample_us_ = now_us; }

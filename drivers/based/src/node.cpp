@@ -2,6 +2,7 @@
 #include "whiskeye/based/node.h"
 
 #include "whiskeye/common/clock.h"
+#include "whiskeye/common/utime.h"
 
 #include <whiskeye/base_cmd_t.hpp>
 #include <whiskeye/odometry_t.hpp>
@@ -25,8 +26,6 @@ const char* const kCounterNames[] = {
 
 // Added to each thread's longest legitimate block before it counts as stalled.
 constexpr double kWorkerSlackS = 1.0;
-
-int64_t to_us(double s) { return static_cast<int64_t>(s * 1e6); }
 
 void log_line(const std::string& line) { std::fprintf(stderr, "based: %s\n", line.c_str()); }
 
@@ -75,12 +74,16 @@ void BasedNode::start() {
   const int64_t now = monotonic_us();
   // A GET or POST blocks at most connect + write + read timeouts; the odometry thread also waits out
   // its reconnect backoff.
-  poll_beat_ = beats_.add("odometry", to_us(p.connection.backoff_max_s + p.odometry.connect_timeout_s +
-                                            2.0 * p.odometry.reply_timeout_s + 1.0 / p.odometry.poll_rate_hz +
-                                            kWorkerSlackS), now);
-  command_beat_ = beats_.add("command", to_us(p.odometry.connect_timeout_s + 2.0 * p.command.reply_timeout_s +
-                                              1.0 / p.command.rate_hz + kWorkerSlackS), now);
-  status_beat_ = beats_.add("status", to_us(1.0 + kWorkerSlackS), now);
+  poll_beat_ = beats_.add("odometry",
+                          seconds_to_utime(p.connection.backoff_max_s + p.odometry.connect_timeout_s +
+                                           2.0 * p.odometry.reply_timeout_s + 1.0 / p.odometry.poll_rate_hz +
+                                           kWorkerSlackS),
+                          now);
+  command_beat_ = beats_.add("command",
+                             seconds_to_utime(p.odometry.connect_timeout_s + 2.0 * p.command.reply_timeout_s +
+                                              1.0 / p.command.rate_hz + kWorkerSlackS),
+                             now);
+  status_beat_ = beats_.add("status", seconds_to_utime(1.0 + kWorkerSlackS), now);
   poll_thread_ = std::thread([this] { poll_loop(); });
   command_thread_ = std::thread([this] { command_loop(); });
   status_thread_ = std::thread([this] { status_loop(); });

@@ -6,6 +6,7 @@
 #pragma once
 
 #include "whiskeye/based/params.h"
+#include "whiskeye/common/utime.h"
 
 #include <cstdint>
 #include <map>
@@ -16,7 +17,7 @@ namespace whiskeye::based {
 
 class BurstLog {
  public:
-  explicit BurstLog(double quiet_s) : quiet_us_(static_cast<int64_t>(quiet_s * 1e6)) {}
+  explicit BurstLog(double quiet_s) : quiet_us_(seconds_to_utime(quiet_s)) {}
 
   // A fault of `kind` at `now_us`. Returns the line to log (empty while a burst is going on).
   std::string fault(const std::string& kind, const std::string& detail, int64_t now_us);
