@@ -70,11 +70,20 @@ bool ServiceNotifier::keep_alive(int64_t now_mono_us) {
 void ServiceNotifier::stopping() { sd_notify(0, "STOPPING=1"); }
 
 void ServiceNotifier::stall_if_injected(int64_t now_mono_us, const std::function<bool()>& stop) {
-  if (stalled_ || faults_.stall_main_loop_after_us < 0 || now_mono_us - start_us_ < faults_.stall_main_loop_after_us) {
-    return;
-  }
-  stalled_ = true;  // once: after the stop request the loop runs on to shut down normally
-  std::fprintf(stderr, "%s: fault injection: main loop stalled (no more watchdog keep-alives)\n", daemon_.c_str());
+  stall_once(faults_.stall_main_loop_after_us, stalled_, now_mono_us,
+             "main loop stalled (no more watchdog keep-alives)", stop);
+}
+
+void ServiceNotifier::stall_worker_if_injected(int64_t now_mono_us, const std::string& worker,
+                                               const std::function<bool()>& stop) {
+  stall_once(faults_.stall_worker_after_us, worker_stalled_, now_mono_us, worker + " stalled", stop);
+}
+
+void ServiceNotifier::stall_once(int64_t after_us, bool& stalled, int64_t now_mono_us, const std::string& what,
+                                 const std::function<bool()>& stop) const {
+  if (stalled || after_us < 0 || now_mono_us - start_us_ < after_us) return;
+  stalled = true;  // once: after the stop request the loop runs on to shut down normally
+  std::fprintf(stderr, "%s: fault injection: %s\n", daemon_.c_str(), what.c_str());
   while (!stop()) std::this_thread::sleep_for(std::chrono::milliseconds(50));
 }
 

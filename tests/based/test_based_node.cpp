@@ -5,6 +5,7 @@
 #include "whiskeye/based/node.h"
 #include "whiskeye/common/clock.h"
 #include "whiskeye/common/se2.h"
+#include "whiskeye/common/service.h"
 
 #include <whiskeye/base_cmd_t.hpp>
 #include <whiskeye/odometry_t.hpp>
@@ -14,6 +15,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <functional>
 #include <limits>
 #include <memory>
@@ -319,8 +321,14 @@ TEST_F(BasedNodeTest, AnUnreachableBaseIsNotAStalledThread) {
 }
 
 TEST_F(BasedNodeTest, AStalledOdometryThreadIsReportedOnceWhileTheOthersRun) {
+  // The daemon's own wiring: the service's test-only worker stall, due 300 ms after start.
+  ::setenv(kFaultInjectEnv, "stall-worker-after=300ms", 1);
+  ServiceNotifier service("based-test", monotonic_us());
+  ::unsetenv(kFaultInjectEnv);
   BasedNode& node = make(test_params(base.url()));
-  node.inject_poll_stall_at(monotonic_us() + 300000);
+  node.set_poll_hook([&service](const std::function<bool()>& stopping) {
+    service.stall_worker_if_injected(monotonic_us(), "odometry thread", stopping);
+  });
   node.start();
   ASSERT_TRUE(samples(5));
   EXPECT_EQ(node.check_workers(monotonic_us()), "");

@@ -100,6 +100,20 @@ TEST(ServiceNotifier, InjectedStallBlocksOnceDueUntilStopIsRequested) {
   EXPECT_EQ(polls, 3);
 }
 
+TEST(ServiceNotifier, InjectedWorkerStallBlocksThatWorkerOnceAndLeavesTheMainLoopAlone) {
+  ScopedEnv spec("WHISKEYE_FAULT_INJECT", "stall-worker-after=1s");
+  ServiceNotifier service("test", 5'000'000);
+  int polls = 0;
+  service.stall_if_injected(9'000'000, [&] { return ++polls > 0; });
+  EXPECT_EQ(polls, 0) << "the main loop stalled on a worker's fault";
+  service.stall_worker_if_injected(5'900'000, "odometry thread", [&] { return ++polls > 0; });
+  EXPECT_EQ(polls, 0) << "stalled before it was due";
+  service.stall_worker_if_injected(6'000'000, "odometry thread", [&] { return ++polls >= 3; });
+  EXPECT_EQ(polls, 3);
+  service.stall_worker_if_injected(7'000'000, "odometry thread", [&] { return ++polls > 100; });
+  EXPECT_EQ(polls, 3) << "stalled twice";
+}
+
 TEST(FaultInjection, ParsesBothStallsAndRejectsAnUnknownFaultNamingTheKnownOnes) {
   const FaultInjection main_loop = parse_fault_injection("stall-main-loop-after=2s");
   EXPECT_EQ(main_loop.stall_main_loop_after_us, 2'000'000);

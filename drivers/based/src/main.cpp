@@ -8,6 +8,7 @@
 
 #include <csignal>
 #include <cstdio>
+#include <functional>
 #include <iostream>
 
 namespace {
@@ -56,8 +57,7 @@ int main(int argc, char** argv) {
   }
 
   try {
-    const int64_t start_us = monotonic_us();
-    ServiceNotifier service("based", start_us);
+    ServiceNotifier service("based", monotonic_us());
     LcmBus bus(lcm_url);
     based::BasedNode node(bus, params);
     if (*circle_opt) {
@@ -73,8 +73,10 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "based: base %s, odometry %.0f Hz, commands %.0f Hz, deadman %.2f s%s\n",
                  params.url.c_str(), params.odometry.poll_rate_hz, params.command.rate_hz,
                  params.command.deadman_s, *circle_opt ? ", driving a circle" : ", following BASE_CMD");
-    if (const int64_t after = service.fault_injection().stall_worker_after_us; after >= 0) {
-      node.inject_poll_stall_at(start_us + after);
+    if (service.fault_injection().stall_worker_after_us >= 0) {
+      node.set_poll_hook([&service](const std::function<bool()>& stopping) {
+        service.stall_worker_if_injected(monotonic_us(), "odometry thread", stopping);
+      });
     }
     node.start();
     struct sigaction sa {};

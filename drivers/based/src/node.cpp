@@ -165,12 +165,9 @@ void BasedNode::poll_loop() {
   int64_t connections_seen = 0;
   while (!stopping_) {
     beats_.beat(poll_beat_, monotonic_us());
-    if (poll_stall_at_us_ >= 0 && monotonic_us() >= poll_stall_at_us_) {
-      poll_stall_at_us_ = -1;
-      log_line("fault injection: odometry thread stalled");
-      while (wait_until(std::chrono::steady_clock::now() + std::chrono::seconds(1))) {
-      }
-      break;
+    if (poll_hook_) {
+      poll_hook_([this] { return stopping_.load(); });
+      if (stopping_) break;
     }
     const Reply reply = client.get(kOdometryPath);
     const int64_t now = monotonic_us();

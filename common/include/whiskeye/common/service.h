@@ -48,15 +48,25 @@ class ServiceNotifier {
   // and blocks the calling loop, polling `stop` every 50 ms, until it returns true; then returns so
   // the daemon can shut down normally. Without the variable it returns at once.
   void stall_if_injected(int64_t now_mono_us, const std::function<bool()>& stop);
+  // TEST-ONLY (WHISKEYE_FAULT_INJECT=stall-worker-after=T): the same for one worker thread, named in
+  // the log line as `worker` ("<daemon>: fault injection: <worker> stalled"). Call it from that
+  // worker's loop only; it touches nothing the main loop's calls use.
+  void stall_worker_if_injected(int64_t now_mono_us, const std::string& worker, const std::function<bool()>& stop);
 
  private:
+  // Once `after_us` (≥ 0) has passed since start: logs "<daemon>: fault injection: <what>" and blocks
+  // until stop() (polled every 50 ms). `stalled` makes it happen once.
+  void stall_once(int64_t after_us, bool& stalled, int64_t now_mono_us, const std::string& what,
+                  const std::function<bool()>& stop) const;
+
   std::string daemon_;
   int64_t start_us_;
   int64_t keep_alive_us_ = 0;
   int64_t last_keep_alive_us_ = 0;
   bool sent_any_ = false;
   FaultInjection faults_;
-  bool stalled_ = false;
+  bool stalled_ = false;         // the main loop's stall happened
+  bool worker_stalled_ = false;  // the worker's stall happened (touched by that worker only)
 };
 
 }  // namespace whiskeye

@@ -24,6 +24,7 @@
 
 #include <atomic>
 #include <condition_variable>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -66,9 +67,11 @@ class BasedNode {
   // silent and for how long. The first call that finds a stall counts `worker_stalls` and logs it.
   // For the loop that sends WATCHDOG=1: withhold it while this is not empty. Call after start().
   std::string check_workers(int64_t now_mono_us);
-  // TEST-ONLY (WHISKEYE_FAULT_INJECT=stall-worker-after=T): the odometry thread blocks, once, from
-  // this monotonic time until stop(). Call before start().
-  void inject_poll_stall_at(int64_t mono_us) { poll_stall_at_us_ = mono_us; }
+  // Called at the top of every odometry-thread iteration with a predicate that is true once stop()
+  // was called: the seam for the test-only worker stall (based's main passes
+  // ServiceNotifier::stall_worker_if_injected). Call before start().
+  using PollHook = std::function<void(const std::function<bool()>& stopping)>;
+  void set_poll_hook(PollHook hook) { poll_hook_ = std::move(hook); }
 
  private:
   void poll_loop();
@@ -113,7 +116,7 @@ class BasedNode {
   int command_beat_ = -1;
   int status_beat_ = -1;
   bool stall_reported_ = false;  // check_workers()' caller only
-  int64_t poll_stall_at_us_ = -1;
+  PollHook poll_hook_;
   std::thread poll_thread_;
   std::thread command_thread_;
   std::thread status_thread_;
