@@ -173,6 +173,18 @@ TEST(VitaSlam, ARestoredCheckpointProducesByteIdenticalResults) {
   EXPECT_EQ(a.dead_reckon({0.1, 0, 0}), b.dead_reckon({0.1, 0, 0}));
 }
 
+TEST(VitaSlam, AnUnsealedCopySealedLaterIsTheCheckpointAndUnsealedItIsRefused) {
+  World w;
+  const SlamParams p;
+  VitaSlam a(p, w.geometry);
+  for (int c = 1; c <= 3; ++c) a.process_cycle(input(w.place(c), c));
+  std::vector<uint8_t> blob = a.serialise_unsealed();
+  EXPECT_THROW(VitaSlam::deserialise(blob, p, w.geometry), std::runtime_error);  // no checksum yet
+  VitaSlam::seal(blob);
+  EXPECT_EQ(blob, a.serialise());
+  EXPECT_EQ(VitaSlam::deserialise(blob, p, w.geometry).serialise(), blob);
+}
+
 TEST(VitaSlam, RefusesABadCheckpoint) {
   World w;
   const SlamParams p;

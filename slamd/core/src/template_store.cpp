@@ -340,6 +340,12 @@ SigmaEstimate TemplateStore::estimate_sigmas(const MatchParams& p, int max_pairs
   return out;
 }
 
+size_t TemplateStore::serialised_bytes() const {
+  const auto bytes = [](const auto& v) { return sizeof(uint64_t) + v.size() * sizeof(v[0]); };
+  return 2 * sizeof(int32_t) + bytes(visual_) + bytes(visual_mean_) + bytes(has_visual_) + bytes(pfh_) + bytes(sda_) +
+         bytes(has_tactile_) + bytes(num_contacts_) + bytes(pc_) + bytes(decay_);
+}
+
 void TemplateStore::serialise(std::vector<uint8_t>& out) const {
   bin::put<int32_t>(out, width_);
   bin::put<int32_t>(out, height_);

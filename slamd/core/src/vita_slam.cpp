@@ -157,7 +157,20 @@ CycleResult VitaSlam::process_cycle(const CycleInput& in) {
 Pose2 VitaSlam::dead_reckon(const Pose2& offset) const { return compose(map_.current_pose(), offset); }
 
 std::vector<uint8_t> VitaSlam::serialise() const {
-  std::vector<uint8_t> out(kMagic, kMagic + 8);
+  std::vector<uint8_t> out = serialise_unsealed();
+  seal(out);
+  return out;
+}
+
+void VitaSlam::seal(std::vector<uint8_t>& blob) { bin::put<uint32_t>(blob, fnv1a(blob.data(), blob.size())); }
+
+std::vector<uint8_t> VitaSlam::serialise_unsealed() const {
+  // Reserved once (the templates are nearly all of it; pose cells and map estimated generously),
+  // so the copy is not reallocated on the way: ~30 MB at 10,000 templates.
+  std::vector<uint8_t> out;
+  out.reserve(4096 + store_.serialised_bytes() + 4 * sizeof(float) * cells_.activity().size() +
+              128 * static_cast<size_t>(map_.size()) + 64 * map_.links().size() + sizeof(uint32_t));
+  out.insert(out.end(), kMagic, kMagic + 8);
   bin::put<uint32_t>(out, kVersion);
   bin::put<uint8_t>(out, static_cast<uint8_t>(params_.mode));
   bin::put<int64_t>(out, last_odometry_utime_);
@@ -170,7 +183,6 @@ std::vector<uint8_t> VitaSlam::serialise() const {
   store_.serialise(out);
   cells_.serialise(out);
   map_.serialise(out);
-  bin::put<uint32_t>(out, fnv1a(out.data(), out.size()));
   return out;
 }
 

@@ -118,6 +118,7 @@ class TemplateStore {
                                 int* best_shift);
 
   void serialise(std::vector<uint8_t>& out) const;
+  size_t serialised_bytes() const;  // what serialise() appends
   // Reads what serialise() wrote at `pos`, advancing it; throws std::runtime_error on bad data.
   static TemplateStore deserialise(const std::vector<uint8_t>& in, size_t& pos);
 

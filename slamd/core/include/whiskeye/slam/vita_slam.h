@@ -85,7 +85,12 @@ class VitaSlam {
   }
   bool localise_only() const { return localise_only_; }
 
+  // The whole state as a checkpoint blob: serialise_unsealed() + seal().
   std::vector<uint8_t> serialise() const;
+  // The same in two steps, so that a daemon takes only the copy on its loop's thread and leaves the
+  // checksum (a pass over every byte, ~30 MB at 10,000 templates) to the thread that writes it.
+  std::vector<uint8_t> serialise_unsealed() const;
+  static void seal(std::vector<uint8_t>& blob);  // appends the checksum
   // Throws std::runtime_error naming the problem: bad magic/version/checksum, truncated data, or
   // dimensions (mode, template size, pose-cell grid) that differ from `params`.
   static VitaSlam deserialise(std::span<const uint8_t> data, const SlamParams& params, const RobotGeometry& geometry);
