@@ -12,6 +12,8 @@
 //   BM_CycleLatency/<n>              the core as configured in config/slam.yaml
 //   BM_CycleLatencyNoPrefilter/<n>   the same with the matcher's exact lower-bound prefilter off,
 //                                    i.e. every stored template compared in full (the plain scan)
+#include "checkpoint_store.h"
+#include "checkpoint_writer.h"
 #include "synthetic.h"
 #include "whiskeye/slam/vita_slam.h"
 
@@ -21,8 +23,10 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <map>
 #include <random>
+#include <thread>
 
 namespace whiskeye::slam {
 namespace {
@@ -192,6 +196,66 @@ void BM_CycleLatencyNoPrefilter(benchmark::State& state) {
   run_latency(state, p);
 }
 BENCHMARK(BM_CycleLatencyNoPrefilter)->Arg(1000)->Arg(10000)->Iterations(kMeasuredCycles)->UseManualTime()->Unit(benchmark::kMillisecond);
+
+// What a live checkpoint of a map of n templates costs slamd's LCM loop, i.e. the time the loop
+// cannot receive messages. Written durably by CheckpointStore (temp file, fsync, rename, directory
+// fsync) to $TMPDIR (default /tmp; point it at the robot's state disk to measure that).
+//   BM_CheckpointSynchronous/<n>  the reference, as slamd did it before: serialise the state, seal
+//                                 it and write it, all on the loop's thread
+//   BM_CheckpointHandOff/<n>      as slamd does it now: the loop copies the state out and hands it
+//                                 to a CheckpointWriter, whose thread seals and writes it
+// The time is the loop's; counters: MB per checkpoint; for the hand-off, how many the writer wrote
+// and how many a newer one superseded (one is taken every 100 ms here, faster than the disk).
+std::string checkpoint_dir() {
+  const char* tmp = std::getenv("TMPDIR");
+  return std::string(tmp != nullptr ? tmp : "/tmp") + "/slamd-checkpoint-bench";
+}
+
+void BM_CheckpointSynchronous(benchmark::State& state) {
+  const VitaSlam slam = VitaSlam::deserialise(grown(static_cast<int>(state.range(0))).blob, config_params(),
+                                              default_robot_geometry());
+  slamd::CheckpointStore store(checkpoint_dir(), 2);
+  uint64_t sequence = 0;
+  size_t bytes = 0;
+  for (auto _ : state) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const std::vector<uint8_t> blob = slam.serialise();
+    store.write(++sequence, blob);
+    state.SetIterationTime(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    bytes = blob.size();
+  }
+  state.counters["MB"] = static_cast<double>(bytes) / 1e6;
+  std::filesystem::remove_all(checkpoint_dir());
+}
+BENCHMARK(BM_CheckpointSynchronous)->Arg(1000)->Arg(10000)->Iterations(20)->UseManualTime()->Unit(benchmark::kMillisecond);
+
+void BM_CheckpointHandOff(benchmark::State& state) {
+  const VitaSlam slam = VitaSlam::deserialise(grown(static_cast<int>(state.range(0))).blob, config_params(),
+                                              default_robot_geometry());
+  slamd::CheckpointStore store(checkpoint_dir(), 2);
+  slamd::CheckpointWriter writer(
+      [&store](uint64_t sequence, std::vector<uint8_t>& payload) {
+        VitaSlam::seal(payload);
+        store.write(sequence, payload);
+      },
+      nullptr);
+  uint64_t sequence = 0;
+  size_t bytes = 0;
+  for (auto _ : state) {
+    const auto t0 = std::chrono::steady_clock::now();
+    std::vector<uint8_t> blob = slam.serialise_unsealed();
+    bytes = blob.size();
+    writer.submit(++sequence, std::move(blob));
+    state.SetIterationTime(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));  // the rest of the loop's life
+  }
+  writer.finish();
+  state.counters["MB"] = static_cast<double>(bytes) / 1e6;
+  state.counters["written"] = static_cast<double>(writer.counters().written);
+  state.counters["superseded"] = static_cast<double>(writer.counters().superseded);
+  std::filesystem::remove_all(checkpoint_dir());
+}
+BENCHMARK(BM_CheckpointHandOff)->Arg(1000)->Arg(10000)->Iterations(20)->UseManualTime()->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace whiskeye::slam

@@ -3,6 +3,7 @@
 //   offline: slamd --replay IN.lcmlog --output OUT.lcmlog [--mode M]  (reads the log directly)
 // See docs/slamd.md.
 #include "checkpoint_store.h"
+#include "checkpoint_writer.h"
 #include "slam_node.h"
 
 #include "whiskeye/common/bus.h"
@@ -187,16 +188,15 @@ int run_live(const Loaded& cfg, const Options& o) {
   slamd::SlamNode node(bus, bus, make_slam(cfg, o, &store), cfg.node, errors);
   node.set_logger(log_line);
   node.set_latency_clock(monotonic_us);
-  int64_t checkpoints = 0;
-  int64_t checkpoint_errors = 0;
+  // The loop only copies the state out; the checksum and the disk are the writer thread's work.
+  slamd::CheckpointWriter writer(
+      [&store](uint64_t sequence, std::vector<uint8_t>& payload) {
+        slam::VitaSlam::seal(payload);
+        store.write(sequence, payload);
+      },
+      log_line);
   auto checkpoint = [&] {
-    try {
-      store.write(static_cast<uint64_t>(node.counters().cycles), node.slam().serialise());
-      ++checkpoints;
-    } catch (const std::exception& e) {
-      ++checkpoint_errors;
-      log_line(std::string("checkpoint failed: ") + e.what());
-    }
+    writer.submit(static_cast<uint64_t>(node.counters().cycles), node.slam().serialise_unsealed());
   };
   if (o.checkpoint_every > 0 && !o.localise) {
     node.set_cycle_hook([&](const slam::CycleResult&) {
@@ -217,8 +217,10 @@ int run_live(const Loaded& cfg, const Options& o) {
     const int64_t now = monotonic_us();
     if (now >= next_tick) {
       auto st = node.status(now_utime());
-      st.checkpoints_written = checkpoints;
-      st.checkpoint_errors = checkpoint_errors;
+      const auto written = writer.counters();
+      st.checkpoints_written = written.written;
+      st.checkpoint_errors = written.errors;
+      st.checkpoints_superseded = written.superseded;
       publish(bus, "SLAM_STATUS", st);
       next_tick = now + 1'000'000;
     }
@@ -228,6 +230,7 @@ int run_live(const Loaded& cfg, const Options& o) {
   }
   service.stopping();
   if (!o.localise) checkpoint();
+  writer.finish();  // the final state is on disk before slamd exits
   log_line("stopped after " + std::to_string(node.counters().cycles) + " cycles");
   return 0;
 }

@@ -237,6 +237,7 @@ std::vector<TypeSample> all_type_samples() {
     m.cycles_without_contact = 4;
     m.checkpoints_written = 100;
     m.checkpoint_errors = 0;
+    m.checkpoints_superseded = 2;
     out.push_back(make(m));
   }
   {

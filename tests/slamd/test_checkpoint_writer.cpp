@@ -1,0 +1,154 @@
+#include "checkpoint_store.h"
+#include "checkpoint_writer.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <filesystem>
+#include <future>
+#include <mutex>
+#include <stdexcept>
+#include <vector>
+
+namespace whiskeye::slamd {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::ElementsAre;
+using ::testing::HasSubstr;
+using namespace std::chrono_literals;
+
+// A disk that records what it is given and, while `hold` is set, blocks inside the write until
+// release() (a slow fsync), announcing that it is blocked.
+class FakeDisk {
+ public:
+  explicit FakeDisk(bool hold = false) : hold_(hold) {}
+  CheckpointWriter::WriteFn fn() {
+    return [this](uint64_t sequence, std::vector<uint8_t>& payload) {
+      if (sequence == fail_sequence_) throw std::runtime_error("/state/checkpoint: No space left on device");
+      {
+        std::lock_guard lock(mutex_);
+        sequences_.push_back(sequence);
+        sizes_.push_back(payload.size());
+      }
+      if (hold_) {
+        hold_ = false;
+        entered_.set_value();
+        release_.get_future().wait();
+      }
+    };
+  }
+  void wait_until_blocked() { ASSERT_EQ(entered_.get_future().wait_for(10s), std::future_status::ready); }
+  void release() { release_.set_value(); }
+  void fail_on(uint64_t sequence) { fail_sequence_ = sequence; }
+  std::vector<uint64_t> sequences() {
+    std::lock_guard lock(mutex_);
+    return sequences_;
+  }
+  std::vector<size_t> sizes() {
+    std::lock_guard lock(mutex_);
+    return sizes_;
+  }
+
+ private:
+  bool hold_;
+  uint64_t fail_sequence_ = UINT64_MAX;
+  std::promise<void> entered_, release_;
+  std::mutex mutex_;
+  std::vector<uint64_t> sequences_;
+  std::vector<size_t> sizes_;
+};
+
+std::vector<uint8_t> bytes(size_t n) { return std::vector<uint8_t>(n, 0x5a); }
+
+TEST(CheckpointWriter, SubmitReturnsWhileTheDiskIsBusyAndTheNewestWaitingSnapshotWins) {
+  FakeDisk disk(/*hold=*/true);
+  CheckpointWriter writer(disk.fn(), nullptr);
+  // The loop's thread must never wait for the disk: every submit returns although the disk holds
+  // snapshot 1 until release() below (a submit that wrote itself would still be waiting).
+  auto first = std::async(std::launch::async, [&] { writer.submit(1, bytes(10)); });
+  disk.wait_until_blocked();  // snapshot 1 is stuck in a slow write
+  auto later = std::async(std::launch::async, [&] {
+    writer.submit(2, bytes(20));
+    writer.submit(3, bytes(30));
+  });
+  const bool first_returned = first.wait_for(10s) == std::future_status::ready;
+  const bool later_returned = later.wait_for(10s) == std::future_status::ready;
+  const int64_t written_while_busy = writer.counters().written;
+  disk.release();
+  EXPECT_TRUE(first_returned);
+  EXPECT_TRUE(later_returned);
+  EXPECT_EQ(written_while_busy, 0);
+  writer.finish();
+  EXPECT_THAT(disk.sequences(), ElementsAre(1u, 3u));  // 2 was replaced by 3 while 1 was written
+  EXPECT_THAT(disk.sizes(), ElementsAre(10u, 30u));
+  const auto c = writer.counters();
+  EXPECT_EQ(c.written, 2);
+  EXPECT_EQ(c.superseded, 1);
+  EXPECT_EQ(c.errors, 0);
+}
+
+TEST(CheckpointWriter, AFailedWriteIsLoggedAndCountedAndTheNextOneIsStillWritten) {
+  FakeDisk disk;
+  disk.fail_on(2);
+  std::vector<std::string> log;
+  std::mutex log_mutex;
+  CheckpointWriter writer(disk.fn(), [&](const std::string& line) {
+    std::lock_guard lock(log_mutex);
+    log.push_back(line);
+  });
+  for (uint64_t s = 1; s <= 3; ++s) {
+    writer.submit(s, bytes(8));
+    // One at a time: wait until the writer has taken it (written or failed).
+    for (int i = 0; i < 10000; ++i) {
+      const auto c = writer.counters();
+      if (c.written + c.errors == static_cast<int64_t>(s)) break;
+      std::this_thread::sleep_for(1ms);
+    }
+  }
+  writer.finish();
+  EXPECT_THAT(disk.sequences(), ElementsAre(1u, 3u));
+  const auto c = writer.counters();
+  EXPECT_EQ(c.written, 2);
+  EXPECT_EQ(c.errors, 1);
+  ASSERT_EQ(log.size(), 1u);
+  EXPECT_THAT(log[0], HasSubstr("checkpoint failed"));
+  EXPECT_THAT(log[0], HasSubstr("No space left on device"));
+}
+
+TEST(CheckpointWriter, FinishWritesWhatIsWaitingAndLaterSubmitsAreWrittenAtOnce) {
+  FakeDisk disk(/*hold=*/true);
+  CheckpointWriter writer(disk.fn(), nullptr);
+  writer.submit(1, bytes(4));
+  disk.wait_until_blocked();
+  writer.submit(2, bytes(4));  // waiting behind 1
+  disk.release();
+  writer.finish();
+  EXPECT_THAT(disk.sequences(), ElementsAre(1u, 2u));
+  writer.submit(3, bytes(4));  // after finish: written before submit returns
+  EXPECT_THAT(disk.sequences(), ElementsAre(1u, 2u, 3u));
+  writer.finish();  // idempotent
+  EXPECT_EQ(writer.counters().written, 3);
+}
+
+TEST(CheckpointWriter, WithTheRealStoreTheNewestSubmittedStateIsTheOneThatLoads) {
+  const fs::path dir = fs::path(::testing::TempDir()) / "cp_writer_store";
+  fs::remove_all(dir);
+  CheckpointStore store(dir.string(), 3);
+  {
+    CheckpointWriter writer([&](uint64_t s, std::vector<uint8_t>& p) { store.write(s, p); }, nullptr);
+    for (uint64_t s = 1; s <= 20; ++s) writer.submit(s, std::vector<uint8_t>(1000, static_cast<uint8_t>(s)));
+  }  // the destructor finishes the writes
+  std::vector<std::string> problems;
+  const auto cp = store.load_newest(&problems);
+  ASSERT_TRUE(cp.has_value());
+  EXPECT_TRUE(problems.empty());
+  EXPECT_EQ(cp->sequence, 20u);
+  EXPECT_EQ(cp->payload, std::vector<uint8_t>(1000, 20));
+  EXPECT_LE(store.list().size(), 3u);
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace whiskeye::slamd
