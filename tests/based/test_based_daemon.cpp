@@ -1,6 +1,7 @@
 // End-to-end tests of the real `based` binary: a Robotino REST server on 127.0.0.1 in the test, the
 // daemon as a subprocess, LCM over udpm:// inside a private network namespace (NETNS).
 #include "fake_robotino.h"
+#include "scratch.h"
 
 #include "whiskeye/common/bus.h"
 #include "whiskeye/common/clock.h"
@@ -19,6 +20,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstdio>
 #include <fstream>
 #include <sstream>
 #include <thread>
@@ -36,8 +38,7 @@ const char* const kLcmUrl = "udpm://239.255.76.67:7667?ttl=0";
 class Daemon {
  public:
   explicit Daemon(const std::vector<std::string>& args) {
-    stderr_path_ = ::testing::TempDir() + "based_stderr_" + std::to_string(::getpid()) + "_" +
-                   std::to_string(counter_++) + ".txt";
+    stderr_path_ = whiskeye::testing::scratch_file("based_stderr", ".txt");
     std::vector<std::string> full{BASED_BINARY};
     full.insert(full.end(), args.begin(), args.end());
     std::vector<char*> argv;
@@ -79,16 +80,13 @@ class Daemon {
   }
 
  private:
-  static inline int counter_ = 0;
   pid_t pid_ = -1;
   bool exited_ = false;
   std::string stderr_path_;
 };
 
 std::string write_config(const std::string& text) {
-  static int n = 0;
-  const std::string path = ::testing::TempDir() + "based_test_" + std::to_string(::getpid()) + "_" +
-                           std::to_string(n++) + ".yaml";
+  const std::string path = whiskeye::testing::scratch_file("based_test", ".yaml");
   std::ofstream(path) << text;
   return path;
 }

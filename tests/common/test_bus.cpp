@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cstdio>
 #include <fstream>
 #include <iterator>
@@ -51,7 +53,7 @@ TEST(MemoryBus, CountsDecodeFailuresInsteadOfCrashing) {
 }
 
 TEST(LogFiles, WriterAndReaderRoundTrip) {
-  const std::string path = ::testing::TempDir() + "roundtrip.lcmlog";
+  const std::string path = ::testing::TempDir() + "bus_roundtrip_" + std::to_string(::getpid()) + ".lcmlog";
   {
     LogWriterBus out(path);
     for (int i = 0; i < 5; ++i) {
@@ -96,7 +98,7 @@ TEST(MemoryBus, PlainNamesMatchExactlyAndRegexesAsRegexes) {
 }
 
 TEST(LogFiles, ViewsReadTheSameEventsWithoutCopying) {
-  const std::string path = ::testing::TempDir() + "views.lcmlog";
+  const std::string path = ::testing::TempDir() + "bus_views_" + std::to_string(::getpid()) + ".lcmlog";
   {
     LogWriterBus out(path);
     for (int i = 0; i < 3; ++i) {
@@ -156,7 +158,7 @@ std::pair<std::vector<double>, LogReader::Damage> read_all(const std::string& pa
 }
 
 TEST(LogFiles, ALogCutOffInsideItsLastEventYieldsEveryCompleteEventAndSaysWhere) {
-  const std::string path = ::testing::TempDir() + "truncated.lcmlog";
+  const std::string path = ::testing::TempDir() + "bus_truncated_" + std::to_string(::getpid()) + ".lcmlog";
   std::vector<char> bytes = three_event_log(path);
   const size_t event = bytes.size() / 3;  // equal events
   auto [xs, damage] = read_all(path);
@@ -183,7 +185,7 @@ TEST(LogFiles, ALogCutOffInsideItsLastEventYieldsEveryCompleteEventAndSaysWhere)
 }
 
 TEST(LogFiles, ACorruptEventIsSkippedAndReadingResumesAtTheNextEvent) {
-  const std::string path = ::testing::TempDir() + "corrupt.lcmlog";
+  const std::string path = ::testing::TempDir() + "bus_corrupt_" + std::to_string(::getpid()) + ".lcmlog";
   const std::vector<char> good = three_event_log(path);
   const size_t event = good.size() / 3;
   struct Case {
@@ -218,7 +220,7 @@ TEST(LogFiles, ACorruptEventIsSkippedAndReadingResumesAtTheNextEvent) {
 }
 
 TEST(LogFiles, EmptyLogHasNoEvents) {
-  const std::string path = ::testing::TempDir() + "empty.lcmlog";
+  const std::string path = ::testing::TempDir() + "bus_empty_" + std::to_string(::getpid()) + ".lcmlog";
   write_bytes(path, {});
   auto [xs, damage] = read_all(path);
   EXPECT_TRUE(xs.empty());
@@ -227,7 +229,7 @@ TEST(LogFiles, EmptyLogHasNoEvents) {
 }
 
 TEST(LogFiles, ViewOwnerKeepsTheDataAfterTheReaderIsGone) {
-  const std::string path = ::testing::TempDir() + "owner.lcmlog";
+  const std::string path = ::testing::TempDir() + "bus_owner_" + std::to_string(::getpid()) + ".lcmlog";
   three_event_log(path);
   LogReader::EventView ev;
   {

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 #include <gmock/gmock.h>
 
+#include <unistd.h>
+
 #include <cstdio>
 #include <fstream>
 
@@ -130,7 +132,7 @@ TEST(Params, FileErrorsNameTheFile) {
   } catch (const ParamError& e) {
     EXPECT_THAT(e.what(), HasSubstr("/nonexistent/robot.yaml: cannot open"));
   }
-  const std::string path = ::testing::TempDir() + "bad.yaml";
+  const std::string path = ::testing::TempDir() + "params_bad_" + std::to_string(::getpid()) + ".yaml";
   std::ofstream(path) << "a: [1, 2\n";
   try {
     ParamNode::from_file(path);

@@ -4,6 +4,8 @@
 // without a camera, based against the fake Robotino server, slamd on an empty bus; whiskerd needs a CAN
 // interface and has the same check in the VM (tests/deploy/scenario_whiskerd_watchdog.sh).
 // Runs in a private network namespace (LCM udpm:// on loopback).
+#include "scratch.h"
+
 #include <gtest/gtest.h>
 
 #include <unistd.h>
@@ -34,12 +36,7 @@ void expect_watchdog_contract(const WatchdogReport& r) {
   EXPECT_TRUE(r.alive_while_stalled) << r.summary();
 }
 
-std::string temp_dir(const std::string& name) {
-  const auto dir = std::filesystem::path(::testing::TempDir()) / ("deploy_" + name + "_" + std::to_string(::getpid()));
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
-  return dir.string();
-}
+std::string temp_dir(const std::string& name) { return whiskeye::testing::scratch_dir("deploy_" + name); }
 
 }  // namespace
 

@@ -1,6 +1,8 @@
 // The daemons as processes on the host (no CAN or video here): --help, bad configuration, a missing
 // CAN interface, and camerad waiting for a missing camera while reporting READY to systemd and
 // DEGRADED on DRIVER_STATUS. Runs in a private network namespace (udpm:// on loopback).
+#include "scratch.h"
+
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/socket.h>
@@ -28,7 +30,7 @@ struct ProcessResult {
 
 // Runs argv with stderr captured; kills it after timeout_s.
 ProcessResult run(const std::vector<std::string>& args, double timeout_s = 10) {
-  const std::string err_path = ::testing::TempDir() + "/daemon_err.txt";
+  const std::string err_path = whiskeye::testing::scratch_file("daemon_err", ".txt");
   const pid_t pid = fork();
   if (pid == 0) {
     FILE* f = std::freopen(err_path.c_str(), "w", stderr);
@@ -55,7 +57,7 @@ ProcessResult run(const std::vector<std::string>& args, double timeout_s = 10) {
 }
 
 std::string write_file(const std::string& name, const std::string& text) {
-  const std::string path = ::testing::TempDir() + "/" + name;
+  const std::string path = whiskeye::testing::scratch_file(name, ".yaml");
   std::ofstream(path) << text;
   return path;
 }
@@ -70,12 +72,12 @@ TEST(DaemonProcesses, HelpExitsZero) {
 }
 
 TEST(DaemonProcesses, BadConfigIsOneLineNamingTheKeyAndExitsNonZero) {
-  const std::string bad = write_file("bad.yaml", "can:\n  rate_hz: 5000\n");
+  const std::string bad = write_file("bad", "can:\n  rate_hz: 5000\n");
   const ProcessResult w = run({WHISKERD, "-c", bad});
   EXPECT_EQ(exit_code(w), 2);
   EXPECT_NE(w.err.find("whiskerd: bad config:"), std::string::npos) << w.err;
   EXPECT_NE(w.err.find("can.rate_hz"), std::string::npos) << w.err;
-  const std::string bad_cam = write_file("bad_cam.yaml", "camera:\n  formats: [RGB3]\n");
+  const std::string bad_cam = write_file("bad_cam", "camera:\n  formats: [RGB3]\n");
   const ProcessResult c = run({CAMERAD, "-c", bad_cam});
   EXPECT_EQ(exit_code(c), 2);
   EXPECT_NE(c.err.find("camera.formats"), std::string::npos) << c.err;
@@ -90,7 +92,7 @@ TEST(DaemonProcesses, WhiskerdWithoutTheCanInterfaceFailsWithAReason) {
 
 TEST(DaemonProcesses, CameradWaitsForAMissingCameraReadyAndDegraded) {
   // A datagram socket standing in for systemd's notify socket.
-  const std::string sock_path = ::testing::TempDir() + "/notify.sock";
+  const std::string sock_path = whiskeye::testing::scratch_file("notify", ".sock");
   unlink(sock_path.c_str());
   const int fd = socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
   ASSERT_GE(fd, 0);

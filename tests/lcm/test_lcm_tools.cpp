@@ -2,7 +2,8 @@
 // lcm-logger's files, lcm-logplayer, the generated Python modules, and lcm-spy (headless).
 // Runs inside a private network namespace (NETNS in CMake), so no packet leaves the machine.
 #include "samples.h"
-#include "../support/subprocess.h"
+#include "scratch.h"
+#include "subprocess.h"
 
 #include "whiskeye/common/bus.h"
 
@@ -116,8 +117,9 @@ TEST_F(LcmTools, GeneratedPythonModulesDecodeOurBytes) {
 }
 
 TEST_F(LcmTools, LcmSpyStartsHeadlessAndFindsAllOurTypes) {
+  // xvfb-run's own temp folder goes in a scratch folder: it is left behind when xvfb-run is stopped.
   Subprocess spy({"xvfb-run", "-a", WHISKEYE_SOURCE_DIR "/scripts/lcm-spy"}, "",
-                 {"WHISKEYE_TYPES_JAR=" WHISKEYE_TYPES_JAR});
+                 {"WHISKEYE_TYPES_JAR=" WHISKEYE_TYPES_JAR, "TMPDIR=" + whiskeye::testing::scratch_dir("lcm_spy")});
   const std::string expected = "Found " + std::to_string(all_type_samples().size()) + " LCM types";
   EXPECT_TRUE(wait_until([&] { return spy.output().find(expected) != std::string::npos; }, 60.0)) << spy.output();
   // Still running (the GUI came up under Xvfb) and no Java exception on the way.

@@ -4,6 +4,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <chrono>
 #include <filesystem>
 #include <future>
@@ -133,7 +135,7 @@ TEST(CheckpointWriter, FinishWritesWhatIsWaitingAndLaterSubmitsAreWrittenAtOnce)
 }
 
 TEST(CheckpointWriter, WithTheRealStoreTheNewestSubmittedStateIsTheOneThatLoads) {
-  const fs::path dir = fs::path(::testing::TempDir()) / "cp_writer_store";
+  const fs::path dir = fs::path(::testing::TempDir()) / ("cp_writer_store_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   CheckpointStore store(dir.string(), 3);
   {

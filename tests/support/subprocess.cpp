@@ -24,6 +24,7 @@ Subprocess::Subprocess(const std::vector<std::string>& argv, std::string output_
     if (fd < 0) throw std::runtime_error("mkstemp failed");
     ::close(fd);
     output_path_ = tmpl;
+    owns_output_ = true;
   }
   std::vector<char*> args;
   for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
@@ -59,6 +60,7 @@ Subprocess::~Subprocess() {
     ::kill(-pid_, SIGKILL);
     ::waitpid(pid_, nullptr, 0);
   }
+  if (owns_output_) ::unlink(output_path_.c_str());
 }
 
 int Subprocess::wait(double timeout_s) {

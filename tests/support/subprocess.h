@@ -11,7 +11,8 @@ namespace whiskeye::testing {
 class Subprocess {
  public:
   // Starts argv[0] (searched in PATH) with the given arguments; output goes to `output_path`
-  // (empty: a temp file). Extra environment entries "K=V" are added to the child's environment.
+  // (empty: a temp file, removed on destruction). Extra environment entries "K=V" are added to the
+  // child's environment.
   explicit Subprocess(const std::vector<std::string>& argv, std::string output_path = "",
                       const std::vector<std::string>& extra_env = {});
   ~Subprocess();
@@ -32,6 +33,7 @@ class Subprocess {
   int status_ = -1;
   bool reaped_ = false;
   std::string output_path_;
+  bool owns_output_ = false;  // a temp file of ours: removed with the process
 };
 
 // Polls `pred` every 10 ms until true or timeout; returns its last value.

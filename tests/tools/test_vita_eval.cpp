@@ -1,6 +1,7 @@
 // Integration test of the vita-eval binary: writes small slamd-like output logs (VITA_* and
 // GROUND_TRUTH) with LogWriterBus, runs the real executable on them and checks its JSON, its table
 // and its PNG plots.
+#include "scratch.h"
 #include "whiskeye/common/bus.h"
 #include "whiskeye/common/se2.h"
 
@@ -166,10 +167,8 @@ int count_colour(const cv::Mat& img, int b, int g, int r) {
 class VitaEvalBinary : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = std::filesystem::path(::testing::TempDir()) /
-           ("vita_eval_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    std::filesystem::remove_all(dir_);
-    std::filesystem::create_directories(dir_);
+    dir_ = whiskeye::testing::scratch_dir("vita_eval_" +
+                                          std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
   }
   std::string file(const std::string& name) const { return (dir_ / name).string(); }
   std::filesystem::path dir_;
