@@ -1,3 +1,4 @@
+#include "scratch.h"
 #include "whiskeye/common/bus.h"
 
 #include <whiskeye/pose2d_t.hpp>
@@ -5,9 +6,6 @@
 
 #include <gtest/gtest.h>
 
-#include <unistd.h>
-
-#include <cstdio>
 #include <fstream>
 #include <iterator>
 #include <tuple>
@@ -53,7 +51,7 @@ TEST(MemoryBus, CountsDecodeFailuresInsteadOfCrashing) {
 }
 
 TEST(LogFiles, WriterAndReaderRoundTrip) {
-  const std::string path = ::testing::TempDir() + "bus_roundtrip_" + std::to_string(::getpid()) + ".lcmlog";
+  const std::string path = whiskeye::testing::scratch_file("bus_roundtrip", ".lcmlog");
   {
     LogWriterBus out(path);
     for (int i = 0; i < 5; ++i) {
@@ -78,7 +76,6 @@ TEST(LogFiles, WriterAndReaderRoundTrip) {
   }
   EXPECT_EQ(n, 5);
   EXPECT_DOUBLE_EQ(in.progress(), 1.0);
-  std::remove(path.c_str());
 }
 
 TEST(MemoryBus, PlainNamesMatchExactlyAndRegexesAsRegexes) {
@@ -98,7 +95,7 @@ TEST(MemoryBus, PlainNamesMatchExactlyAndRegexesAsRegexes) {
 }
 
 TEST(LogFiles, ViewsReadTheSameEventsWithoutCopying) {
-  const std::string path = ::testing::TempDir() + "bus_views_" + std::to_string(::getpid()) + ".lcmlog";
+  const std::string path = whiskeye::testing::scratch_file("bus_views", ".lcmlog");
   {
     LogWriterBus out(path);
     for (int i = 0; i < 3; ++i) {
@@ -121,7 +118,6 @@ TEST(LogFiles, ViewsReadTheSameEventsWithoutCopying) {
   }
   EXPECT_EQ(channels, (std::vector<std::string>{"A", "B", "A"}));
   EXPECT_EQ(xs, (std::vector<double>{0, 1, 2}));
-  std::remove(path.c_str());
 }
 
 // Writes three pose2d_t events on "A" and returns the file's bytes.
@@ -158,7 +154,7 @@ std::pair<std::vector<double>, LogReader::Damage> read_all(const std::string& pa
 }
 
 TEST(LogFiles, ALogCutOffInsideItsLastEventYieldsEveryCompleteEventAndSaysWhere) {
-  const std::string path = ::testing::TempDir() + "bus_truncated_" + std::to_string(::getpid()) + ".lcmlog";
+  const std::string path = whiskeye::testing::scratch_file("bus_truncated", ".lcmlog");
   std::vector<char> bytes = three_event_log(path);
   const size_t event = bytes.size() / 3;  // equal events
   auto [xs, damage] = read_all(path);
@@ -181,11 +177,10 @@ TEST(LogFiles, ALogCutOffInsideItsLastEventYieldsEveryCompleteEventAndSaysWhere)
   EXPECT_EQ(xs, (std::vector<double>{0, 1}));
   EXPECT_TRUE(damage.truncated_tail);
   EXPECT_NE(damage.summary().find("incomplete event header"), std::string::npos) << damage.summary();
-  std::remove(path.c_str());
 }
 
 TEST(LogFiles, ACorruptEventIsSkippedAndReadingResumesAtTheNextEvent) {
-  const std::string path = ::testing::TempDir() + "bus_corrupt_" + std::to_string(::getpid()) + ".lcmlog";
+  const std::string path = whiskeye::testing::scratch_file("bus_corrupt", ".lcmlog");
   const std::vector<char> good = three_event_log(path);
   const size_t event = good.size() / 3;
   struct Case {
@@ -216,20 +211,18 @@ TEST(LogFiles, ACorruptEventIsSkippedAndReadingResumesAtTheNextEvent) {
   auto [xs, damage] = read_all(path);
   EXPECT_EQ(xs, (std::vector<double>{0, 1, 2}));
   EXPECT_EQ(damage.skipped_bytes, sizeof junk);
-  std::remove(path.c_str());
 }
 
 TEST(LogFiles, EmptyLogHasNoEvents) {
-  const std::string path = ::testing::TempDir() + "bus_empty_" + std::to_string(::getpid()) + ".lcmlog";
+  const std::string path = whiskeye::testing::scratch_file("bus_empty", ".lcmlog");
   write_bytes(path, {});
   auto [xs, damage] = read_all(path);
   EXPECT_TRUE(xs.empty());
   EXPECT_FALSE(damage.damaged());
-  std::remove(path.c_str());
 }
 
 TEST(LogFiles, ViewOwnerKeepsTheDataAfterTheReaderIsGone) {
-  const std::string path = ::testing::TempDir() + "bus_owner_" + std::to_string(::getpid()) + ".lcmlog";
+  const std::string path = whiskeye::testing::scratch_file("bus_owner", ".lcmlog");
   three_event_log(path);
   LogReader::EventView ev;
   {
@@ -237,7 +230,6 @@ TEST(LogFiles, ViewOwnerKeepsTheDataAfterTheReaderIsGone) {
     ASSERT_TRUE(in.next(ev));
     ASSERT_TRUE(in.next(ev));
   }
-  std::remove(path.c_str());
   ASSERT_TRUE(ev.owner);
   pose2d_t p;
   ASSERT_TRUE(decode_message(ev.data, p));

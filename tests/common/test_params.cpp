@@ -1,11 +1,9 @@
+#include "scratch.h"
 #include "whiskeye/common/params.h"
 
 #include <gtest/gtest.h>
 #include <gmock/gmock.h>
 
-#include <unistd.h>
-
-#include <cstdio>
 #include <fstream>
 
 namespace whiskeye {
@@ -132,7 +130,7 @@ TEST(Params, FileErrorsNameTheFile) {
   } catch (const ParamError& e) {
     EXPECT_THAT(e.what(), HasSubstr("/nonexistent/robot.yaml: cannot open"));
   }
-  const std::string path = ::testing::TempDir() + "params_bad_" + std::to_string(::getpid()) + ".yaml";
+  const std::string path = whiskeye::testing::scratch_file("params_bad", ".yaml");
   std::ofstream(path) << "a: [1, 2\n";
   try {
     ParamNode::from_file(path);
@@ -140,7 +138,6 @@ TEST(Params, FileErrorsNameTheFile) {
   } catch (const ParamError& e) {
     EXPECT_THAT(e.what(), HasSubstr(path + ": not valid YAML"));
   }
-  std::remove(path.c_str());
 }
 
 }  // namespace

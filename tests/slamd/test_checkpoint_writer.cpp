@@ -1,10 +1,9 @@
 #include "checkpoint_store.h"
 #include "checkpoint_writer.h"
+#include "scratch.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-
-#include <unistd.h>
 
 #include <chrono>
 #include <filesystem>
@@ -135,8 +134,7 @@ TEST(CheckpointWriter, FinishWritesWhatIsWaitingAndLaterSubmitsAreWrittenAtOnce)
 }
 
 TEST(CheckpointWriter, WithTheRealStoreTheNewestSubmittedStateIsTheOneThatLoads) {
-  const fs::path dir = fs::path(::testing::TempDir()) / ("cp_writer_store_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
+  const fs::path dir = whiskeye::testing::scratch_dir("cp_writer_store");
   CheckpointStore store(dir.string(), 3);
   {
     CheckpointWriter writer([&](uint64_t s, std::vector<uint8_t>& p) { store.write(s, p); }, nullptr);
@@ -149,7 +147,6 @@ TEST(CheckpointWriter, WithTheRealStoreTheNewestSubmittedStateIsTheOneThatLoads)
   EXPECT_EQ(cp->sequence, 20u);
   EXPECT_EQ(cp->payload, std::vector<uint8_t>(1000, 20));
   EXPECT_LE(store.list().size(), 3u);
-  fs::remove_all(dir);
 }
 
 }  // namespace
