@@ -93,6 +93,18 @@ std::string check_odometry(const odometry_t& m) {
   return "";
 }
 
+
+bool has_contact(const whisk_cycle_t& m) {
+  for (const auto& row : m.contact) {
+    for (int8_t c : row) {
+      if (c) return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
 slam::WhiskCycleInput to_core(const whisk_cycle_t& m) {
   slam::WhiskCycleInput in;
   in.cycle = m.cycle;
@@ -112,17 +124,6 @@ slam::WhiskCycleInput to_core(const whisk_cycle_t& m) {
   }
   return in;
 }
-
-bool has_contact(const whisk_cycle_t& m) {
-  for (const auto& row : m.contact) {
-    for (int8_t c : row) {
-      if (c) return true;
-    }
-  }
-  return false;
-}
-
-}  // namespace
 
 SlamNode::SlamNode(Bus& in, Bus& out, std::unique_ptr<slam::VitaSlam> slam, const NodeParams& params,
                    DecodeErrors& decode_errors)

@@ -17,6 +17,7 @@
 #include "whiskeye/slam/vita_slam.h"
 
 #include <whiskeye/slam_status_t.hpp>
+#include <whiskeye/whisk_cycle_t.hpp>
 
 #include <deque>
 #include <functional>
@@ -31,6 +32,9 @@ struct NodeParams {
   bool operator==(const NodeParams&) const = default;
 };
 void load(const ParamNode& node, NodeParams& params);
+
+// A WHISK_CYCLE message as the core's input (the message is assumed already validated).
+slam::WhiskCycleInput to_core(const whisk_cycle_t& m);
 
 struct NodeCounters {
   int64_t cycles = 0;
