@@ -53,5 +53,31 @@ TEST(BinaryIo, AnArrayLongerThanTheDataIsRefusedNamingWhere) {
   }
 }
 
+TEST(BinaryIo, RowsAreWrittenExactlyAsOneArrayOfTheSameValuesAndReadBackRowByRow) {
+  RowStore<uint16_t> rows(3);
+  std::vector<uint16_t> flat;
+  for (uint16_t r = 0; r < 600; ++r) {  // more than one chunk
+    uint16_t* row = rows.append();
+    for (uint16_t k = 0; k < 3; ++k) flat.push_back(row[k] = static_cast<uint16_t>(r * 3 + k));
+  }
+  std::vector<uint8_t> a, b;
+  put_rows(a, rows);
+  put_vec(b, flat);
+  EXPECT_EQ(a, b);
+  size_t pos = 0;
+  RowStore<uint16_t> back(3);
+  get_rows(b, pos, back);
+  EXPECT_EQ(pos, b.size());
+  EXPECT_EQ(back, rows);
+  RowStore<uint16_t> sevens(7);  // 1,800 values are not whole rows of 7
+  pos = 0;
+  try {
+    get_rows(b, pos, sevens);
+    FAIL() << "1,800 values were read as rows of 7";
+  } catch (const std::runtime_error& e) {
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("array of 1800 elements at byte 0 is not whole rows of 7"));
+  }
+}
+
 }  // namespace
 }  // namespace whiskeye::slam::bin

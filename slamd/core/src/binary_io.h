@@ -5,6 +5,8 @@
 // 30 MB, checkpointed every cycle); elsewhere each value is swapped byte by byte.
 #pragma once
 
+#include "whiskeye/slam/row_store.h"
+
 #include <bit>
 #include <cstdint>
 #include <cstring>
@@ -47,33 +49,71 @@ T get(const std::vector<uint8_t>& in, size_t& pos) {
   return v;
 }
 
+// n values from `data`, without a count.
 template <typename T>
-void put_vec(std::vector<uint8_t>& out, const std::vector<T>& v) {
-  put<uint64_t>(out, v.size());
+void put_array(std::vector<uint8_t>& out, const T* data, size_t n) {
   if constexpr (std::endian::native == std::endian::little) {
     const size_t at = out.size();
-    out.resize(at + v.size() * sizeof(T));
-    if (!v.empty()) std::memcpy(out.data() + at, v.data(), v.size() * sizeof(T));
+    out.resize(at + n * sizeof(T));
+    if (n != 0) std::memcpy(out.data() + at, data, n * sizeof(T));
   } else {
-    for (const T& x : v) put<T>(out, x);
+    for (size_t i = 0; i < n; ++i) put<T>(out, data[i]);
   }
 }
 
+// n values into `data`; the caller has checked that they are there.
 template <typename T>
-std::vector<T> get_vec(const std::vector<uint8_t>& in, size_t& pos) {
+void get_array(const std::vector<uint8_t>& in, size_t& pos, T* data, size_t n) {
+  if constexpr (std::endian::native == std::endian::little) {
+    if (n != 0) std::memcpy(data, in.data() + pos, n * sizeof(T));
+    pos += n * sizeof(T);
+  } else {
+    for (size_t i = 0; i < n; ++i) data[i] = get<T>(in, pos);
+  }
+}
+
+// An array's count as uint64 at `pos`, checked against the bytes left.
+template <typename T>
+size_t get_count(const std::vector<uint8_t>& in, size_t& pos) {
   const auto n = get<uint64_t>(in, pos);
   if (n > (in.size() - pos) / sizeof(T)) {
     throw std::runtime_error("checkpoint: array of " + std::to_string(n) + " elements at byte " + std::to_string(pos) +
                              " is longer than the data");
   }
-  std::vector<T> v(static_cast<size_t>(n));
-  if constexpr (std::endian::native == std::endian::little) {
-    if (n != 0) std::memcpy(v.data(), in.data() + pos, v.size() * sizeof(T));
-    pos += v.size() * sizeof(T);
-  } else {
-    for (T& x : v) x = get<T>(in, pos);
-  }
+  return static_cast<size_t>(n);
+}
+
+template <typename T>
+void put_vec(std::vector<uint8_t>& out, const std::vector<T>& v) {
+  put<uint64_t>(out, v.size());
+  put_array(out, v.data(), v.size());
+}
+
+template <typename T>
+std::vector<T> get_vec(const std::vector<uint8_t>& in, size_t& pos) {
+  std::vector<T> v(get_count<T>(in, pos));
+  get_array(in, pos, v.data(), v.size());
   return v;
+}
+
+// A RowStore as put_vec() writes the same values in one vector: the count, then every row in order.
+template <typename T>
+void put_rows(std::vector<uint8_t>& out, const RowStore<T>& rows) {
+  put<uint64_t>(out, rows.elements());
+  rows.for_each_run([&](const T* data, size_t n) { put_array(out, data, n); });
+}
+
+// Reads what put_rows() (or put_vec()) wrote into `rows` (empty, with its row length set).
+template <typename T>
+void get_rows(const std::vector<uint8_t>& in, size_t& pos, RowStore<T>& rows) {
+  const size_t at = pos;
+  const size_t n = get_count<T>(in, pos);
+  const size_t len = rows.row_length();
+  if (len == 0 ? n != 0 : n % len != 0) {
+    throw std::runtime_error("checkpoint: array of " + std::to_string(n) + " elements at byte " + std::to_string(at) +
+                             " is not whole rows of " + std::to_string(len));
+  }
+  for (size_t r = 0; len != 0 && r < n / len; ++r) get_array(in, pos, rows.append(), len);
 }
 
 }  // namespace whiskeye::slam::bin

@@ -182,7 +182,13 @@ float l1_f32(const float* __restrict a, const float* __restrict b, size_t n) {
 
 }  // namespace
 
-TemplateStore::TemplateStore(int visual_width, int visual_height) : width_(visual_width), height_(visual_height) {}
+TemplateStore::TemplateStore(int visual_width, int visual_height)
+    : width_(visual_width),
+      height_(visual_height),
+      visual_(pixels()),
+      blocks_(blocks()),
+      pfh_(kPfhBins),
+      sda_(kSdaSize) {}
 
 size_t TemplateStore::blocks() const {
   return static_cast<size_t>(width_) * static_cast<size_t>(blocks_per_column(height_));
@@ -197,24 +203,19 @@ int TemplateStore::add(const Query& q, double pc_x, double pc_y, double pc_theta
                                   std::to_string(q.visual->height) + ", the store holds " + std::to_string(width_) +
                                   "x" + std::to_string(height_));
     }
-    visual_.resize(visual_.size() + np);
-    to_column_major(q.visual->pixels.data(), width_, height_, &visual_[visual_.size() - np]);
-    visual_mean_.push_back(q.visual->mean);
-  } else {
-    visual_.resize(visual_.size() + np, 0);
-    visual_mean_.push_back(0.0f);
   }
-  const size_t nb = blocks();
-  blocks_.resize(blocks_.size() + nb);
-  block_means(&visual_[visual_.size() - np], width_, height_, blocks_.data() + (blocks_.size() - nb));  // nb may be 0
+  uint8_t* pixels_cm = visual_.append();  // zeros without a visual part
+  if (q.visual != nullptr) to_column_major(q.visual->pixels.data(), width_, height_, pixels_cm);
+  visual_mean_.push_back(q.visual != nullptr ? q.visual->mean : 0.0f);
+  block_means(pixels_cm, width_, height_, blocks_.append());  // no blocks (nullptr) below 4 rows
   has_visual_.push_back(q.visual != nullptr ? 1 : 0);
+  uint16_t* pfh = pfh_.append();
+  float* sda = sda_.append();
   if (q.tactile != nullptr) {
-    pfh_.insert(pfh_.end(), q.tactile->pfh.begin(), q.tactile->pfh.end());
-    sda_.insert(sda_.end(), q.tactile->sda.begin(), q.tactile->sda.end());
+    std::copy(q.tactile->pfh.begin(), q.tactile->pfh.end(), pfh);
+    std::copy(q.tactile->sda.begin(), q.tactile->sda.end(), sda);
     num_contacts_.push_back(q.tactile->num_contacts);
   } else {
-    pfh_.resize(pfh_.size() + kPfhBins, 0);
-    sda_.resize(sda_.size() + kSdaSize, 0.0f);
     num_contacts_.push_back(0);
   }
   has_tactile_.push_back(q.tactile != nullptr ? 1 : 0);
@@ -254,7 +255,6 @@ BestMatch TemplateStore::match(const Query& q, const Terms& terms, const MatchPa
     cur_blocks.resize(blocks());
     block_means(cur.data(), width_, height_, cur_blocks.data());
   }
-  const size_t nb = blocks();
   BoundProbe probe;
   const double inv_v = 1.0 / p.sigma_visual;
   const double inv_pfh = 1.0 / (65535.0 * p.sigma_pfh);
@@ -270,8 +270,8 @@ BestMatch TemplateStore::match(const Query& q, const Terms& terms, const MatchPa
     double ev = 0.0, ep = 0.0, es = 0.0;
     int shift = 0;
     if (terms.tactile) {
-      ep = l1_u16(q.tactile->pfh.data(), &pfh_[iu * kPfhBins], kPfhBins) * inv_pfh;
-      es = l1_f32(q.tactile->sda.data(), &sda_[iu * kSdaSize], kSdaSize) * inv_sda;
+      ep = l1_u16(q.tactile->pfh.data(), pfh_.row(iu), kPfhBins) * inv_pfh;
+      es = l1_f32(q.tactile->sda.data(), sda_.row(iu), kSdaSize) * inv_sda;
     }
     if (terms.visual) {
       // ε ≥ (0 + ep) + es whatever the visual term: the tactile terms alone may rule it out.
@@ -281,7 +281,7 @@ BestMatch TemplateStore::match(const Query& q, const Terms& terms, const MatchPa
       if (use_bound) {
         // ε with the visual term's lower bound, by the same operations as e below: ≤ e. (The
         // library is built with -ffp-contract=off so both sums round alike.)
-        const double lower = shift_bounds(cur_blocks.data(), blocks_.data() + iu * nb, width_, height_, p.shift_max,
+        const double lower = shift_bounds(cur_blocks.data(), blocks_.row(iu), width_, height_, p.shift_max,
                                           p.shift_step, bounds) *
                              inv_v;
         const bool pruned = best.id >= 0 && lower + ep + es >= best.error;  // e ≥ best.error: cannot replace it
@@ -289,7 +289,7 @@ BestMatch TemplateStore::match(const Query& q, const Terms& terms, const MatchPa
         if (pruned) continue;
       }
       // A fresh minimum per stored template (the original code carried it across templates).
-      ev = visual_distance_impl(cur.data(), &visual_[iu * np], use_bound ? bounds.data() : nullptr, width_, height_,
+      ev = visual_distance_impl(cur.data(), visual_.row(iu), use_bound ? bounds.data() : nullptr, width_, height_,
                                 p.shift_max, p.shift_step, &shift) *
            inv_v;
     }
@@ -318,18 +318,17 @@ SigmaEstimate TemplateStore::estimate_sigmas(const MatchParams& p, int max_pairs
     double sd() const { return k < 2 ? 0.0 : std::sqrt(std::max(0.0, (s2 - s * s / k) / (k - 1))); }
   } av, ap, as;
   int64_t idx = 0;
-  const size_t np = pixels();
   for (int i = 0; i < n; ++i) {
     for (int j = i + 1; j < n; ++j, ++idx) {
       if (idx % stride != 0) continue;
       const auto iu = static_cast<size_t>(i), ju = static_cast<size_t>(j);
       if (has_visual_[iu] != 0 && has_visual_[ju] != 0) {
-        av.add(visual_distance(&visual_[iu * np], &visual_[ju * np], width_, height_, p.shift_max, p.shift_step,
+        av.add(visual_distance(visual_.row(iu), visual_.row(ju), width_, height_, p.shift_max, p.shift_step,
                                nullptr));
       }
       if (has_tactile_[iu] != 0 && has_tactile_[ju] != 0) {
-        ap.add(l1_u16(&pfh_[iu * kPfhBins], &pfh_[ju * kPfhBins], kPfhBins) / 65535.0);
-        as.add(l1_f32(&sda_[iu * kSdaSize], &sda_[ju * kSdaSize], kSdaSize));
+        ap.add(l1_u16(pfh_.row(iu), pfh_.row(ju), kPfhBins) / 65535.0);
+        as.add(l1_f32(sda_.row(iu), sda_.row(ju), kSdaSize));
       }
       ++out.pairs;
     }
@@ -342,18 +341,21 @@ SigmaEstimate TemplateStore::estimate_sigmas(const MatchParams& p, int max_pairs
 
 size_t TemplateStore::serialised_bytes() const {
   const auto bytes = [](const auto& v) { return sizeof(uint64_t) + v.size() * sizeof(v[0]); };
-  return 2 * sizeof(int32_t) + bytes(visual_) + bytes(visual_mean_) + bytes(has_visual_) + bytes(pfh_) + bytes(sda_) +
+  const auto row_bytes = [](const auto& r) {
+    return sizeof(uint64_t) + r.elements() * sizeof(typename std::decay_t<decltype(r)>::value_type);
+  };
+  return 2 * sizeof(int32_t) + row_bytes(visual_) + bytes(visual_mean_) + bytes(has_visual_) + row_bytes(pfh_) + row_bytes(sda_) +
          bytes(has_tactile_) + bytes(num_contacts_) + bytes(pc_) + bytes(decay_);
 }
 
 void TemplateStore::serialise(std::vector<uint8_t>& out) const {
   bin::put<int32_t>(out, width_);
   bin::put<int32_t>(out, height_);
-  bin::put_vec(out, visual_);
+  bin::put_rows(out, visual_);
   bin::put_vec(out, visual_mean_);
   bin::put_vec(out, has_visual_);
-  bin::put_vec(out, pfh_);
-  bin::put_vec(out, sda_);
+  bin::put_rows(out, pfh_);
+  bin::put_rows(out, sda_);
   bin::put_vec(out, has_tactile_);
   bin::put_vec(out, num_contacts_);
   bin::put_vec(out, pc_);
@@ -367,23 +369,25 @@ TemplateStore TemplateStore::deserialise(const std::vector<uint8_t>& in, size_t&
   if (s.width_ <= 0 || s.height_ <= 0 || s.width_ > 4096 || s.height_ > 4096) {
     throw std::runtime_error("checkpoint: bad template size");
   }
-  s.visual_ = bin::get_vec<uint8_t>(in, pos);
+  s.visual_ = RowStore<uint8_t>(s.pixels());
+  s.blocks_ = RowStore<uint8_t>(s.blocks());
+  s.pfh_ = RowStore<uint16_t>(kPfhBins);
+  s.sda_ = RowStore<float>(kSdaSize);
+  bin::get_rows(in, pos, s.visual_);
   s.visual_mean_ = bin::get_vec<float>(in, pos);
   s.has_visual_ = bin::get_vec<uint8_t>(in, pos);
-  s.pfh_ = bin::get_vec<uint16_t>(in, pos);
-  s.sda_ = bin::get_vec<float>(in, pos);
+  bin::get_rows(in, pos, s.pfh_);
+  bin::get_rows(in, pos, s.sda_);
   s.has_tactile_ = bin::get_vec<uint8_t>(in, pos);
   s.num_contacts_ = bin::get_vec<int32_t>(in, pos);
   s.pc_ = bin::get_vec<double>(in, pos);
   s.decay_ = bin::get_vec<double>(in, pos);
   const size_t n = s.has_visual_.size();
-  if (s.visual_.size() != n * s.pixels() || s.visual_mean_.size() != n || s.pfh_.size() != n * kPfhBins ||
-      s.sda_.size() != n * kSdaSize || s.has_tactile_.size() != n || s.num_contacts_.size() != n ||
-      s.pc_.size() != 3 * n || s.decay_.size() != n) {
+  if (s.visual_.rows() != n || s.visual_mean_.size() != n || s.pfh_.rows() != n || s.sda_.rows() != n ||
+      s.has_tactile_.size() != n || s.num_contacts_.size() != n || s.pc_.size() != 3 * n || s.decay_.size() != n) {
     throw std::runtime_error("checkpoint: template arrays disagree in length");
   }
-  s.blocks_.resize(n * s.blocks());
-  for (size_t i = 0; i < n; ++i) block_means(&s.visual_[i * s.pixels()], s.width_, s.height_, s.blocks_.data() + i * s.blocks());
+  for (size_t i = 0; i < n; ++i) block_means(s.visual_.row(i), s.width_, s.height_, s.blocks_.append());
   return s;
 }
 

@@ -6,12 +6,14 @@
 // are L1 distances. Only the terms in use this cycle count (mode ∩ senses present); a stored
 // template that lacks a part in use is not a candidate. The result is the argmin over templates.
 //
-// Storage is contiguous (one byte per visual pixel, 16 bits per PFH bin, one float per SDA entry):
+// Each template's parts are contiguous (one byte per visual pixel, 16 bits per PFH bin, one float per
+// SDA entry), the templates in chunks of 256 that never move:
 // 64×40 + 125·2 + 24·4 = 2,906 bytes per template, plus 32 bytes of bookkeeping; in memory only,
 // a 4-row block-mean copy of the visual part for the matcher's lower bound (640 bytes at 64×40).
 #pragma once
 
 #include "whiskeye/common/params.h"
+#include "whiskeye/slam/row_store.h"
 #include "whiskeye/slam/tactile_template.h"
 #include "whiskeye/slam/types.h"
 #include "whiskeye/slam/visual_template.h"
@@ -94,9 +96,9 @@ class TemplateStore {
   bool has_tactile(int id) const { return has_tactile_[static_cast<size_t>(id)] != 0; }
   int num_contacts(int id) const { return num_contacts_[static_cast<size_t>(id)]; }
   // Column-major (x·height + y): see visual_distance().
-  const uint8_t* visual(int id) const { return &visual_[static_cast<size_t>(id) * pixels()]; }
-  const uint16_t* pfh(int id) const { return &pfh_[static_cast<size_t>(id) * kPfhBins]; }
-  const float* sda(int id) const { return &sda_[static_cast<size_t>(id) * kSdaSize]; }
+  const uint8_t* visual(int id) const { return visual_.row(static_cast<size_t>(id)); }
+  const uint16_t* pfh(int id) const { return pfh_.row(static_cast<size_t>(id)); }
+  const float* sda(int id) const { return sda_.row(static_cast<size_t>(id)); }
   // Pose-cell coordinates (cells) at creation: where a match injects energy.
   double pc_x(int id) const { return pc_[static_cast<size_t>(id) * 3]; }
   double pc_y(int id) const { return pc_[static_cast<size_t>(id) * 3 + 1]; }
@@ -130,12 +132,13 @@ class TemplateStore {
 
   int width_ = 0;
   int height_ = 0;
-  std::vector<uint8_t> visual_;
-  std::vector<uint8_t> blocks_;  // blocks() per template: 4-row block means of visual_ (not serialised)
+  // Per template, in chunks that never move (row_store.h): adding a template copies nothing.
+  RowStore<uint8_t> visual_;
+  RowStore<uint8_t> blocks_;  // blocks() per template: 4-row block means of visual_ (not serialised)
   std::vector<float> visual_mean_;
   std::vector<uint8_t> has_visual_;
-  std::vector<uint16_t> pfh_;
-  std::vector<float> sda_;
+  RowStore<uint16_t> pfh_;
+  RowStore<float> sda_;
   std::vector<uint8_t> has_tactile_;
   std::vector<int32_t> num_contacts_;
   std::vector<double> pc_;

@@ -1,0 +1,71 @@
+// Fixed-length rows (one per template) appended in chunks that never move. A std::vector holding
+// 10,000 templates' pixels (25 MB) copies all of them when it outgrows its capacity, which stalled
+// the cycle that added the template ~15 ms; here growing adds a chunk and copies nothing. Each row is
+// contiguous, so the matcher's per-template loops are unchanged.
+#pragma once
+
+#include <algorithm>
+#include <cstddef>
+#include <memory>
+#include <vector>
+
+namespace whiskeye::slam {
+
+template <typename T>
+class RowStore {
+ public:
+  using value_type = T;
+  RowStore() = default;
+  explicit RowStore(size_t row_length) : len_(row_length) {}
+  RowStore(const RowStore& o) : len_(o.len_), rows_(o.rows_) {
+    for (const auto& c : o.chunks_) {
+      chunks_.push_back(std::make_unique<T[]>(kRowsPerChunk * len_));
+      std::copy(c.get(), c.get() + kRowsPerChunk * len_, chunks_.back().get());
+    }
+  }
+  RowStore& operator=(const RowStore& o) {
+    if (this != &o) *this = RowStore(o);
+    return *this;
+  }
+  RowStore(RowStore&&) noexcept = default;
+  RowStore& operator=(RowStore&&) noexcept = default;
+
+  size_t rows() const { return rows_; }
+  size_t row_length() const { return len_; }
+  size_t elements() const { return rows_ * len_; }
+
+  // A new zero-filled row; valid for the store's lifetime (nullptr when rows are empty).
+  T* append() {
+    if (rows_ % kRowsPerChunk == 0 && len_ > 0) chunks_.push_back(std::make_unique<T[]>(kRowsPerChunk * len_));
+    ++rows_;
+    return row(rows_ - 1);
+  }
+  T* row(size_t i) { return len_ == 0 ? nullptr : chunks_[i / kRowsPerChunk].get() + (i % kRowsPerChunk) * len_; }
+  const T* row(size_t i) const {
+    return len_ == 0 ? nullptr : chunks_[i / kRowsPerChunk].get() + (i % kRowsPerChunk) * len_;
+  }
+
+  // f(data, count) over the rows in order, as few contiguous runs as there are chunks.
+  template <typename F>
+  void for_each_run(F f) const {
+    for (size_t c = 0; c * kRowsPerChunk < rows_ && len_ > 0; ++c) {
+      f(static_cast<const T*>(chunks_[c].get()), std::min(kRowsPerChunk, rows_ - c * kRowsPerChunk) * len_);
+    }
+  }
+
+  bool operator==(const RowStore& o) const {
+    if (len_ != o.len_ || rows_ != o.rows_) return false;
+    for (size_t i = 0; i < rows_ && len_ > 0; ++i) {
+      if (!std::equal(row(i), row(i) + len_, o.row(i))) return false;
+    }
+    return true;
+  }
+
+ private:
+  static constexpr size_t kRowsPerChunk = 256;
+  size_t len_ = 0;
+  size_t rows_ = 0;
+  std::vector<std::unique_ptr<T[]>> chunks_;
+};
+
+}  // namespace whiskeye::slam
