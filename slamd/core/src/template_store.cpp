@@ -105,14 +105,25 @@ void for_each_shift(int w, int shift_max, int shift_step, F f) {
   }
 }
 
-// The block-mean bound of shift s's SAD (current column c against stored column c − s); hb blocks
-// per column.
+// Current column c against stored column c − s, both column-major with `per_column` values a column:
+// the overlap is one run of `len` values, starting `off` into the current template for s ≥ 0 and
+// into the stored one for s < 0.
+struct Overlap {
+  size_t off, len;
+};
+Overlap overlap(int w, int per_column, int s) {
+  return {static_cast<size_t>(std::abs(s)) * static_cast<size_t>(per_column),
+          static_cast<size_t>(w - std::abs(s)) * static_cast<size_t>(per_column)};
+}
+uint32_t overlap_sad(const uint8_t* cur, const uint8_t* st, int s, Overlap o) {
+  return s >= 0 ? sad_u8(cur + o.off, st, o.len) : sad_u8(cur, st + o.off, o.len);
+}
+
+// The block-mean bound of shift s's SAD; hb blocks per column.
 uint32_t shift_bound(const uint8_t* cur_blocks, const uint8_t* st_blocks, int w, int hb, int s) {
-  const size_t off = static_cast<size_t>(std::abs(s)) * static_cast<size_t>(hb);
-  const size_t len = static_cast<size_t>(w - std::abs(s)) * static_cast<size_t>(hb);
-  const uint64_t sad = s >= 0 ? sad_u8(cur_blocks + off, st_blocks, len) : sad_u8(cur_blocks, st_blocks + off, len);
-  const uint64_t raw = kBlockRows * sad;
-  const uint64_t slack = len * (kBlockRows - 1);
+  const Overlap o = overlap(w, hb, s);
+  const uint64_t raw = kBlockRows * static_cast<uint64_t>(overlap_sad(cur_blocks, st_blocks, s, o));
+  const uint64_t slack = o.len * (kBlockRows - 1);
   return raw > slack ? static_cast<uint32_t>(raw - slack) : 0;
 }
 
@@ -127,15 +138,13 @@ double visual_distance_impl(const uint8_t* cur, const uint8_t* st, const uint32_
   int best_s = 0;
   size_t j = 0;
   for_each_shift(w, shift_max, shift_step, [&](int s) {
-    const size_t off = static_cast<size_t>(std::abs(s)) * static_cast<size_t>(h);
-    const size_t len = static_cast<size_t>(w - std::abs(s)) * static_cast<size_t>(h);
-    const uint64_t den = len;
+    const Overlap o = overlap(w, h, s);
+    const uint64_t den = o.len;
     // SAD ≥ bound, so bound·best_den ≥ best_num·den rules out the strict improvement below.
     const bool hopeless = bounds != nullptr && best_num != kNone && bounds[j] * best_den >= best_num * den;
     ++j;
     if (hopeless) return;
-    // Current column c against stored column c − s.
-    const uint32_t sad = s >= 0 ? sad_u8(cur + off, st, len) : sad_u8(cur, st + off, len);
+    const uint32_t sad = overlap_sad(cur, st, s, o);
     // Compare sad/den exactly (cross-multiplied) so the choice never depends on rounding.
     if (best_num == kNone || static_cast<uint64_t>(sad) * best_den < best_num * den) {
       best_num = sad;
@@ -158,7 +167,7 @@ double shift_bounds(const uint8_t* cur_blocks, const uint8_t* st_blocks, int w, 
   bounds.clear();
   for_each_shift(w, shift_max, shift_step, [&](int s) {
     const uint32_t b = shift_bound(cur_blocks, st_blocks, w, blocks_per_column(h), s);
-    const uint64_t den = static_cast<uint64_t>(w - std::abs(s)) * static_cast<uint64_t>(h);
+    const uint64_t den = overlap(w, h, s).len;
     if (bounds.empty() || static_cast<uint64_t>(b) * best_den < best_num * den) {
       best_num = b;
       best_den = den;
