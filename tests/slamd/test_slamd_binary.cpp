@@ -5,12 +5,14 @@
 
 #include "whiskeye/common/bus.h"
 
+#include <whiskeye/slam_status_t.hpp>
 #include <whiskeye/vita_event_t.hpp>
 #include <whiskeye/vita_map_t.hpp>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
@@ -229,10 +231,17 @@ TEST_F(SlamdBinary, LiveRunFedByLcmLogplayerTakesTheSameDecisionsAsReplay) {
   std::mutex mutex;
   std::vector<vita_event_t> live;
   subscribe<vita_event_t>(bus, "VITA_EVENT", [&](const vita_event_t& m) { live.push_back(m); }, errors);
+  slam_status_t status;
+  int statuses = 0;
+  subscribe<slam_status_t>(bus, "SLAM_STATUS", [&](const slam_status_t& m) {
+    status = m;
+    ++statuses;
+  }, errors);
 
+  // As shipped: a checkpoint after every cycle, written by slamd's writer thread.
   const fs::path state = dir_ / "live_state";
   fs::remove_all(state);
-  Subprocess slamd({kSlamd, "--config", kConfig, "--state-dir", state.string(), "--checkpoint-every", "0"});
+  Subprocess slamd({kSlamd, "--config", kConfig, "--state-dir", state.string()});
   ASSERT_TRUE(wait_until([&] { return slamd.output().find("running in vita mode") != std::string::npos; }, 20))
       << slamd.output();
   Subprocess player({"lcm-logplayer", "--speed", "2", sim_log_});
@@ -246,7 +255,13 @@ TEST_F(SlamdBinary, LiveRunFedByLcmLogplayerTakesTheSameDecisionsAsReplay) {
   for (int i = 0; i < 40; ++i) bus.handle_timeout(50);
   EXPECT_EQ(slamd.stop(20, SIGTERM), 0) << slamd.output();
   EXPECT_THAT(slamd.output(), HasSubstr("stopped after"));
-  EXPECT_FALSE(fs::is_empty(state)) << "a checkpoint is written on SIGTERM";
+  // Checkpoints were written while it ran, none failed, and the newest holds the last cycle.
+  ASSERT_GT(statuses, 0);
+  EXPECT_GT(status.checkpoints_written, 0);
+  EXPECT_EQ(status.checkpoint_errors, 0);
+  char newest[64];
+  std::snprintf(newest, sizeof newest, "checkpoint-%012zu.vslam", live.size());
+  EXPECT_TRUE(fs::exists(state / newest)) << newest;
 
   // The last cycle of a log may still be waiting for a camera frame after its end when the log
   // stops; --replay flushes it, a live daemon keeps it pending. Everything before must agree.
