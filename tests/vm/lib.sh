@@ -10,6 +10,11 @@ check() {
   local out
   if out=$("$@" 2>&1); then pass "$name"; else fail "$name" "$(echo "$out" | tail -n 3 | tr '\n' ' ')"; fi
 }
+# wait_for FILE PATTERN: up to 30 s for a line (a TCG guest starts programs slowly).
+wait_for() {
+  for _ in $(seq 300); do grep -q "$2" "$1" 2>/dev/null && return 0; sleep 0.1; done
+  return 1
+}
 # Loopback multicast for LCM udpm:// inside the guest.
 setup_lcm_loopback() {
   ip link set lo up

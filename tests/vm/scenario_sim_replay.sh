@@ -15,12 +15,6 @@ source "$(dirname "$0")/lib.sh"
 setup_lcm_loopback
 setup_vcan vcan0
 
-# wait_for FILE PATTERN: up to 30 s for a line (a TCG guest starts programs slowly).
-wait_for() {
-  for _ in $(seq 300); do grep -q "$2" "$1" 2>/dev/null && return 0; sleep 0.1; done
-  return 1
-}
-
 # run_mode MODE PREFIX
 run_mode() {
   local mode=$1 prefix=$2 config=$IN/whiskerd_$1.yaml

@@ -1,7 +1,7 @@
 // The motor safety lines of the whisker head: one output (motor enable) and inputs (driver fault,
 // emergency stop). whiskerd talks to this interface; GpiodMotorLines drives real lines with libgpiod
-// (C++ bindings), FakeMotorLines lets unit tests script faults (this kernel has no gpio-sim), and
-// NoMotorLines is for rigs without lines (--no-gpio).
+// (C++ bindings; tested against the kernel's gpio-mockup in the VM, vm.gpio), FakeMotorLines lets unit
+// tests script faults, and NoMotorLines is for rigs without lines (--no-gpio).
 #pragma once
 
 #include <memory>

@@ -1,0 +1,58 @@
+#!/bin/bash
+# VM scenario: whiskerd's motor lines (libgpiod) against a real gpiochip, the kernel's gpio-mockup
+# driver built by build_gpio_mockup.sh on the host (a ctest fixture) and loaded here with three named
+# lines (enable, fault, e-stop): first the lines alone (gpio_vm_check), then whiskerd using them.
+#   scenario_gpio.sh RESULTS_DIR CHECK MODULE_DIR WHISKERD WHISKERD_CONFIG
+set -u
+RESULTS_DIR=$1
+CHECK=$2
+MODULE=$3/gpio-mockup.ko
+WHISKERD=$4
+BASE_CONFIG=$5
+source "$(dirname "$0")/lib.sh"
+
+mountpoint -q /sys/kernel/debug || mount -t debugfs none /sys/kernel/debug
+check gpio_mockup_module_loads insmod "$MODULE" gpio_mockup_ranges=-1,3 gpio_mockup_named_lines=1
+chip=$(ls -d /sys/kernel/debug/gpio-mockup/gpiochip* 2>/dev/null | head -1)
+check gpio_mockup_chip_appears test -n "$chip"
+gpioinfo 2>/dev/null | grep -A3 gpio-mockup || true
+"$CHECK" --chip-debugfs "$chip" --results "$RESULTS_DIR/results.txt" || echo "gpio checker reported failures"
+
+# whiskerd on vcan0 (no boards: the motors stay off) with its lines on the mockup.
+setup_lcm_loopback
+setup_vcan vcan0
+config=/tmp/whiskerd_gpio.yaml
+cat "$BASE_CONFIG" - > "$config" <<'YAML'
+gpio:
+  enabled: true
+  enable_line: gpio-mockup-A-0
+  fault_line: gpio-mockup-A-1
+  estop_line: gpio-mockup-A-2
+YAML
+sed 's/fault_line: gpio-mockup-A-1/fault_line: WHISKER_MOTOR_FAULT/' "$config" > /tmp/whiskerd_missing.yaml
+echo 1 > "$chip/1"  # fault and e-stop idle (active low)
+echo 1 > "$chip/2"
+
+"$WHISKERD" -c /tmp/whiskerd_missing.yaml > "$RESULTS_DIR/whiskerd_missing.log" 2>&1
+code=$?
+cat "$RESULTS_DIR/whiskerd_missing.log"
+check whiskerd_without_its_fault_line_exits_1_naming_it \
+  sh -c "test $code = 1 && grep -q WHISKER_MOTOR_FAULT '$RESULTS_DIR/whiskerd_missing.log'"
+
+log=$RESULTS_DIR/whiskerd.log
+"$WHISKERD" -c "$config" > "$log" 2>&1 &
+wd=$!
+check whiskerd_opens_the_mockup_lines wait_for "$log" "gpiod lines enable=gpio-mockup-A-0 fault=gpio-mockup-A-1"
+check whiskerd_keeps_the_motors_off_without_boards test "$(cat "$chip/0")" = 0
+sleep 1
+echo 0 > "$chip/1"  # a fault pulse shorter than a control period
+echo 1 > "$chip/1"
+check whiskerd_latches_a_fault_pulse_on_the_real_line wait_for "$log" "motor fault / emergency stop: motors disabled"
+check the_enable_line_is_low_after_the_fault test "$(cat "$chip/0")" = 0
+kill -TERM $wd
+wait $wd
+code=$?
+cat "$log"
+check whiskerd_stops_cleanly test $code = 0
+check the_enable_line_is_low_after_whiskerd_stops test "$(cat "$chip/0")" = 0
+exit 0
