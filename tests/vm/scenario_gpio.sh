@@ -1,14 +1,16 @@
 #!/bin/bash
 # VM scenario: whiskerd's motor lines (libgpiod) against a real gpiochip, the kernel's gpio-mockup
 # driver built by build_gpio_mockup.sh on the host (a ctest fixture) and loaded here with three named
-# lines (enable, fault, e-stop): first the lines alone (gpio_vm_check), then whiskerd using them.
-#   scenario_gpio.sh RESULTS_DIR CHECK MODULE_DIR WHISKERD WHISKERD_CONFIG
+# lines (enable, fault, e-stop): first the lines alone (gpio_vm_check), then whiskerd using them, idle
+# and then driving its motors while vita-sim's candump log (fixture vm.sim_replay_inputs) streams.
+#   scenario_gpio.sh RESULTS_DIR CHECK MODULE_DIR WHISKERD WHISKERD_CONFIG SIM_REPLAY_INPUTS
 set -u
 RESULTS_DIR=$1
 CHECK=$2
 MODULE=$3/gpio-mockup.ko
 WHISKERD=$4
 BASE_CONFIG=$5
+IN=$6
 source "$(dirname "$0")/lib.sh"
 
 mountpoint -q /sys/kernel/debug || mount -t debugfs none /sys/kernel/debug
@@ -55,4 +57,29 @@ code=$?
 cat "$log"
 check whiskerd_stops_cleanly test $code = 0
 check the_enable_line_is_low_after_whiskerd_stops test "$(cat "$chip/0")" = 0
+
+# With every board streaming (the simulated boards replayed by canplayer) whiskerd powers the motors:
+# the enable line goes high; a fault pulse drops it at once and it stays low (latched) while the
+# boards go on streaming.
+# poll_enable VALUE: up to 10 s for the enable line to read VALUE.
+poll_enable() {
+  for _ in $(seq 500); do [ "$(cat "$chip/0")" = "$1" ] && return 0; sleep 0.02; done
+  return 1
+}
+log=$RESULTS_DIR/whiskerd_streaming.log
+"$WHISKERD" -c "$config" > "$log" 2>&1 &
+wd=$!
+wait_for "$log" "gpiod lines enable=" || echo "whiskerd did not start"
+canplayer -I "$IN/sim_fd.candump" vcan0=can0 &
+player=$!
+check enable_goes_high_once_every_board_streams poll_enable 1
+echo 0 > "$chip/1"
+echo 1 > "$chip/1"
+check a_fault_pulse_drops_the_enable_line poll_enable 0
+check whiskerd_reports_the_fault wait_for "$log" "motor fault / emergency stop: motors disabled"
+wait $player
+check the_fault_stays_latched_to_the_end_of_the_stream test "$(cat "$chip/0")" = 0
+kill -TERM $wd
+wait $wd
+cat "$log"
 exit 0
