@@ -23,12 +23,13 @@ using Bits = std::conditional_t<sizeof(T) == 1, uint8_t,
              std::conditional_t<sizeof(T) == 2, uint16_t, std::conditional_t<sizeof(T) == 4, uint32_t, uint64_t>>>;
 
 template <typename T>
+void put_array(std::vector<uint8_t>& out, const T* data, size_t n);
+
+template <typename T>
 void put(std::vector<uint8_t>& out, T v) {
   static_assert(std::is_arithmetic_v<T>);
   if constexpr (std::endian::native == std::endian::little) {
-    const size_t at = out.size();
-    out.resize(at + sizeof(T));
-    std::memcpy(out.data() + at, &v, sizeof(T));
+    put_array(out, &v, 1);
   } else {
     Bits<T> u;
     std::memcpy(&u, &v, sizeof(T));
