@@ -16,6 +16,7 @@
 #include <stdexcept>
 
 #include <whiskeye/common/clock.h>
+#include <whiskeye/common/utime.h>
 
 namespace whiskeye::deploy_testing {
 
@@ -148,7 +149,7 @@ WatchdogReport check_watchdog(const std::vector<std::string>& argv, const Watchd
   if (!r.stall_logged) {
     r.problems.push_back("the daemon never logged the injected stall");
   } else {
-    const int64_t stalled_us = monotonic_us() + interval_us + static_cast<int64_t>(c.stall_grace_s * 1e6);
+    const int64_t stalled_us = monotonic_us() + interval_us + seconds_to_utime(c.stall_grace_s);
     const int64_t quiet_us = 3 * c.watchdog_usec;
     std::this_thread::sleep_for(std::chrono::microseconds(stalled_us - monotonic_us() + quiet_us));
     r.quiet_s = static_cast<double>(monotonic_us() - stalled_us) * 1e-6;

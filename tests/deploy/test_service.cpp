@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <functional>
 #include <stdexcept>
 #include <thread>
 
@@ -87,17 +88,29 @@ TEST(ServiceNotifier, WithoutInjectionTheStallNeverBlocks) {
   EXPECT_EQ(polls, 0);
 }
 
+namespace {
+
+// The contract of either injected stall, due 1 s after a start at 5 s: it does not block before it is
+// due; once due it blocks until the stop predicate is true (polled); released, it never blocks again,
+// so the daemon can shut down. `stall` is the stall under test, called as the daemon's loop would.
+using Stall = std::function<void(int64_t now_us, const std::function<bool()>& stop)>;
+void expect_blocks_once_when_due(const Stall& stall) {
+  int polls = 0;
+  stall(5'900'000, [&] { return ++polls > 0; });
+  EXPECT_EQ(polls, 0) << "stalled before it was due";
+  stall(6'000'000, [&] { return ++polls >= 3; });
+  EXPECT_EQ(polls, 3);
+  stall(7'000'000, [&] { return ++polls > 100; });
+  EXPECT_EQ(polls, 3) << "stalled twice";
+}
+
+}  // namespace
+
 TEST(ServiceNotifier, InjectedStallBlocksOnceDueUntilStopIsRequested) {
   ScopedEnv spec("WHISKEYE_FAULT_INJECT", "stall-main-loop-after=1s");
   ServiceNotifier service("test", 5'000'000);
-  int polls = 0;
-  service.stall_if_injected(5'900'000, [&] { return ++polls > 0; });
-  EXPECT_EQ(polls, 0) << "stalled before it was due";
-  service.stall_if_injected(6'000'000, [&] { return ++polls >= 3; });
-  EXPECT_EQ(polls, 3);
-  // Once released it never stalls again, so the daemon can shut down.
-  service.stall_if_injected(7'000'000, [&] { return ++polls > 100; });
-  EXPECT_EQ(polls, 3);
+  expect_blocks_once_when_due(
+      [&](int64_t now, const std::function<bool()>& stop) { service.stall_if_injected(now, stop); });
 }
 
 TEST(ServiceNotifier, InjectedWorkerStallBlocksThatWorkerOnceAndLeavesTheMainLoopAlone) {
@@ -106,12 +119,9 @@ TEST(ServiceNotifier, InjectedWorkerStallBlocksThatWorkerOnceAndLeavesTheMainLoo
   int polls = 0;
   service.stall_if_injected(9'000'000, [&] { return ++polls > 0; });
   EXPECT_EQ(polls, 0) << "the main loop stalled on a worker's fault";
-  service.stall_worker_if_injected(5'900'000, "odometry thread", [&] { return ++polls > 0; });
-  EXPECT_EQ(polls, 0) << "stalled before it was due";
-  service.stall_worker_if_injected(6'000'000, "odometry thread", [&] { return ++polls >= 3; });
-  EXPECT_EQ(polls, 3);
-  service.stall_worker_if_injected(7'000'000, "odometry thread", [&] { return ++polls > 100; });
-  EXPECT_EQ(polls, 3) << "stalled twice";
+  expect_blocks_once_when_due([&](int64_t now, const std::function<bool()>& stop) {
+    service.stall_worker_if_injected(now, "odometry thread", stop);
+  });
 }
 
 TEST(FaultInjection, ParsesBothStallsAndRejectsAnUnknownFaultNamingTheKnownOnes) {
