@@ -10,9 +10,10 @@ check() {
   local out
   if out=$("$@" 2>&1); then pass "$name"; else fail "$name" "$(echo "$out" | tail -n 3 | tr '\n' ' ')"; fi
 }
-# wait_for FILE PATTERN: up to 30 s for a line (a TCG guest starts programs slowly).
+# wait_for FILE PATTERN [SECONDS]: up to SECONDS (default 30) for a line matching PATTERN to appear
+# in FILE (a TCG guest starts programs slowly).
 wait_for() {
-  for _ in $(seq 300); do grep -q "$2" "$1" 2>/dev/null && return 0; sleep 0.1; done
+  for _ in $(seq $((${3:-30} * 10))); do grep -q "$2" "$1" 2>/dev/null && return 0; sleep 0.1; done
   return 1
 }
 # Loopback multicast for LCM udpm:// inside the guest.

@@ -19,7 +19,7 @@ check vivid_offers_640x480_yuyv bash -c "v4l2-ctl -d /dev/video0 --list-formats-
 printf 'camera: {match_card: vivid, width: 700, height: 500, formats: [MJPG, YUYV]}\n' > /tmp/fallback.yaml
 "$CAMERAD" -c /tmp/fallback.yaml > "$RESULTS_DIR/camerad_fallback.log" 2>&1 &
 fb_pid=$!
-for i in $(seq 1 120); do grep -q "streaming" "$RESULTS_DIR/camerad_fallback.log" && break; sleep 0.5; done
+wait_for "$RESULTS_DIR/camerad_fallback.log" streaming 60 || true
 kill -TERM $fb_pid
 wait $fb_pid
 check camerad_logs_the_fallback_to_the_nearest_mode \
@@ -32,7 +32,7 @@ cam_pid=$!
 check_pid=$!
 
 # Let camerad stream for a couple of seconds first (startup on an emulated CPU is slow).
-for i in $(seq 1 120); do grep -q "streaming" "$RESULTS_DIR/camerad.log" && break; sleep 0.5; done
+wait_for "$RESULTS_DIR/camerad.log" streaming 60 || true
 sleep 3
 # The device disappears under camerad (as an unplug would), then the driver is unloaded and
 # reloaded. Unbinding first releases camerad's hold on the module so rmmod cannot fail "in use".
