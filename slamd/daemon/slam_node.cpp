@@ -93,7 +93,6 @@ std::string check_odometry(const odometry_t& m) {
   return "";
 }
 
-
 bool has_contact(const whisk_cycle_t& m) {
   for (const auto& row : m.contact) {
     for (int8_t c : row) {
