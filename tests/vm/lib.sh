@@ -10,6 +10,12 @@ check() {
   local out
   if out=$("$@" 2>&1); then pass "$name"; else fail "$name" "$(echo "$out" | tail -n 3 | tr '\n' ' ')"; fi
 }
+# exited_ok NAME STATUS: one reported test that a checker program ran to its end. A checker writes its
+# own PASS/FAIL lines as it goes or at its end; one that crashes or cannot start would otherwise
+# leave only the scenario's checks behind, all passing.
+exited_ok() {
+  if [ "$2" = 0 ]; then pass "$1"; else fail "$1" "exit status $2 (its log is in the results folder)"; fi
+}
 # wait_for FILE PATTERN [SECONDS]: up to SECONDS (default 30) for a line matching PATTERN to appear
 # in FILE (a TCG guest starts programs slowly).
 wait_for() {

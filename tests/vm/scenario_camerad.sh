@@ -45,8 +45,10 @@ unload_vivid() {
 check vivid_unloads_mid_stream unload_vivid
 check vivid_reloads load_vivid
 
-wait $check_pid
+check_rc=0
+wait $check_pid || check_rc=$?
 cat "$RESULTS_DIR/check.log"
+exited_ok camera_vm_check_exits_0 "$check_rc"
 kill -TERM $cam_pid
 wait $cam_pid
 check camerad_exits_cleanly_on_sigterm test $? = 0

@@ -18,7 +18,9 @@ check gpio_mockup_module_loads insmod "$MODULE" gpio_mockup_ranges=-1,3 gpio_moc
 chip=$(ls -d /sys/kernel/debug/gpio-mockup/gpiochip* 2>/dev/null | head -1)
 check gpio_mockup_chip_appears test -n "$chip"
 gpioinfo 2>/dev/null | grep -A3 gpio-mockup || true
-"$CHECK" --chip-debugfs "$chip" --results "$RESULTS_DIR/results.txt" || echo "gpio checker reported failures"
+check_rc=0
+"$CHECK" --chip-debugfs "$chip" --results "$RESULTS_DIR/results.txt" || check_rc=$?
+exited_ok gpio_vm_check_exits_0 "$check_rc"
 
 # whiskerd on vcan0 (no boards: the motors stay off) with its lines on the mockup.
 setup_lcm_loopback
@@ -50,13 +52,11 @@ sleep 1
 echo 0 > "$chip/1"  # a fault pulse shorter than a control period
 echo 1 > "$chip/1"
 check whiskerd_latches_a_fault_pulse_on_the_real_line wait_for "$log" "motor fault / emergency stop: motors disabled"
-check the_enable_line_is_low_after_the_fault test "$(cat "$chip/0")" = 0
 kill -TERM $wd
 wait $wd
 code=$?
 cat "$log"
 check whiskerd_stops_cleanly test $code = 0
-check the_enable_line_is_low_after_whiskerd_stops test "$(cat "$chip/0")" = 0
 
 # With every board streaming (the simulated boards replayed by canplayer) whiskerd powers the motors:
 # the enable line goes high; a fault pulse drops it at once and it stays low (latched) while the
@@ -81,5 +81,23 @@ wait $player
 check the_fault_stays_latched_to_the_end_of_the_stream test "$(cat "$chip/0")" = 0
 kill -TERM $wd
 wait $wd
+cat "$log"
+
+# SIGTERM while the motors are powered: whiskerd retracts, then drops the enable line before it exits.
+log=$RESULTS_DIR/whiskerd_sigterm.log
+"$WHISKERD" -c "$config" > "$log" 2>&1 &
+wd=$!
+wait_for "$log" "gpiod lines enable=" || echo "whiskerd did not start"
+canplayer -I "$IN/sim_fd.candump" vcan0=can0 &
+player=$!
+check enable_goes_high_again_with_the_boards_streaming poll_enable 1
+kill -TERM $wd
+wait $wd
+code=$?
+check whiskerd_stops_cleanly_while_powered test $code = 0
+check sigterm_while_powered_leaves_the_enable_line_low test "$(cat "$chip/0")" = 0
+check whiskerd_retracted_before_dropping_enable grep -q "running -> retracting" "$log"
+kill $player 2>/dev/null
+wait $player 2>/dev/null
 cat "$log"
 exit 0

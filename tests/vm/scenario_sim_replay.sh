@@ -30,8 +30,10 @@ run_mode() {
   sleep 0.3
   check "${prefix}canplayer_replays_the_candump_with_interface_mapping" \
     canplayer -I "$IN/sim_$mode.candump" vcan0=can0
-  wait $check_pid || echo "$mode checker reported failures"
+  local check_rc=0
+  wait $check_pid || check_rc=$?
   cat "$RESULTS_DIR/check_$mode.log"
+  exited_ok "${prefix}sim_replay_check_exits_0" "$check_rc"
   kill -TERM $wd_pid
   wait $wd_pid
   check "${prefix}whiskerd_exits_cleanly_after_the_replay" test $? = 0

@@ -21,9 +21,11 @@ run_mode() {
   local dump_pid=$!
   "$WHISKERD" -c "$config" --no-gpio > "$RESULTS_DIR/whiskerd_$mode.log" 2>&1 &
   local wd_pid=$!
+  local check_rc=0
   "$CHECK" --mode "$mode" --interface vcan0 --results "$RESULTS_DIR/results.txt" > "$RESULTS_DIR/check_$mode.log" 2>&1 \
-    || echo "$mode checker reported failures"
+    || check_rc=$?
   cat "$RESULTS_DIR/check_$mode.log"
+  exited_ok "${prefix}whisker_vm_check_exits_0" "$check_rc"
   kill -TERM $wd_pid
   wait $wd_pid
   local rc=$?
