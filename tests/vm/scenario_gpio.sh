@@ -66,12 +66,17 @@ poll_enable() {
   for _ in $(seq 500); do [ "$(cat "$chip/0")" = "$1" ] && return 0; sleep 0.02; done
   return 1
 }
-log=$RESULTS_DIR/whiskerd_streaming.log
-"$WHISKERD" -c "$config" > "$log" 2>&1 &
-wd=$!
-wait_for "$log" "gpiod lines enable=" || echo "whiskerd did not start"
-canplayer -I "$IN/sim_fd.candump" vcan0=can0 &
-player=$!
+# start_streaming LOG: whiskerd (pid in $wd, output in LOG) with the simulated boards replayed to
+# it (canplayer's pid in $player).
+start_streaming() {
+  log=$1
+  "$WHISKERD" -c "$config" > "$log" 2>&1 &
+  wd=$!
+  wait_for "$log" "gpiod lines enable=" || echo "whiskerd did not start"
+  canplayer -I "$IN/sim_fd.candump" vcan0=can0 &
+  player=$!
+}
+start_streaming "$RESULTS_DIR/whiskerd_streaming.log"
 check enable_goes_high_once_every_board_streams poll_enable 1
 echo 0 > "$chip/1"
 echo 1 > "$chip/1"
@@ -84,12 +89,7 @@ wait $wd
 cat "$log"
 
 # SIGTERM while the motors are powered: whiskerd retracts, then drops the enable line before it exits.
-log=$RESULTS_DIR/whiskerd_sigterm.log
-"$WHISKERD" -c "$config" > "$log" 2>&1 &
-wd=$!
-wait_for "$log" "gpiod lines enable=" || echo "whiskerd did not start"
-canplayer -I "$IN/sim_fd.candump" vcan0=can0 &
-player=$!
+start_streaming "$RESULTS_DIR/whiskerd_sigterm.log"
 check enable_goes_high_again_with_the_boards_streaming poll_enable 1
 kill -TERM $wd
 wait $wd
