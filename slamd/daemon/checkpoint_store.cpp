@@ -3,6 +3,8 @@
 #include <zlib.h>
 
 #include <algorithm>
+#include <charconv>
+#include <string_view>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -44,8 +46,9 @@ uint32_t crc_of(std::span<const uint8_t> data) {
   return static_cast<uint32_t>(crc);
 }
 
-[[noreturn]] void fail(const std::string& path, const std::string& what) {
-  throw CheckpointError(path + ": " + what);
+[[noreturn]] void fail(const std::string& path, const std::string& what,
+                       CheckpointError::Kind kind = CheckpointError::Kind::kCorrupt) {
+  throw CheckpointError(path + ": " + what, kind);
 }
 
 void write_all(int fd, const uint8_t* data, std::size_t size, const std::string& path) {
@@ -68,24 +71,41 @@ void fsync_directory(const std::string& dir) {
   if (rc != 0) fail(dir, std::string("directory fsync failed: ") + std::strerror(errno));
 }
 
-std::string file_name(uint64_t sequence) {
+constexpr char kPrefix[] = "checkpoint-";
+
+std::string file_name(uint64_t number) {
   char name[64];
-  std::snprintf(name, sizeof name, "checkpoint-%012llu.vslam", static_cast<unsigned long long>(sequence));
+  std::snprintf(name, sizeof name, "%s%012llu.vslam", kPrefix, static_cast<unsigned long long>(number));
   return name;
+}
+
+// n of "checkpoint-<n>.vslam[.corrupt]", or 0.
+uint64_t file_number(const std::string& name) {
+  if (name.rfind(kPrefix, 0) != 0) return 0;
+  const char* first = name.data() + sizeof kPrefix - 1;
+  const char* last = name.data() + name.size();
+  uint64_t n = 0;
+  const auto [end, ec] = std::from_chars(first, last, n);
+  if (ec != std::errc() || end == first || std::string_view(end, static_cast<std::size_t>(last - end)).rfind(".vslam", 0) != 0) {
+    return 0;
+  }
+  return n;
 }
 
 }  // namespace
 
 Checkpoint read_checkpoint(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) fail(path, "cannot open");
+  if (!in) fail(path, std::string("cannot open: ") + std::strerror(errno), CheckpointError::Kind::kUnusable);
   std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   if (bytes.size() < kHeaderSize) fail(path, "truncated header (" + std::to_string(bytes.size()) + " bytes)");
   if (std::memcmp(bytes.data(), kMagic, sizeof kMagic) != 0) fail(path, "not a slamd checkpoint (bad magic)");
   const uint32_t version = get<uint32_t>(bytes.data() + 8);
   if (version != kCheckpointFormatVersion) {
-    fail(path, "unsupported checkpoint format version " + std::to_string(version) + " (this slamd reads " +
-                   std::to_string(kCheckpointFormatVersion) + ")");
+    fail(path,
+         "unsupported checkpoint format version " + std::to_string(version) + " (this slamd reads " +
+             std::to_string(kCheckpointFormatVersion) + ")",
+         CheckpointError::Kind::kUnusable);
   }
   const uint32_t crc = get<uint32_t>(bytes.data() + 12);
   Checkpoint cp;
@@ -135,7 +155,16 @@ CheckpointStore::CheckpointStore(std::string directory, int keep) : directory_(s
   std::error_code ec;
   fs::create_directories(directory_, ec);
   if (ec || !fs::is_directory(directory_)) {
-    throw CheckpointError(directory_ + ": cannot create the checkpoint directory" + (ec ? ": " + ec.message() : ""));
+    throw CheckpointError(directory_ + ": cannot create the checkpoint directory" + (ec ? ": " + ec.message() : ""),
+                          CheckpointError::Kind::kUnusable);
+  }
+  for (const auto& entry : fs::directory_iterator(directory_)) {
+    const std::string name = entry.path().filename().string();
+    next_number_ = std::max(next_number_, file_number(name) + 1);
+    if (entry.is_regular_file() && name.rfind(std::string(".") + kPrefix, 0) == 0 && entry.path().extension() == ".tmp") {
+      std::error_code rm;
+      if (fs::remove(entry.path(), rm)) removed_temp_files_.push_back(entry.path().string());
+    }
   }
 }
 
@@ -143,17 +172,18 @@ std::vector<std::string> CheckpointStore::list() const {
   std::vector<std::string> files;
   for (const auto& entry : fs::directory_iterator(directory_)) {
     const std::string name = entry.path().filename().string();
-    if (entry.is_regular_file() && name.rfind("checkpoint-", 0) == 0 && entry.path().extension() == ".vslam") {
+    if (entry.is_regular_file() && file_number(name) > 0 && entry.path().extension() == ".vslam") {
       files.push_back(entry.path().string());
     }
   }
-  std::sort(files.begin(), files.end());  // zero-padded sequence numbers sort by name
+  std::sort(files.begin(), files.end());  // zero-padded numbers sort by name
   return files;
 }
 
 std::string CheckpointStore::write(uint64_t sequence, std::span<const uint8_t> payload) {
-  const std::string path = (fs::path(directory_) / file_name(sequence)).string();
+  const std::string path = (fs::path(directory_) / file_name(next_number_)).string();
   write_checkpoint_file(path, sequence, payload);
+  ++next_number_;  // after success: a failed write leaves no file, and its number is reused
   auto files = list();
   while (static_cast<int>(files.size()) > keep_) {
     std::error_code ec;
@@ -163,16 +193,28 @@ std::string CheckpointStore::write(uint64_t sequence, std::span<const uint8_t> p
   return path;
 }
 
-std::optional<Checkpoint> CheckpointStore::load_newest(std::vector<std::string>* problems) {
+std::optional<Checkpoint> CheckpointStore::load_newest(std::vector<std::string>* problems,
+                                                        const std::function<void(const Checkpoint&)>& use) {
   auto files = list();
   for (auto it = files.rbegin(); it != files.rend(); ++it) {
+    Checkpoint cp;
     try {
-      return read_checkpoint(*it);
+      cp = read_checkpoint(*it);
     } catch (const CheckpointError& e) {
+      if (e.kind() != CheckpointError::Kind::kCorrupt) throw;
       if (problems) problems->push_back(e.what());
       std::error_code ec;
       fs::rename(*it, *it + ".corrupt", ec);  // keep it for inspection, out of the rotation
+      continue;
     }
+    if (use) {
+      try {
+        use(cp);
+      } catch (const std::exception& e) {
+        fail(*it, e.what(), CheckpointError::Kind::kUnusable);
+      }
+    }
+    return cp;
   }
   return std::nullopt;
 }

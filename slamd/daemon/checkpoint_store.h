@@ -4,14 +4,18 @@
 //   offset 0  char[8]  magic "WKSLAMCP"
 //          8  uint32   format version (kCheckpointFormatVersion)
 //         12  uint32   CRC-32 (zlib) of the payload
-//         16  uint64   sequence (the whisk cycle number the state is after)
+//         16  uint64   sequence (the map's whisk cycle count, over all sessions, the state is after)
 //         24  uint64   payload size in bytes
 //         32  payload  (VitaSlam::serialise(), which carries its own version)
 // A write goes to a hidden temp file in the same directory, is fsync'ed, renamed over the final name
 // and the directory is fsync'ed: a crash leaves either the old or the new checkpoint, never half of one.
+// Files are named checkpoint-<n>.vslam, n one more than any file in the directory: the newest file is
+// always the last one written, whatever map it holds (a resumed one, or a new one after --fresh), so
+// rotation never prunes what was just written.
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <span>
 #include <stdexcept>
@@ -24,7 +28,14 @@ constexpr uint32_t kCheckpointFormatVersion = 1;
 
 class CheckpointError : public std::runtime_error {
  public:
-  using std::runtime_error::runtime_error;
+  // kCorrupt: the bytes are damaged (magic, size, checksum); kUnusable: intact or unreadable here,
+  // but not loadable by this slamd (a newer format, another mode, no permission).
+  enum class Kind { kCorrupt, kUnusable };
+  CheckpointError(const std::string& what, Kind kind = Kind::kCorrupt) : std::runtime_error(what), kind_(kind) {}
+  Kind kind() const { return kind_; }
+
+ private:
+  Kind kind_;
 };
 
 struct Checkpoint {
@@ -41,23 +52,33 @@ void write_checkpoint_file(const std::string& path, uint64_t sequence, std::span
 // A directory of numbered checkpoints, newest kept, older ones pruned.
 class CheckpointStore {
  public:
-  // Creates the directory if needed; CheckpointError naming it when that fails.
+  // Creates the directory if needed; CheckpointError naming it when that fails. Temp files a crash
+  // left behind (.checkpoint-*.tmp) are removed and listed in removed_temp_files().
   CheckpointStore(std::string directory, int keep);
 
-  // Writes checkpoint-<sequence>.vslam and prunes all but the newest `keep`. Returns its path.
+  // Writes the next checkpoint-<n>.vslam (header sequence = `sequence`) and prunes all but the
+  // newest `keep`. Returns its path.
   std::string write(uint64_t sequence, std::span<const uint8_t> payload);
 
-  // The newest checkpoint that validates. Each newer file that does not is reported in
-  // `problems` as "<path>: <reason>" and left on disk for inspection (renamed *.corrupt).
-  std::optional<Checkpoint> load_newest(std::vector<std::string>* problems);
+  // The newest checkpoint that validates and that `use` (if given) accepts; `use` throws to refuse
+  // one. A corrupt newer file is reported in `problems` as "<path>: <reason>", renamed *.corrupt
+  // (kept for inspection, out of the rotation) and the next older one is tried. A file that is
+  // intact but unusable here (a newer format, refused by `use`, unreadable) throws CheckpointError
+  // kUnusable naming it: falling back past it, or starting a new map whose checkpoints would rotate
+  // it out, could lose that map.
+  std::optional<Checkpoint> load_newest(std::vector<std::string>* problems,
+                                        const std::function<void(const Checkpoint&)>& use = {});
 
   // Checkpoint files present, oldest first.
   std::vector<std::string> list() const;
   const std::string& directory() const { return directory_; }
+  const std::vector<std::string>& removed_temp_files() const { return removed_temp_files_; }
 
  private:
   std::string directory_;
   int keep_;
+  uint64_t next_number_ = 1;
+  std::vector<std::string> removed_temp_files_;
 };
 
 }  // namespace whiskeye::slamd

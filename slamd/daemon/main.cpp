@@ -99,19 +99,37 @@ class Progress {
 std::unique_ptr<slam::VitaSlam> make_slam(const Loaded& cfg, const Options& o, slamd::CheckpointStore* store) {
   if (!o.map_file.empty()) {
     const slamd::Checkpoint cp = slamd::read_checkpoint(o.map_file);
-    auto s = std::make_unique<slam::VitaSlam>(slam::VitaSlam::deserialise(cp.payload, cfg.slam, cfg.robot));
+    std::unique_ptr<slam::VitaSlam> s;
+    try {
+      s = std::make_unique<slam::VitaSlam>(slam::VitaSlam::deserialise(cp.payload, cfg.slam, cfg.robot));
+    } catch (const std::exception& e) {
+      throw std::runtime_error(o.map_file + ": " + e.what());
+    }
     if (o.localise) s->set_localise_only(true);
     log_line("loaded map " + o.map_file + " (" + std::to_string(s->map().experiences().size()) + " experiences)" +
              (o.localise ? ", localising without growing it" : ""));
     return s;
   }
+  if (store != nullptr) {
+    for (const auto& f : store->removed_temp_files()) log_line("removed " + f + " (an unfinished write)");
+  }
   if (store != nullptr && !o.fresh) {
     std::vector<std::string> problems;
-    const auto cp = store->load_newest(&problems);
+    std::unique_ptr<slam::VitaSlam> resumed;
+    std::optional<slamd::Checkpoint> cp;
+    try {
+      cp = store->load_newest(&problems, [&](const slamd::Checkpoint& c) {
+        resumed = std::make_unique<slam::VitaSlam>(slam::VitaSlam::deserialise(c.payload, cfg.slam, cfg.robot));
+      });
+    } catch (const slamd::CheckpointError& e) {
+      // Intact but not loadable here: starting a new map would rotate it out. The operator decides.
+      throw std::runtime_error(std::string("cannot resume from ") + e.what() +
+                               " (start with --fresh for a new map; older checkpoints are kept until rotated out)");
+    }
     for (const auto& p : problems) log_line("skipped unusable checkpoint " + p);
     if (cp) {
       log_line("resuming from " + cp->path + " (after cycle " + std::to_string(cp->sequence) + ")");
-      return std::make_unique<slam::VitaSlam>(slam::VitaSlam::deserialise(cp->payload, cfg.slam, cfg.robot));
+      return resumed;
     }
   }
   return std::make_unique<slam::VitaSlam>(cfg.slam, cfg.robot);
@@ -128,9 +146,14 @@ int run_replay(const Loaded& cfg, const Options& o) {
   slamd::SlamNode node(in, out, make_slam(cfg, o, store ? &*store : nullptr), cfg.node, errors);
   node.set_logger(log_line);
   if (o.timing) node.set_latency_clock(monotonic_us);
-  if (store && o.checkpoint_every > 0) {
+  if (store && o.checkpoint_every > 0 && !o.localise) {
     node.set_cycle_hook([&](const slam::CycleResult&) {
-      if (node.counters().cycles % o.checkpoint_every == 0) store->write(static_cast<uint64_t>(node.counters().cycles), node.slam().serialise());
+      if (node.counters().cycles % o.checkpoint_every != 0) return;
+      try {
+        store->write(static_cast<uint64_t>(node.slam().stats().cycles), node.slam().serialise());
+      } catch (const std::exception& e) {
+        log_line(std::string("checkpoint failed: ") + e.what());  // as live: the replay goes on
+      }
     });
   }
   Progress progress;
@@ -196,7 +219,7 @@ int run_live(const Loaded& cfg, const Options& o) {
       },
       log_line);
   auto checkpoint = [&] {
-    writer.submit(static_cast<uint64_t>(node.counters().cycles), node.slam().serialise_unsealed());
+    writer.submit(static_cast<uint64_t>(node.slam().stats().cycles), node.slam().serialise_unsealed());
   };
   if (o.checkpoint_every > 0 && !o.localise) {
     node.set_cycle_hook([&](const slam::CycleResult&) {
@@ -209,9 +232,11 @@ int run_live(const Loaded& cfg, const Options& o) {
   service.ready("running");
   log_line("running in " + slam::to_string(cfg.slam.mode) + " mode, state in " + state_dir);
   int64_t next_tick = monotonic_us();
+  int exit_code = 0;
   while (!g_stop) {
     if (bus.handle_timeout(100) < 0 && !g_stop) {  // a signal interrupting the wait is not a failure
-      log_line("LCM receive failed");
+      log_line("LCM receive failed; saving the state and exiting for systemd to restart slamd");
+      exit_code = 1;
       break;
     }
     const int64_t now = monotonic_us();
@@ -229,10 +254,11 @@ int run_live(const Loaded& cfg, const Options& o) {
     service.stall_if_injected(now, [] { return g_stop.load(); });
   }
   service.stopping();
+  node.flush();  // cycles still waiting for a camera frame go into the final state
   if (!o.localise) checkpoint();
   writer.finish();  // the final state is on disk before slamd exits
   log_line("stopped after " + std::to_string(node.counters().cycles) + " cycles");
-  return 0;
+  return exit_code;
 }
 
 }  // namespace

@@ -1,4 +1,5 @@
 #include "checkpoint_store.h"
+#include "scratch.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -15,11 +16,9 @@ using ::testing::HasSubstr;
 class CheckpointStoreTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::path(::testing::TempDir()) /
-           ("cp_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    dir_ = whiskeye::testing::scratch_dir("cp_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     fs::remove_all(dir_);
   }
-  void TearDown() override { fs::remove_all(dir_); }
   static std::vector<uint8_t> payload(int n, uint8_t seed) {
     std::vector<uint8_t> p(static_cast<std::size_t>(n));
     for (int i = 0; i < n; ++i) p[static_cast<std::size_t>(i)] = static_cast<uint8_t>(seed + i * 7);
@@ -115,6 +114,60 @@ TEST_F(CheckpointStoreTest, RejectsTruncatedBadMagicAndFutureVersion) {
   } catch (const CheckpointError& e) {
     EXPECT_THAT(e.what(), HasSubstr("truncated header"));
   }
+}
+
+TEST_F(CheckpointStoreTest, TheLastWrittenIsTheNewestAcrossRestartsWhateverItsSequence) {
+  {
+    CheckpointStore store(dir_.string(), 2);
+    for (uint64_t s = 10; s <= 12; ++s) store.write(s, payload(50, static_cast<uint8_t>(s)));
+  }
+  // A restart that begins a new map (cycle 1) or resumes: its checkpoints come after the old ones.
+  CheckpointStore store(dir_.string(), 2);
+  const std::string path = store.write(1, payload(50, 99));
+  const auto files = store.list();
+  ASSERT_EQ(files.size(), 2u);
+  EXPECT_EQ(files.back(), path) << "the file just written is never the one rotated out";
+  std::vector<std::string> problems;
+  const auto cp = store.load_newest(&problems);
+  ASSERT_TRUE(cp);
+  EXPECT_EQ(cp->sequence, 1u);
+  EXPECT_EQ(cp->payload, payload(50, 99));
+}
+
+TEST_F(CheckpointStoreTest, AnIntactButUnusableNewestIsNamedAndKeptNotSkipped) {
+  CheckpointStore store(dir_.string(), 3);
+  store.write(1, payload(64, 1));
+  const std::string newest = store.write(2, payload(64, 2));
+  std::vector<std::string> problems;
+  try {
+    store.load_newest(&problems, [](const Checkpoint&) { throw std::runtime_error("written in another mode"); });
+    FAIL() << "an unusable checkpoint must not be passed over";
+  } catch (const CheckpointError& e) {
+    EXPECT_EQ(e.kind(), CheckpointError::Kind::kUnusable);
+    EXPECT_THAT(e.what(), HasSubstr(newest + ": written in another mode"));
+  }
+  EXPECT_TRUE(fs::exists(newest)) << "not renamed: it is not corrupt";
+  corrupt_byte(newest, 8);  // a format version this slamd does not read
+  try {
+    store.load_newest(&problems);
+    FAIL();
+  } catch (const CheckpointError& e) {
+    EXPECT_EQ(e.kind(), CheckpointError::Kind::kUnusable);
+    EXPECT_THAT(e.what(), HasSubstr("unsupported checkpoint format version"));
+  }
+  EXPECT_TRUE(fs::exists(newest));
+  EXPECT_TRUE(problems.empty());
+}
+
+TEST_F(CheckpointStoreTest, TempFilesOfAnInterruptedWriteAreRemovedOnStart) {
+  fs::create_directories(dir_);
+  std::ofstream(dir_ / ".checkpoint-000000000007.vslam.tmp") << "half a checkpoint";
+  std::ofstream(dir_ / "notes.txt") << "not ours";
+  CheckpointStore store(dir_.string(), 3);
+  ASSERT_EQ(store.removed_temp_files().size(), 1u);
+  EXPECT_THAT(store.removed_temp_files()[0], HasSubstr(".checkpoint-000000000007.vslam.tmp"));
+  EXPECT_FALSE(fs::exists(dir_ / ".checkpoint-000000000007.vslam.tmp"));
+  EXPECT_TRUE(fs::exists(dir_ / "notes.txt"));
 }
 
 TEST_F(CheckpointStoreTest, NothingValidMeansNoCheckpoint) {

@@ -1,6 +1,7 @@
 // The real slamd binary on a short simulator run: deterministic replay, checkpoints and resume,
 // reuse of a saved map, bad configuration, and a live run fed by lcm-logplayer over udpm:// (inside
 // a private network namespace) that takes the same decisions as --replay.
+#include "checkpoint_store.h"
 #include "subprocess.h"
 
 #include "whiskeye/common/bus.h"
@@ -26,6 +27,7 @@ namespace fs = std::filesystem;
 using testing::Subprocess;
 using testing::wait_until;
 using ::testing::HasSubstr;
+using ::testing::Not;
 
 const std::string kSlamd = SLAMD_EXE;
 const std::string kConfig = WHISKEYE_SOURCE_DIR "/config/slam.yaml";
@@ -54,6 +56,16 @@ Output read_output(const std::string& path) {
     }
   }
   return o;
+}
+
+// Checkpoint files in `dir`, oldest first.
+std::vector<fs::path> checkpoints(const fs::path& dir) {
+  std::vector<fs::path> files;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    if (e.path().extension() == ".vslam") files.push_back(e.path());
+  }
+  std::sort(files.begin(), files.end());
+  return files;
 }
 
 std::string slurp(const std::string& path) {
@@ -152,6 +164,47 @@ TEST_F(SlamdBinary, CheckpointsAndResumesSkippingACorruptOne) {
   EXPECT_THAT(log, HasSubstr("skipped unusable checkpoint " + files.back().string()));
   EXPECT_THAT(log, HasSubstr("resuming from " + files.front().string()));
   EXPECT_TRUE(fs::exists(files.back().string() + ".corrupt"));
+}
+
+TEST_F(SlamdBinary, EverySessionResumesFromThePreviousOneAndFreshStartsANewMap) {
+  const fs::path state = dir_ / "sessions";
+  fs::remove_all(state);
+  const std::vector<std::string> args{"--state-dir", state.string(), "--checkpoint-keep", "2"};
+  std::string log;
+  ASSERT_EQ(replay((dir_ / "s1.lcmlog").string(), args, &log), 0) << log;
+  EXPECT_THAT(log, Not(HasSubstr("resuming")));
+  const std::size_t cycles = read_output((dir_ / "s1.lcmlog").string()).events.size();
+  ASSERT_GT(cycles, 0u);
+  // Each session goes on from the state the previous one left: its own checkpoints must not be
+  // rotated out by the older, higher-numbered files of the session it resumed.
+  for (std::size_t session = 2; session <= 3; ++session) {
+    ASSERT_EQ(replay((dir_ / "s.lcmlog").string(), args, &log), 0) << log;
+    EXPECT_THAT(log, HasSubstr("(after cycle " + std::to_string((session - 1) * cycles) + ")")) << session;
+  }
+  auto files = checkpoints(state);
+  ASSERT_EQ(files.size(), 2u);
+  EXPECT_EQ(slamd::read_checkpoint(files.back().string()).sequence, 3 * cycles);
+  // --fresh: a new map, whose checkpoints are the newest from its first cycle on.
+  ASSERT_EQ(replay((dir_ / "s.lcmlog").string(), {"--state-dir", state.string(), "--checkpoint-keep", "2", "--fresh"},
+                   &log),
+            0)
+      << log;
+  EXPECT_THAT(log, Not(HasSubstr("resuming")));
+  ASSERT_EQ(replay((dir_ / "s.lcmlog").string(), args, &log), 0) << log;
+  EXPECT_THAT(log, HasSubstr("(after cycle " + std::to_string(cycles) + ")"));
+}
+
+TEST_F(SlamdBinary, AMapOfAnotherModeIsNeitherLoadedNorRotatedOut) {
+  const fs::path state = dir_ / "other_mode";
+  fs::remove_all(state);
+  std::string log;
+  ASSERT_EQ(replay((dir_ / "vita.lcmlog").string(), {"--state-dir", state.string()}, &log), 0) << log;
+  const auto before = checkpoints(state);
+  ASSERT_FALSE(before.empty());
+  ASSERT_EQ(replay((dir_ / "tactile.lcmlog").string(), {"--state-dir", state.string(), "--mode", "tactile"}, &log), 1);
+  EXPECT_THAT(log, HasSubstr("cannot resume from " + before.back().string() + ": "));
+  EXPECT_THAT(log, HasSubstr("--fresh"));
+  EXPECT_EQ(checkpoints(state), before) << "nothing renamed, nothing rotated out";
 }
 
 TEST_F(SlamdBinary, LocalisesInASavedMapWithoutGrowingIt) {
@@ -259,9 +312,14 @@ TEST_F(SlamdBinary, LiveRunFedByLcmLogplayerTakesTheSameDecisionsAsReplay) {
   ASSERT_GT(statuses, 0);
   EXPECT_GT(status.checkpoints_written, 0);
   EXPECT_EQ(status.checkpoint_errors, 0);
-  char newest[64];
-  std::snprintf(newest, sizeof newest, "checkpoint-%012zu.vslam", live.size());
-  EXPECT_TRUE(fs::exists(state / newest)) << newest;
+  const std::string out = slamd.output();
+  const std::size_t at = out.find("stopped after ");
+  ASSERT_NE(at, std::string::npos);
+  const uint64_t cycles = std::stoull(out.substr(at + 14));
+  EXPECT_GE(cycles, live.size());
+  const auto files = checkpoints(state);
+  ASSERT_FALSE(files.empty());
+  EXPECT_EQ(slamd::read_checkpoint(files.back().string()).sequence, cycles) << files.back();
 
   // The last cycle of a log may still be waiting for a camera frame after its end when the log
   // stops; --replay flushes it, a live daemon keeps it pending. Everything before must agree.
