@@ -104,6 +104,27 @@ bool has_contact(const whisk_cycle_t& m) {
 
 }  // namespace
 
+std::string whisk_cycle_size_error(std::span<const uint8_t> data) {
+  // Fingerprint, then utime, cycle, utime_start, utime_end; then num_whiskers, num_samples, num_missing.
+  constexpr std::size_t kCountsAt = 8 + 4 * 8;
+  constexpr std::size_t kFixed = kCountsAt + 3 * 4;
+  const std::string what = "cannot decode " + std::to_string(data.size()) + " bytes as whiskeye.whisk_cycle_t: ";
+  if (data.size() < kFixed) return what + "shorter than its fixed fields";
+  const int64_t whiskers = read_be_i32(data.data() + kCountsAt);
+  const int64_t samples = read_be_i32(data.data() + kCountsAt + 4);
+  if (whiskers < 0 || samples < 0) {
+    return what + "negative num_whiskers (" + std::to_string(whiskers) + ") or num_samples (" +
+           std::to_string(samples) + ")";
+  }
+  // Per sample: utime (8), valid (1), phase (1); per sample and whisker: three floats and a byte.
+  const int64_t need = static_cast<int64_t>(kFixed) + samples * 10 + samples * whiskers * 13;
+  if (need != static_cast<int64_t>(data.size())) {
+    return what + "num_samples " + std::to_string(samples) + " and num_whiskers " + std::to_string(whiskers) +
+           " need " + std::to_string(need) + " bytes";
+  }
+  return {};
+}
+
 slam::WhiskCycleInput to_core(const whisk_cycle_t& m) {
   slam::WhiskCycleInput in;
   in.cycle = m.cycle;
@@ -130,7 +151,15 @@ SlamNode::SlamNode(Bus& in, Bus& out, std::unique_ptr<slam::VitaSlam> slam, cons
   // Camera frames are the bulk of the input: decoded as views (no pixel copy), see on_camera().
   in.subscribe_raw("CAMERA", [this](std::span<const uint8_t> data, const MessageInfo& info) { on_camera(data, info); });
   subscribe<odometry_t>(in, "ODOMETRY", [this](const odometry_t& m) { on_odometry(m); }, decode_errors_);
-  subscribe<whisk_cycle_t>(in, "WHISK_CYCLE", [this](const whisk_cycle_t& m) { on_whisk_cycle(m); }, decode_errors_);
+  // The generated decoder sizes its arrays from the message's counts before it checks them against
+  // the message's length (a negative count throws, a huge one allocates gigabytes): check them first.
+  in.subscribe_raw("WHISK_CYCLE", [this](std::span<const uint8_t> data, const MessageInfo& info) {
+    whisk_cycle_t msg;
+    std::string reason = whisk_cycle_size_error(data);
+    if (reason.empty()) decode_message(data, msg, &reason);  // sets the reason when it fails
+    if (!reason.empty()) return decode_errors_.record(info.channel, reason);
+    on_whisk_cycle(msg);
+  });
 }
 
 void SlamNode::reject(const std::string& what) {

@@ -33,6 +33,10 @@ struct NodeParams {
 };
 void load(const ParamNode& node, NodeParams& params);
 
+// Why the bytes of a WHISK_CYCLE message cannot be decoded safely (counts negative, or not matching
+// the message's length), or "" when they can.
+std::string whisk_cycle_size_error(std::span<const uint8_t> data);
+
 // A WHISK_CYCLE message as the core's input (the message is assumed already validated).
 slam::WhiskCycleInput to_core(const whisk_cycle_t& m);
 

@@ -1,6 +1,7 @@
 #include "scratch.h"
 #include "whiskeye/common/bus.h"
 
+#include <whiskeye/driver_status_t.hpp>
 #include <whiskeye/pose2d_t.hpp>
 #include <whiskeye/odometry_t.hpp>
 
@@ -48,6 +49,26 @@ TEST(MemoryBus, CountsDecodeFailuresInsteadOfCrashing) {
   EXPECT_EQ(errors.count("GROUND_TRUTH"), 3);
   EXPECT_NE(last_reason.find("trailing bytes"), std::string::npos);
   EXPECT_NE(last_reason.find("whiskeye.pose2d_t"), std::string::npos);
+}
+
+TEST(MemoryBus, ANegativeArrayCountIsADecodeErrorNotAnException) {
+  // The generated decoder resizes its arrays from the count before it looks at the length.
+  driver_status_t st{};
+  std::vector<uint8_t> bytes = encode_message(st);
+  constexpr std::size_t kNumCounters = 8 + 8 + 5 + 1 + 5;  // fingerprint, utime, "", state, ""
+  ASSERT_EQ(bytes.size(), kNumCounters + 4 + 4);
+  std::fill(bytes.begin() + kNumCounters, bytes.begin() + kNumCounters + 4, 0xff);  // -1
+  driver_status_t out;
+  std::string reason;
+  EXPECT_FALSE(decode_message(bytes, out, &reason));
+  EXPECT_NE(reason.find("whiskeye.driver_status_t"), std::string::npos) << reason;
+  EXPECT_NE(reason.find("negative or too large"), std::string::npos) << reason;
+
+  MemoryBus bus;
+  DecodeErrors errors;
+  subscribe<driver_status_t>(bus, "STATUS", [](const driver_status_t&) { FAIL(); }, errors);
+  bus.publish_raw("STATUS", bytes);
+  EXPECT_EQ(errors.total(), 1);
 }
 
 TEST(LogFiles, WriterAndReaderRoundTrip) {

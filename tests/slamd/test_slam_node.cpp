@@ -147,6 +147,32 @@ TEST_F(SlamNodeTest, KeepsTheOwnerOfSharedCameraFramesInsteadOfCopying) {
   EXPECT_EQ(node_->counters().cycles_without_camera, 0);
 }
 
+TEST_F(SlamNodeTest, AWhiskCycleWhoseCountsDoNotFitItsLengthIsADecodeErrorNotACrash) {
+  stream({8});
+  node_->flush();
+  const std::vector<uint8_t> good = encode_message(free_cycle(7, kT0 + 5 * kS));
+  EXPECT_EQ(whisk_cycle_size_error(good), "");
+  constexpr std::size_t kNumSamples = 8 + 4 * 8 + 4;
+  auto with_samples = [&](uint32_t n) {
+    std::vector<uint8_t> b = good;
+    for (int i = 0; i < 4; ++i) b[kNumSamples + static_cast<std::size_t>(i)] = static_cast<uint8_t>(n >> (24 - 8 * i));
+    return b;
+  };
+  // -1 made the decoder throw out of the handler (slamd exited); 0x7fffffff made it allocate
+  // 16 GB before reading past the message.
+  for (uint32_t n : {0xffffffffu, 0x7fffffffu, 499u}) in_.publish_raw("WHISK_CYCLE", with_samples(n));
+  in_.publish_raw("WHISK_CYCLE", std::vector<uint8_t>(good.begin(), good.begin() + 30));
+  EXPECT_EQ(errors_.total(), 4);
+  EXPECT_EQ(errors_.count("WHISK_CYCLE"), 4);
+  EXPECT_NE(whisk_cycle_size_error(with_samples(0xffffffffu)).find("negative"), std::string::npos);
+  EXPECT_NE(whisk_cycle_size_error(with_samples(0x7fffffffu)).find("num_samples 2147483647"), std::string::npos);
+  // Still running: the same cycle, intact, is processed.
+  const int64_t before = node_->counters().cycles;
+  in_.publish_raw("WHISK_CYCLE", good);
+  node_->flush();
+  EXPECT_EQ(node_->counters().cycles, before + 1);
+}
+
 TEST_F(SlamNodeTest, RejectsBadMessagesCountsThemAndCarriesOn) {
   stream({8});
   // Undecodable bytes, then decodable but inconsistent messages.

@@ -82,15 +82,23 @@ std::vector<uint8_t> encode_message(const T& msg) {
   return buf;
 }
 
-// Decodes an LCM message; false with a reason on a fingerprint mismatch, truncation or trailing bytes.
+// Decodes an LCM message; false with a reason on a fingerprint mismatch, truncation, trailing bytes
+// or a negative array count (the generated decoders size arrays from the message's counts before
+// checking them against its length, and throw on a negative one; a huge count is the caller's to
+// rule out first, see slamd's whisk_cycle_size_error).
 template <typename T>
 bool decode_message(std::span<const uint8_t> data, T& out, std::string* reason = nullptr) {
-  const int n = out.decode(data.data(), 0, static_cast<int>(data.size()));
+  int n = -1;
+  std::string why = " (wrong type fingerprint or truncated)";
+  try {
+    n = out.decode(data.data(), 0, static_cast<int>(data.size()));
+  } catch (const std::exception& e) {
+    why = std::string(" (") + e.what() + ": an array count is negative or too large)";
+  }
   if (n < 0 || static_cast<std::size_t>(n) != data.size()) {
     if (reason) {
       *reason = std::string("cannot decode ") + std::to_string(data.size()) + " bytes as whiskeye." +
-                T::getTypeName() +
-                (n < 0 ? " (wrong type fingerprint or truncated)" : " (trailing bytes)");
+                T::getTypeName() + (n < 0 ? why : " (trailing bytes)");
     }
     return false;
   }
