@@ -113,6 +113,33 @@ TEST(VitaSlam, AMissingSenseDegradesToTheOtherAndNeverStops) {
   EXPECT_NEAR(r3.pose.x, 0.09, 1e-9);  // 9 of the 10 samples have a previous sample to integrate from
 }
 
+TEST(VitaSlam, WithoutAFrameAndWithoutContactViTaMatchesNothing) {
+  World w;
+  VitaSlam slam(SlamParams{}, w.geometry);
+  const WhiskCycleInput nothing = test::whisk_cycle(w.geometry, {}, 0.003, 5);
+  CycleInput seen = input(w.place(0), 1);
+  seen.whisk = &nothing;
+  ASSERT_EQ(slam.process_cycle(seen).match.template_id, 0);  // a contact-free template
+  // Camera lost, nothing touched: an empty touch matches every contact-free template exactly, so
+  // using it would "recognise" template 0 wherever the robot is (and inject there once it is old).
+  CycleInput blind = input(w.place(0), 2);
+  blind.whisk = &nothing;
+  blind.image = nullptr;
+  const CycleResult r = slam.process_cycle(blind);
+  EXPECT_FALSE(r.match.tactile_used);
+  EXPECT_FALSE(r.match.visual_used);
+  EXPECT_EQ(r.match.template_id, -1);
+  EXPECT_EQ(r.event.type, EventType::SameExperience);
+  // Touch alone is the tactile mode's own (aliased) sense: there the empty touch still matches.
+  SlamParams tactile;
+  tactile.mode = Mode::Tactile;
+  VitaSlam touch(tactile, w.geometry);
+  touch.process_cycle(seen);
+  const CycleResult t = touch.process_cycle(blind);
+  EXPECT_TRUE(t.match.tactile_used);
+  EXPECT_EQ(t.match.template_id, 0);
+}
+
 TEST(VitaSlam, ABadFrameIsCountedAndTheCycleGoesOn) {
   World w;
   VitaSlam slam(SlamParams{}, w.geometry);

@@ -99,8 +99,10 @@ CycleResult VitaSlam::process_cycle(const CycleInput& in) {
     }
   }
   Terms terms{vt.has_value(), tt.has_value()};
-  // No contact this cycle: touch says nothing about the place, so vision decides alone.
-  if (terms.visual && terms.tactile && !tt->has_contact()) terms.tactile = false;
+  // No contact this cycle: in ViTa mode touch says nothing about the place, so vision decides alone,
+  // and without a usable frame nothing does (an empty touch matches every contact-free template with
+  // ε = 0). Touch alone (tactile mode) compares empty touches, and is fooled by them, as the paper's.
+  if (params_.mode == Mode::Vita && terms.tactile && !tt->has_contact()) terms.tactile = false;
   const Query q{vt ? &*vt : nullptr, tt ? &*tt : nullptr};
   out.dense = tt.has_value() && tt->has_contact();
 
