@@ -99,6 +99,31 @@ TEST(VisualTemplate, AllPixelFormatsGiveTheSameTemplate) {
   }
 }
 
+TEST(VisualTemplate, AnMjpegFrameLargerThanItsMessageSaysIsRefusedBeforeDecoding) {
+  const std::vector<uint8_t> grey(16 * 16, 100);
+  std::vector<uint8_t> jpeg;
+  cv::imencode(".jpg", cv::Mat(16, 16, CV_8UC1, const_cast<uint8_t*>(grey.data())), jpeg);
+  const VisualParams p = plain_params();
+  EXPECT_NO_THROW(make_visual_template(view(jpeg, 16, 16, 0, kPixMjpeg), p));
+  // The frame header (SOF0: FF C0, length, precision, height, width) patched to 32752 x 32752: a
+  // 300-byte message that decoded into 1 GB of pixels (5 GB once converted) and took 12 s.
+  std::size_t sof = 2;
+  while (!(jpeg[sof] == 0xff && jpeg[sof + 1] == 0xc0)) sof += 2 + ((jpeg[sof + 2] << 8) | jpeg[sof + 3]);
+  for (std::size_t at : {sof + 5, sof + 7}) {
+    jpeg[at] = 0x7f;
+    jpeg[at + 1] = 0xf0;
+  }
+  try {
+    make_visual_template(view(jpeg, 16, 16, 0, kPixMjpeg), p);
+    FAIL() << "a frame that does not match its message must be refused";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("32752x32752 by its JPEG header, the message says 16x16"), std::string::npos)
+        << e.what();
+  }
+  const std::vector<uint8_t> not_jpeg{0xff, 0xd8, 0xff, 0xda, 0x00, 0x02, 0x00, 0x00};
+  EXPECT_THROW(make_visual_template(view(not_jpeg, 16, 16, 0, kPixMjpeg), p), InputError);
+}
+
 TEST(VisualTemplate, RefusesBadFramesWithAReason) {
   const std::vector<uint8_t> small(100, 0);
   const VisualParams p = plain_params();

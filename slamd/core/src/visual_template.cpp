@@ -9,7 +9,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <span>
 #include <string>
+#include <utility>
 
 namespace whiskeye::slam {
 
@@ -52,6 +54,35 @@ void check_raw(const ImageView& im, int bytes_per_pixel) {
   }
 }
 
+// The frame size in a JPEG's header (its first SOF segment), or {0, 0} when there is none before the
+// scan. cv::imdecode takes the size from there, not from the message: a few hundred bytes can claim
+// 32752 x 32752 pixels (gigabytes, seconds of CPU), so the header is read first.
+std::pair<int, int> jpeg_size(std::span<const uint8_t> d) {
+  if (d.size() < 4 || d[0] != 0xff || d[1] != 0xd8) return {0, 0};
+  std::size_t pos = 2;
+  while (pos + 4 <= d.size()) {
+    if (d[pos] != 0xff) return {0, 0};
+    const uint8_t marker = d[pos + 1];
+    if (marker == 0xff) {  // fill byte
+      ++pos;
+      continue;
+    }
+    if (marker == 0x01 || (marker >= 0xd0 && marker <= 0xd7)) {  // no length field
+      pos += 2;
+      continue;
+    }
+    const std::size_t length = (std::size_t{d[pos + 2]} << 8) | d[pos + 3];
+    const bool sof = marker >= 0xc0 && marker <= 0xcf && marker != 0xc4 && marker != 0xc8 && marker != 0xcc;
+    if (sof) {
+      if (length < 7 || pos + 9 > d.size()) return {0, 0};
+      return {(d[pos + 7] << 8) | d[pos + 8], (d[pos + 5] << 8) | d[pos + 6]};
+    }
+    if (marker == 0xda || marker == 0xd9 || length < 2) return {0, 0};  // scan or end before a frame header
+    pos += 2 + length;
+  }
+  return {0, 0};
+}
+
 cv::Mat to_grey8(const ImageView& im) {
   // OpenCV wants a non-const pointer for a header over foreign data; it is only read.
   auto* data = const_cast<uint8_t*>(im.data.data());
@@ -75,6 +106,13 @@ cv::Mat to_grey8(const ImageView& im) {
       return grey;
     case kPixMjpeg: {
       if (im.data.empty()) throw InputError("image: empty MJPEG frame");
+      const auto [width, height] = jpeg_size(im.data);
+      if (width == 0 || height == 0) throw InputError("image: MJPEG frame without a readable JPEG frame header");
+      if (width != im.width || height != im.height) {
+        throw InputError("image: MJPEG frame is " + std::to_string(width) + "x" + std::to_string(height) +
+                         " by its JPEG header, the message says " + std::to_string(im.width) + "x" +
+                         std::to_string(im.height));
+      }
       const cv::Mat buf(1, static_cast<int>(im.data.size()), CV_8UC1, data);
       try {
         grey = cv::imdecode(buf, cv::IMREAD_GRAYSCALE);
