@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
+
 namespace whiskeye::slam {
 namespace {
 
@@ -206,7 +208,7 @@ TEST(ExperienceMap, ReadsVersionOneCheckpointsWithoutViewShifts) {
   v1.erase(v1.begin() + static_cast<std::ptrdiff_t>(shift_at), v1.begin() + static_cast<std::ptrdiff_t>(shift_at + 4));
   ExperienceMap r;
   size_t pos = 0;
-  r.deserialise(v1, pos, 1);
+  r.deserialise(v1, pos, 1, 1);
   EXPECT_EQ(pos, v1.size());
   ASSERT_EQ(r.size(), 1);
   EXPECT_EQ(r.experiences()[0].view_shift, 0);
@@ -226,16 +228,37 @@ TEST(ExperienceMap, SerialisationRoundTripsExactly) {
   m.serialise(a);
   ExperienceMap r;
   size_t pos = 0;
-  r.deserialise(a, pos, 2);
+  r.deserialise(a, pos, 2, 2);
   EXPECT_EQ(pos, a.size());
   r.serialise(b);
   EXPECT_EQ(a, b);
   EXPECT_EQ(r.current_id(), 1);
   EXPECT_EQ(r.offset(), m.offset());
+  // A template id beyond the store (it sized an index by it: 6 GB for 2^28), a heading that is not a
+  // unit vector (its NaN spread through relaxation), a non-finite position: refused by name.
+  auto patched = [&](std::size_t at, auto value) {
+    std::vector<uint8_t> x = a;
+    std::memcpy(x.data() + at, &value, sizeof value);
+    return x;
+  };
+  constexpr std::size_t kFirst = 8, kTemplateId = kFirst + 7 * 8 + 8;
+  for (const auto& [what, blob] : {std::pair{"template", patched(kTemplateId, int32_t{1 << 27})},
+                                   std::pair{"template", patched(kTemplateId, int32_t{2})},
+                                   std::pair{"heading", patched(kFirst + 2 * 8, 0.0)},
+                                   std::pair{"pose", patched(kFirst, std::nan(""))}}) {
+    ExperienceMap x;
+    pos = 0;
+    try {
+      x.deserialise(blob, pos, 2, 2);
+      ADD_FAILURE() << what;
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+  }
   a[7] = 0xff;  // corrupt the experience count (its most significant byte)
   pos = 0;
   ExperienceMap bad;
-  EXPECT_THROW(bad.deserialise(a, pos, 2), std::runtime_error);
+  EXPECT_THROW(bad.deserialise(a, pos, 2, 2), std::runtime_error);
 }
 
 }  // namespace

@@ -213,12 +213,21 @@ TEST(TemplateMatch, SerialisationRoundTripsExactly) {
   std::vector<uint8_t> blob;
   s.serialise(blob);
   size_t pos = 0;
-  const TemplateStore r = TemplateStore::deserialise(blob, pos);
+  const TemplateStore r = TemplateStore::deserialise(blob, pos, 64, 40);
   EXPECT_EQ(pos, blob.size());
   EXPECT_TRUE(r == s);
+  // Templates of another size than the parameters' are refused before anything is allocated for
+  // them (4096 x 4096 made the first chunk of rows 4 GB).
+  pos = 0;
+  try {
+    TemplateStore::deserialise(blob, pos, 4096, 4096);
+    FAIL();
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("templates are 64x40, the parameters say 4096x4096"), std::string::npos);
+  }
   blob.resize(blob.size() - 3);
   pos = 0;
-  EXPECT_THROW(TemplateStore::deserialise(blob, pos), std::runtime_error);
+  EXPECT_THROW(TemplateStore::deserialise(blob, pos, 64, 40), std::runtime_error);
 }
 
 void expect_same(const BestMatch& a, const BestMatch& b, const std::string& what) {
@@ -262,7 +271,7 @@ TEST(TemplateMatch, LowerBoundPrefilterNeverChangesTheResult) {
   std::vector<uint8_t> blob;
   s.serialise(blob);
   size_t pos = 0;
-  const TemplateStore restored = TemplateStore::deserialise(blob, pos);
+  const TemplateStore restored = TemplateStore::deserialise(blob, pos, 64, 40);
   std::vector<Query> queries;
   for (size_t i = 0; i < views.size(); i += 3) queries.push_back({&views[i], &touches[(i + 1) % touches.size()]});
   std::vector<VisualTemplate> fresh;

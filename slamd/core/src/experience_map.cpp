@@ -272,7 +272,12 @@ void ExperienceMap::serialise(std::vector<uint8_t>& out) const {
   bin::put<double>(out, offset_.theta);
 }
 
-void ExperienceMap::deserialise(const std::vector<uint8_t>& in, size_t& pos, uint32_t format_version) {
+void ExperienceMap::deserialise(const std::vector<uint8_t>& in, size_t& pos, uint32_t format_version,
+                                int num_templates) {
+  auto finite = [](std::initializer_list<double> values) {
+    return std::all_of(values.begin(), values.end(), [](double v) { return std::isfinite(v); });
+  };
+  auto template_ok = [&](int id) { return id >= -1 && id < num_templates; };
   ExperienceMap m(params_);
   const auto n = bin::get<uint64_t>(in, pos);
   if (n > in.size()) throw std::runtime_error("checkpoint: experience count is larger than the data");
@@ -289,7 +294,13 @@ void ExperienceMap::deserialise(const std::vector<uint8_t>& in, size_t& pos, uin
     e.tactile_template_id = bin::get<int32_t>(in, pos);
     e.dense = bin::get<uint8_t>(in, pos) != 0;
     if (format_version >= 2) e.view_shift = bin::get<int32_t>(in, pos);
-    if (e.template_id < -1 || e.template_id > (1 << 28)) throw std::runtime_error("checkpoint: bad template id");
+    if (!template_ok(e.template_id) || !template_ok(e.visual_template_id) || !template_ok(e.tactile_template_id)) {
+      throw std::runtime_error("checkpoint: experience " + std::to_string(i) + " refers to template " +
+                               std::to_string(e.template_id) + " of " + std::to_string(num_templates));
+    }
+    if (!finite({x, y, c, s, e.pc_x, e.pc_y, e.pc_theta}) || std::abs(c * c + s * s - 1.0) > 1e-6) {
+      throw std::runtime_error("checkpoint: experience " + std::to_string(i) + " has a non-finite pose or heading");
+    }
     m.add_experience({x, y, std::atan2(s, c)}, e);
     // Restore the exact heading representation, not its round trip through an angle.
     m.c_.back() = c;
@@ -304,6 +315,7 @@ void ExperienceMap::deserialise(const std::vector<uint8_t>& in, size_t& pos, uin
     d.y = bin::get<double>(in, pos);
     d.theta = bin::get<double>(in, pos);
     const auto ut = bin::get<int64_t>(in, pos);
+    if (!finite({d.x, d.y, d.theta})) throw std::runtime_error("checkpoint: link " + std::to_string(l) + " is not finite");
     try {
       m.add_link(from, to, d, ut);
     } catch (const std::invalid_argument& e) {
@@ -315,6 +327,7 @@ void ExperienceMap::deserialise(const std::vector<uint8_t>& in, size_t& pos, uin
   m.offset_.x = bin::get<double>(in, pos);
   m.offset_.y = bin::get<double>(in, pos);
   m.offset_.theta = bin::get<double>(in, pos);
+  if (!finite({m.offset_.x, m.offset_.y, m.offset_.theta})) throw std::runtime_error("checkpoint: offset is not finite");
   m.poses_dirty_ = true;
   *this = std::move(m);
 }

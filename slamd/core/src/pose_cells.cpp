@@ -422,7 +422,13 @@ void PoseCells::deserialise(const std::vector<uint8_t>& in, size_t& pos) {
   if (rx.size() != res_x_.size() || ry.size() != res_y_.size()) {
     throw std::runtime_error("checkpoint: pose-cell remainders have the wrong length");
   }
-  res_t_ = bin::get<double>(in, pos);
+  const double rt = bin::get<double>(in, pos);
+  const auto finite = [](auto v) { return std::isfinite(v); };
+  if (!std::all_of(p.begin(), p.end(), finite) || !std::all_of(rx.begin(), rx.end(), finite) ||
+      !std::all_of(ry.begin(), ry.end(), finite) || !std::isfinite(rt)) {
+    throw std::runtime_error("checkpoint: pose-cell activity or remainders are not finite");
+  }
+  res_t_ = rt;
   best_valid_ = false;
   p_ = std::move(p);
   support_dirty_ = true;

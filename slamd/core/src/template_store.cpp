@@ -371,12 +371,13 @@ void TemplateStore::serialise(std::vector<uint8_t>& out) const {
   bin::put_vec(out, decay_);
 }
 
-TemplateStore TemplateStore::deserialise(const std::vector<uint8_t>& in, size_t& pos) {
+TemplateStore TemplateStore::deserialise(const std::vector<uint8_t>& in, size_t& pos, int width, int height) {
   TemplateStore s;
   s.width_ = bin::get<int32_t>(in, pos);
   s.height_ = bin::get<int32_t>(in, pos);
-  if (s.width_ <= 0 || s.height_ <= 0 || s.width_ > 4096 || s.height_ > 4096) {
-    throw std::runtime_error("checkpoint: bad template size");
+  if (s.width_ != width || s.height_ != height) {
+    throw std::runtime_error("checkpoint: templates are " + std::to_string(s.width_) + "x" + std::to_string(s.height_) +
+                             ", the parameters say " + std::to_string(width) + "x" + std::to_string(height));
   }
   s.visual_ = RowStore<uint8_t>(s.pixels());
   s.blocks_ = RowStore<uint8_t>(s.blocks());
@@ -395,6 +396,10 @@ TemplateStore TemplateStore::deserialise(const std::vector<uint8_t>& in, size_t&
   if (s.visual_.rows() != n || s.visual_mean_.size() != n || s.pfh_.rows() != n || s.sda_.rows() != n ||
       s.has_tactile_.size() != n || s.num_contacts_.size() != n || s.pc_.size() != 3 * n || s.decay_.size() != n) {
     throw std::runtime_error("checkpoint: template arrays disagree in length");
+  }
+  if (!std::all_of(s.pc_.begin(), s.pc_.end(), [](double v) { return std::isfinite(v); }) ||
+      !std::all_of(s.decay_.begin(), s.decay_.end(), [](double v) { return std::isfinite(v); })) {
+    throw std::runtime_error("checkpoint: a template's pose-cell coordinates or decay are not finite");
   }
   for (size_t i = 0; i < n; ++i) block_means(s.visual_.row(i), s.width_, s.height_, s.blocks_.append());
   return s;

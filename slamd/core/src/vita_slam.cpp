@@ -215,16 +215,9 @@ VitaSlam VitaSlam::deserialise(std::span<const uint8_t> data, const SlamParams& 
   s.stats_.empty_whisk_cycles = bin::get<int64_t>(in, pos);
   s.stats_.odometry_out_of_order = bin::get<int64_t>(in, pos);
   s.stats_.odometry_gaps = bin::get<int64_t>(in, pos);
-  s.store_ = TemplateStore::deserialise(in, pos);
-  if (s.store_.visual_width() != params.visual.template_width ||
-      s.store_.visual_height() != params.visual.template_height) {
-    throw std::runtime_error("checkpoint: templates are " + std::to_string(s.store_.visual_width()) + "x" +
-                             std::to_string(s.store_.visual_height()) + ", the parameters say " +
-                             std::to_string(params.visual.template_width) + "x" +
-                             std::to_string(params.visual.template_height));
-  }
+  s.store_ = TemplateStore::deserialise(in, pos, params.visual.template_width, params.visual.template_height);
   s.cells_.deserialise(in, pos);
-  s.map_.deserialise(in, pos, version);
+  s.map_.deserialise(in, pos, version, s.store_.size());
   if (pos != end) throw std::runtime_error("checkpoint: " + std::to_string(end - pos) + " unexpected trailing bytes");
   return s;
 }

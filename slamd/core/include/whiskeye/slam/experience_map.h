@@ -92,8 +92,9 @@ class ExperienceMap {
   void set_params(const ExperienceMapParams& p) { params_ = p; }
 
   void serialise(std::vector<uint8_t>& out) const;
-  // format_version: the checkpoint's; version 1 had no view shifts (read as 0).
-  void deserialise(const std::vector<uint8_t>& in, size_t& pos, uint32_t format_version);
+  // format_version: the checkpoint's; version 1 had no view shifts (read as 0). Template ids must be
+  // below num_templates, poses finite and headings unit vectors (std::runtime_error otherwise).
+  void deserialise(const std::vector<uint8_t>& in, size_t& pos, uint32_t format_version, int num_templates);
 
  private:
   void sync_poses() const;

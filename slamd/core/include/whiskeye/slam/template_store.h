@@ -121,8 +121,9 @@ class TemplateStore {
 
   void serialise(std::vector<uint8_t>& out) const;
   size_t serialised_bytes() const;  // what serialise() appends
-  // Reads what serialise() wrote at `pos`, advancing it; throws std::runtime_error on bad data.
-  static TemplateStore deserialise(const std::vector<uint8_t>& in, size_t& pos);
+  // Reads what serialise() wrote at `pos`, advancing it; throws std::runtime_error on bad data, and
+  // on visual templates of another size than width x height before it allocates for them.
+  static TemplateStore deserialise(const std::vector<uint8_t>& in, size_t& pos, int width, int height);
 
   bool operator==(const TemplateStore&) const = default;
 
