@@ -31,6 +31,26 @@ const char* safety_name(Safety s) {
 
 namespace {
 
+// Reasons are static strings: the status snapshot carries the pointer to the publisher thread,
+// which may outlive the core, and the real-time path never formats text.
+constexpr const char* kBusStaleRetract = "stale bus: no samples from any board, retracting";
+constexpr const char* kBusStaleDisabled = "stale bus: motors disabled until every board streams";
+constexpr const char* kBoardSilentRetract[wp::kNumBoards] = {
+    "board 0: no samples for can.stale_timeout_s, retracting",
+    "board 1: no samples for can.stale_timeout_s, retracting",
+    "board 2: no samples for can.stale_timeout_s, retracting",
+    "board 3: no samples for can.stale_timeout_s, retracting",
+    "board 4: no samples for can.stale_timeout_s, retracting",
+    "board 5: no samples for can.stale_timeout_s, retracting"};
+constexpr const char* kBoardSilentDisabled[wp::kNumBoards] = {
+    "board 0: no samples, motors disabled until every board streams",
+    "board 1: no samples, motors disabled until every board streams",
+    "board 2: no samples, motors disabled until every board streams",
+    "board 3: no samples, motors disabled until every board streams",
+    "board 4: no samples, motors disabled until every board streams",
+    "board 5: no samples, motors disabled until every board streams"};
+static_assert(wp::kNumBoards == 6, "one reason string per board above");
+
 void load_calibration(const ParamNode& n, wp::WhiskerCalibration& c) {
   n.get("offset_x", c.offset_x, -4096.0, 4096.0);
   n.get("offset_y", c.offset_y, -4096.0, 4096.0);
@@ -117,6 +137,7 @@ void load(const ParamNode& root, Params& p) {
 
 WhiskerCore::WhiskerCore(const Params& params)
     : params_(params), controller_(params.controller), assembler_(params.mode) {
+  last_sample_mono_.fill(-1);
   for (int w = 0; w < kN; ++w) {
     cos_r_[w] = std::cos(params_.calibration[w].rotation);
     sin_r_[w] = std::sin(params_.calibration[w].rotation);
@@ -125,7 +146,6 @@ WhiskerCore::WhiskerCore(const Params& params)
 
 void WhiskerCore::on_frame(uint32_t id, bool fd, std::span<const uint8_t> data, int64_t mono_us) {
   ++counters_[Counters::kFrames];
-  last_frame_mono_ = mono_us;
   const wp::Decoded d = wp::decode_frame(id, fd, data, params_.mode, params_.ids);
   switch (d.kind) {
     case wp::FrameKind::kRejected:
@@ -137,10 +157,16 @@ void WhiskerCore::on_frame(uint32_t id, bool fd, std::span<const uint8_t> data, 
       }
       break;
     case wp::FrameKind::kSample:
-      if (assembler_.add(d.sample)) ++counters_[Counters::kSamples];
+      if (assembler_.add(d.sample)) {
+        ++counters_[Counters::kSamples];
+        last_sample_mono_[d.sample.board] = mono_us;
+      }
       break;
     case wp::FrameKind::kFragment:
-      if (assembler_.add(d.fragment)) ++counters_[Counters::kSamples];
+      if (assembler_.add(d.fragment)) {
+        ++counters_[Counters::kSamples];
+        last_sample_mono_[d.fragment.board] = mono_us;
+      }
       break;
     case wp::FrameKind::kHeartbeat:
       ++counters_[Counters::kHeartbeats];
@@ -154,9 +180,22 @@ void WhiskerCore::on_frame(uint32_t id, bool fd, std::span<const uint8_t> data, 
   for (int b = 0; b < wp::kNumBoards; ++b) counters_[Counters::kGapsBoard0 + b] = assembler_.gaps(b);
 }
 
+bool WhiskerCore::timed_out(int64_t last_mono, int64_t mono_us) const {
+  return last_mono < 0 || static_cast<double>(mono_us - last_mono) > params_.stale_timeout_s * 1e6;
+}
+
 bool WhiskerCore::bus_stale(int64_t mono_us) const {
-  return last_frame_mono_ < 0 ||
-         static_cast<double>(mono_us - last_frame_mono_) > params_.stale_timeout_s * 1e6;
+  for (const int64_t last : last_sample_mono_) {
+    if (!timed_out(last, mono_us)) return false;
+  }
+  return true;
+}
+
+int WhiskerCore::silent_board(int64_t mono_us) const {
+  for (int b = 0; b < wp::kNumBoards; ++b) {
+    if (timed_out(last_sample_mono_[b], mono_us)) return b;
+  }
+  return -1;
 }
 
 void WhiskerCore::fault() {
@@ -223,6 +262,7 @@ void WhiskerCore::step(int64_t utime, int64_t mono_us, PeriodOutput& out) {
 
   // Safety state machine.
   const bool stale = bus_stale(mono_us);
+  const int silent = silent_board(mono_us);
   switch (safety_) {
     case Safety::kWaiting:
       if (stop_requested_) {
@@ -238,7 +278,9 @@ void WhiskerCore::step(int64_t utime, int64_t mono_us, PeriodOutput& out) {
       if (stop_requested_) {
         start_retract(mono_us, "stopping: retracting");
       } else if (stale) {
-        start_retract(mono_us, "stale bus: no CAN frames, retracting");
+        start_retract(mono_us, kBusStaleRetract);
+      } else if (silent >= 0) {
+        start_retract(mono_us, kBoardSilentRetract[silent]);
       }
       break;
     case Safety::kRetracting:
@@ -246,14 +288,13 @@ void WhiskerCore::step(int64_t utime, int64_t mono_us, PeriodOutput& out) {
           static_cast<double>(mono_us - retract_start_mono_) >= params_.retract_time_s * 1e6) {
         motors_enabled_ = false;
         safety_ = stop_requested_ ? Safety::kStopped : Safety::kDisabled;
-        if (!stop_requested_) reason_ = "stale bus: motors disabled until frames return";
       }
       break;
     case Safety::kDisabled:
       if (stop_requested_) {
         safety_ = Safety::kStopped;
-      } else if (!stale && all_fresh) {
-        safety_ = Safety::kWaiting;  // bus back: start again through the normal path
+      } else if (silent < 0 && all_fresh) {
+        safety_ = Safety::kWaiting;  // every board back: start again through the normal path
         reason_ = "bus recovered";
       }
       break;
@@ -264,6 +305,14 @@ void WhiskerCore::step(int64_t utime, int64_t mono_us, PeriodOutput& out) {
       break;
   }
   if (safety_ == Safety::kStopped) reason_ = "stopped on request";
+  // Disabled: say what it waits for now (a silent board may be joined by the rest of the bus).
+  if (safety_ == Safety::kDisabled) {
+    if (stale) {
+      reason_ = kBusStaleDisabled;
+    } else if (silent >= 0) {
+      reason_ = kBoardSilentDisabled[silent];
+    }
+  }
 
   const rcp::ControlOutput c = controller_.step(in);
   out.cycle = c.cycle;

@@ -29,22 +29,31 @@ Params test_params() {
   return p;
 }
 
-// Feeds one sample of every board (board 5 optionally missing) and runs one period.
+// Feeds one sample of every board (one board optionally missing) and runs one period.
 struct Rig {
   explicit Rig(const Params& p = test_params()) : core(p) {}
-  void feed(int seq, int16_t x5 = 20, bool skip_board5 = false) {
+  void send(int b, int seq, int16_t x5 = 20) {
+    wp::BoardSample s;
+    s.board = b;
+    s.seq = static_cast<uint16_t>(seq);
+    for (int k = 0; k < 4; ++k) {
+      const int w = 4 * b + k;
+      s.whiskers[k] = {static_cast<int16_t>(w == 5 ? x5 : w), static_cast<int16_t>(-w), static_cast<int16_t>(10 * w), false};
+    }
+    std::array<uint8_t, 32> buf{};
+    wp::encode_sample_fd(s, buf);
+    core.on_frame(wp::sample_id({}, b), true, buf, mono);
+  }
+  void feed(int seq, int16_t x5 = 20, int skip_board = -1) {
     for (int b = 0; b < wp::kNumBoards; ++b) {
-      if (skip_board5 && b == 5) continue;
-      wp::BoardSample s;
-      s.board = b;
-      s.seq = static_cast<uint16_t>(seq);
-      for (int k = 0; k < 4; ++k) {
-        const int w = 4 * b + k;
-        s.whiskers[k] = {static_cast<int16_t>(w == 5 ? x5 : w), static_cast<int16_t>(-w), static_cast<int16_t>(10 * w), false};
-      }
-      std::array<uint8_t, 32> buf{};
-      wp::encode_sample_fd(s, buf);
-      core.on_frame(wp::sample_id({}, b), true, buf, mono);
+      if (b != skip_board) send(b, seq, x5);
+    }
+  }
+  void heartbeats() {
+    for (int b = 0; b < wp::kNumBoards; ++b) {
+      std::array<uint8_t, 2> buf{};
+      wp::encode_heartbeat({b, 0x05, 0}, buf);
+      core.on_frame(wp::heartbeat_id({}, b), false, buf, mono);
     }
   }
   void step() {
@@ -68,7 +77,7 @@ struct Rig {
 
 TEST(WhiskerdCore, WaitsForEveryBoardBeforeEnablingMotors) {
   Rig rig;
-  rig.feed(0, 20, /*skip_board5=*/true);
+  rig.feed(0, 20, /*skip_board=*/5);
   rig.step();
   EXPECT_EQ(rig.core.safety(), Safety::kWaiting);
   EXPECT_FALSE(rig.core.motors_enabled());
@@ -183,6 +192,72 @@ TEST(WhiskerdCore, StaleBusRetractsThenDropsEnableThenRecovers) {
   rig.run(3);
   EXPECT_EQ(rig.core.safety(), Safety::kRunning);
   EXPECT_TRUE(rig.core.motors_enabled());
+}
+
+TEST(WhiskerdCore, HeartbeatsAloneAreAStaleBus) {
+  Rig rig;
+  rig.run(300);
+  ASSERT_EQ(rig.core.safety(), Safety::kRunning);
+  for (int i = 0; i < 2500; ++i) {  // 5 s of heartbeats and nothing else
+    rig.heartbeats();
+    rig.step();
+  }
+  EXPECT_EQ(rig.core.safety(), Safety::kDisabled);
+  EXPECT_FALSE(rig.core.motors_enabled());
+  EXPECT_EQ(rig.out.command.enable_mask, 0u);
+  EXPECT_NE(std::string(rig.core.reason()).find("stale bus"), std::string::npos) << rig.core.reason();
+  StatusSnapshot s;
+  s.safety = rig.core.safety();
+  s.reason = rig.core.reason();
+  s.bus_state = "error-active";
+  driver_status_t m;
+  to_lcm(s, m);
+  EXPECT_NE(m.state, int8_t{driver_status_t::STATE_OK});
+}
+
+TEST(WhiskerdCore, SilentBoardRetractsNamingItThenRecoversWhenItStreamsAgain) {
+  Rig rig;
+  rig.run(300);
+  ASSERT_EQ(rig.core.safety(), Safety::kRunning);
+  auto period_without_board3 = [&] {
+    rig.feed(rig.seq++, 20, /*skip_board=*/3);
+    rig.step();
+  };
+  int periods = 0;
+  while (rig.core.safety() != Safety::kRetracting && periods < 2500) {
+    period_without_board3();
+    ++periods;
+  }
+  ASSERT_EQ(rig.core.safety(), Safety::kRetracting);
+  EXPECT_LE(periods * kPeriod, 0.02e6 + 2 * kPeriod);  // within the stale timeout
+  EXPECT_NE(std::string(rig.core.reason()).find("board 3"), std::string::npos) << rig.core.reason();
+  for (int i = 0; i < 200 && rig.core.safety() == Safety::kRetracting; ++i) period_without_board3();
+  EXPECT_EQ(rig.core.safety(), Safety::kDisabled);
+  EXPECT_FALSE(rig.core.motors_enabled());
+  EXPECT_EQ(rig.out.command.enable_mask, 0u);
+  EXPECT_NE(std::string(rig.core.reason()).find("board 3"), std::string::npos) << rig.core.reason();
+  for (int i = 0; i < 100; ++i) period_without_board3();  // the other five are not enough
+  EXPECT_EQ(rig.core.safety(), Safety::kDisabled);
+  rig.run(3);
+  EXPECT_EQ(rig.core.safety(), Safety::kRunning);
+  EXPECT_EQ(rig.out.command.enable_mask, 0xFFFFFFu);
+}
+
+TEST(WhiskerdCore, OnlyFreshSamplesKeepABoardAlive) {
+  Rig rig;
+  rig.run(300);
+  ASSERT_EQ(rig.core.safety(), Safety::kRunning);
+  const int frozen = rig.seq - 1;
+  for (int i = 0; i < 100 && rig.core.safety() == Safety::kRunning; ++i) {
+    rig.feed(rig.seq++, 20, /*skip_board=*/1);
+    rig.send(1, frozen);      // a duplicate of its last sample
+    rig.send(1, frozen - 5);  // a late one
+    std::array<uint8_t, 32> buf{};
+    rig.core.on_frame(wp::sample_id({}, 1), true, std::span(buf.data(), 8), rig.mono);  // rejected
+    rig.step();
+  }
+  EXPECT_EQ(rig.core.safety(), Safety::kRetracting);
+  EXPECT_NE(std::string(rig.core.reason()).find("board 1"), std::string::npos) << rig.core.reason();
 }
 
 TEST(WhiskerdCore, StopRequestRetractsToRestThenFinishes) {
