@@ -15,7 +15,7 @@ const char* const Counters::kNames[Counters::kCount] = {
     "frames", "samples", "heartbeats", "rejected_unknown_id", "rejected_wrong_length",
     "rejected_out_of_range", "rejected_wrong_frame_type", "gaps", "incomplete_samples",
     "stale_board_periods", "deadline_misses", "publish_drops", "can_tx_errors", "late_samples",
-    "gaps_board0", "gaps_board1", "gaps_board2", "gaps_board3", "gaps_board4", "gaps_board5"};
+    "board_resyncs", "gaps_board0", "gaps_board1", "gaps_board2", "gaps_board3", "gaps_board4", "gaps_board5"};
 
 const char* safety_name(Safety s) {
   switch (s) {
@@ -177,6 +177,7 @@ void WhiskerCore::on_frame(uint32_t id, bool fd, std::span<const uint8_t> data, 
   counters_[Counters::kGaps] = assembler_.total_gaps();
   counters_[Counters::kIncomplete] = assembler_.incomplete();
   counters_[Counters::kLateSamples] = assembler_.late();
+  counters_[Counters::kBoardResyncs] = assembler_.resyncs();
   for (int b = 0; b < wp::kNumBoards; ++b) counters_[Counters::kGapsBoard0 + b] = assembler_.gaps(b);
 }
 

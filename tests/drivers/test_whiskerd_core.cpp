@@ -9,6 +9,8 @@
 
 #include <array>
 #include <cmath>
+#include <set>
+#include <string>
 
 #include "latency_stats.h"
 #include "spsc_ring.h"
@@ -122,6 +124,46 @@ TEST(WhiskerdCore, CountsRejectedFramesByReasonAndGapsPerBoard) {
   EXPECT_EQ(c[Counters::kRejectedUnknownId], 1);
   EXPECT_EQ(c[Counters::kGapsBoard0 + 4], 3);
   EXPECT_EQ(c[Counters::kGaps], 3 * wp::kNumBoards);
+}
+
+TEST(WhiskerdCore, RebootedBoardIsFollowedAndCountedInDriverStatus) {
+  Rig rig;
+  rig.run(300);
+  ASSERT_EQ(rig.core.safety(), Safety::kRunning);
+  // Board 2 reboots: its sequence restarts at 0 while the other boards go on.
+  for (int i = 0; i < 10; ++i) {
+    rig.feed(rig.seq++, 20, /*skip_board=*/2);
+    rig.send(2, i);
+    rig.step();
+  }
+  EXPECT_EQ(rig.core.counters()[Counters::kBoardResyncs], 1);
+  EXPECT_EQ(rig.core.safety(), Safety::kRunning);
+  for (int w = 8; w < 12; ++w) EXPECT_EQ(rig.out.status[w], 0) << w;  // board 2 fresh again
+  StatusSnapshot s;
+  s.reason = "";
+  s.bus_state = "error-active";
+  s.counters = rig.core.counters().values;
+  driver_status_t m;
+  to_lcm(s, m);
+  int64_t resyncs = -1;
+  for (int i = 0; i < m.num_counters; ++i) {
+    if (m.counter_names[i] == "board_resyncs") resyncs = m.counter_values[i];
+  }
+  EXPECT_EQ(resyncs, 1);
+}
+
+TEST(WhiskerdCore, CounterNamesMatchTheirIndices) {
+  std::set<std::string> names;
+  for (const char* n : Counters::kNames) {
+    ASSERT_NE(n, nullptr);
+    names.insert(n);
+  }
+  EXPECT_EQ(names.size(), std::size_t{Counters::kCount});
+  EXPECT_STREQ(Counters::kNames[Counters::kLateSamples], "late_samples");
+  EXPECT_STREQ(Counters::kNames[Counters::kBoardResyncs], "board_resyncs");
+  for (int b = 0; b < wp::kNumBoards; ++b) {
+    EXPECT_EQ(Counters::kNames[Counters::kGapsBoard0 + b], "gaps_board" + std::to_string(b));
+  }
 }
 
 TEST(WhiskerdCore, FaultDisablesMotorsAtOnceAndLatches) {
