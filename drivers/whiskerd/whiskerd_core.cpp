@@ -51,6 +51,13 @@ constexpr const char* kBoardSilentDisabled[wp::kNumBoards] = {
     "board 5: no samples, motors disabled until every board streams"};
 static_assert(wp::kNumBoards == 6, "one reason string per board above");
 
+// Moves every time of a whisk cycle by offset_us (monotonic -> epoch).
+void shift_times(rcp::WhiskCycle& c, int64_t offset_us) {
+  c.utime_start += offset_us;
+  c.utime_end += offset_us;
+  for (rcp::WhiskCycle::Sample& s : c.samples) s.utime += offset_us;
+}
+
 void load_calibration(const ParamNode& n, wp::WhiskerCalibration& c) {
   n.get("offset_x", c.offset_x, -4096.0, 4096.0);
   n.get("offset_y", c.offset_y, -4096.0, 4096.0);
@@ -222,9 +229,10 @@ void WhiskerCore::step(int64_t utime, int64_t mono_us, PeriodOutput& out) {
   out.seq = seq_;
   out.completed_cycle.reset();
 
-  // Latest sample of every board -> calibration -> controller input.
+  // Latest sample of every board -> calibration -> controller input. The controller runs on the
+  // monotonic clock: its dt, slew limit, ramps and cycle timing must not see wall-clock steps.
   rcp::WhiskerSample in;
-  in.utime = utime;
+  in.utime = mono_us;
   in.seq = seq_;
   bool all_fresh = true;
   for (int b = 0; b < wp::kNumBoards; ++b) {
@@ -330,7 +338,12 @@ void WhiskerCore::step(int64_t utime, int64_t mono_us, PeriodOutput& out) {
   }
   out.command.enable_mask = mask;
   out.command.seq = ++command_seq_;
-  if (c.completed_cycle) out.completed_cycle = std::make_unique<rcp::WhiskCycle>(std::move(*c.completed_cycle));
+  if (c.completed_cycle) {
+    // WHISK_CYCLE is in epoch time (slamd matches it against camera and odometry stamps): the
+    // whole cycle takes the wall-clock offset of the period that completes it.
+    out.completed_cycle = std::make_unique<rcp::WhiskCycle>(std::move(*c.completed_cycle));
+    shift_times(*out.completed_cycle, utime - mono_us);
+  }
 }
 
 bool LineGuard::poll_fault(WhiskerCore& core) {

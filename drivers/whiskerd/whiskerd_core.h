@@ -105,7 +105,9 @@ class WhiskerCore {
 
   // One received frame; mono_us is the receive time on the monotonic clock.
   void on_frame(uint32_t id, bool fd, std::span<const uint8_t> data, int64_t mono_us);
-  // One control period: utime = epoch time of the period, mono_us = the monotonic clock.
+  // One control period: utime = epoch time of the period, mono_us = the monotonic clock. The
+  // controller runs on mono_us; the outputs (PeriodOutput::utime, a completed cycle's times) are
+  // epoch, a completed cycle shifted by this period's utime - mono_us.
   void step(int64_t utime, int64_t mono_us, PeriodOutput& out);
 
   // GPIO fault or emergency stop: motors off from this period on, latched until restart.

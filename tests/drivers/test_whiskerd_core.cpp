@@ -7,6 +7,7 @@
 #include <whiskeye/whisk_cycle_t.hpp>
 #include <whiskeye/whisker_sample_t.hpp>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <set>
@@ -347,6 +348,43 @@ TEST(WhiskerdCore, CompletedCycleIsHandedOutOnce) {
     }
   }
   EXPECT_GE(cycles, 1);
+}
+
+TEST(WhiskerdCore, WallClockStepsNeitherStopNorJerkTheWhiskingAndCyclesStayInEpochTime) {
+  Rig rig;
+  rig.run(300);
+  const double max_step = test_params().controller.pattern.max_rate * kPeriod * 1e-6;
+  std::array<float, kN> prev = rig.out.theta_command;
+  double max_change = 0.0;
+  int64_t first_cycle = rig.out.cycle;
+  int cycles_after_back = 0, cycles_after_forward = 0;
+  constexpr int kBack = 200, kForward = 1500, kEnd = 3000;
+  for (int i = 0; i < kEnd; ++i) {
+    if (i == kBack) rig.utime -= 5'000'000;          // NTP steps the wall clock back 5 s
+    if (i == kForward) rig.utime += 3'600'000'000;   // and forward 1 h; the monotonic clock is steady
+    rig.run(1);
+    for (int w = 0; w < kN; ++w) {
+      max_change = std::max(max_change, static_cast<double>(std::abs(rig.out.theta_command[w] - prev[w])));
+    }
+    prev = rig.out.theta_command;
+    if (const auto& c = rig.out.completed_cycle) {
+      (i >= kForward ? cycles_after_forward : cycles_after_back) += i >= kBack;
+      // Its last sample is the previous period's, in the completing period's epoch time.
+      EXPECT_EQ(c->utime_end, rig.out.utime - kPeriod) << i;
+      ASSERT_FALSE(c->samples.empty());
+      EXPECT_EQ(c->utime_start, c->samples.front().utime);
+      EXPECT_EQ(c->utime_end, c->samples.back().utime);
+      for (std::size_t k = 1; k < c->samples.size(); ++k) {
+        EXPECT_EQ(c->samples[k].utime - c->samples[k - 1].utime, kPeriod) << i << " " << k;
+      }
+    }
+  }
+  EXPECT_LE(max_change, max_step + 1e-5);
+  EXPECT_EQ(rig.core.controller().stats().rejected_samples, 0);
+  EXPECT_GE(cycles_after_back, 2);     // 2.6 s of whisking at 1 Hz between the steps
+  EXPECT_GE(cycles_after_forward, 2);  // 3 s after
+  EXPECT_GE(rig.out.cycle - first_cycle, 5);
+  EXPECT_EQ(rig.core.safety(), Safety::kRunning);
 }
 
 TEST(WhiskerdCore, StatusMessageCarriesCountersAndLatencies) {
