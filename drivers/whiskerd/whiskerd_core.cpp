@@ -7,7 +7,9 @@
 #include <whiskeye/whisker_sample_t.hpp>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <utility>
 
 namespace whiskeye::whiskerd {
 
@@ -96,6 +98,18 @@ void load(const ParamNode& root, Params& p) {
   ids.get("sample_base", sample, 0, 0x7ff - wp::kNumBoards);
   ids.get("command_base", command, 0, 0x7ff - wp::kNumBoards);
   ids.get("heartbeat_base", heartbeat, 0, 0x7ff - wp::kNumBoards);
+  // whiskerd receives samples and heartbeats through kernel filters on the aligned 8-id block
+  // (mask 0x7f8, see whiskerd_main.cpp): node ids 1..6 must fall in base's own block.
+  static_assert(wp::kNumBoards < 8, "node ids 1..kNumBoards fit one block of 8 ids");
+  for (const auto& [key, base] : {std::pair<const char*, int>{"sample_base", sample}, {"heartbeat_base", heartbeat}}) {
+    if (base % 8 != 0) {
+      char hex[8];
+      std::snprintf(hex, sizeof hex, "0x%03x", base);
+      throw ParamError(ids.source() + ": '" + ids.path_of(key) + "' = " + hex +
+                       " must be a multiple of 8 (0x...0 or 0x...8): the CAN filter covers the aligned block "
+                       "base..base+7");
+    }
+  }
   auto overlap = [](int a, int b) { return std::abs(a - b) <= wp::kNumBoards; };
   if (overlap(sample, command) || overlap(sample, heartbeat) || overlap(command, heartbeat)) {
     throw ParamError(ids.path_of("sample_base") + ", command_base, heartbeat_base: id ranges overlap");

@@ -434,6 +434,28 @@ TEST(WhiskerdConfig, OverlappingIdRangesAreRejected) {
   EXPECT_THROW(load(ParamNode::from_string("can: {ids: {sample_base: 0x200}}\n"), p), ParamError);
 }
 
+TEST(WhiskerdConfig, ReceivedIdBasesMustStartAnAlignedBlockOfEight) {
+  // The kernel filters cover base .. base+7 with mask 0x7f8: an unaligned base would silently drop
+  // the upper boards' frames (0x183: 0x188 and 0x189).
+  const std::pair<const char*, const char*> bad[] = {{"sample_base", "0x183"}, {"sample_base", "0x305"},
+                                                     {"sample_base", "0x7f1"}, {"heartbeat_base", "0x703"},
+                                                     {"heartbeat_base", "0x305"}, {"heartbeat_base", "0x7f1"}};
+  for (const auto& [key, base] : bad) {
+    Params p;
+    const std::string yaml = std::string("can: {ids: {") + key + ": " + base + "}}\n";
+    try {
+      load(ParamNode::from_string(yaml), p);
+      ADD_FAILURE() << yaml << " loaded";
+    } catch (const ParamError& e) {
+      EXPECT_NE(std::string(e.what()).find(std::string("can.ids.") + key), std::string::npos) << e.what();
+    }
+  }
+  Params p;
+  load(ParamNode::from_string("can: {ids: {sample_base: 0x188, heartbeat_base: 0x708}}\n"), p);
+  EXPECT_EQ(p.ids.sample_base, 0x188u);
+  EXPECT_EQ(p.ids.heartbeat_base, 0x708u);
+}
+
 TEST(WhiskerdConfig, ShippedConfigLoads) {
   Params p;
   load(ParamNode::from_file(WHISKEYE_SOURCE_DIR "/config/whiskerd.yaml"), p);
