@@ -7,7 +7,9 @@
 #include <whiskeye/whisker_sample_t.hpp>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <utility>
 
 namespace whiskeye::whiskerd {
 
@@ -15,7 +17,7 @@ const char* const Counters::kNames[Counters::kCount] = {
     "frames", "samples", "heartbeats", "rejected_unknown_id", "rejected_wrong_length",
     "rejected_out_of_range", "rejected_wrong_frame_type", "gaps", "incomplete_samples",
     "stale_board_periods", "deadline_misses", "publish_drops", "can_tx_errors", "late_samples",
-    "gaps_board0", "gaps_board1", "gaps_board2", "gaps_board3", "gaps_board4", "gaps_board5"};
+    "board_resyncs", "gaps_board0", "gaps_board1", "gaps_board2", "gaps_board3", "gaps_board4", "gaps_board5"};
 
 const char* safety_name(Safety s) {
   switch (s) {
@@ -30,6 +32,33 @@ const char* safety_name(Safety s) {
 }
 
 namespace {
+
+// Reasons are static strings: the status snapshot carries the pointer to the publisher thread,
+// which may outlive the core, and the real-time path never formats text.
+constexpr const char* kBusStaleRetract = "stale bus: no samples from any board, retracting";
+constexpr const char* kBusStaleDisabled = "stale bus: motors disabled until every board streams";
+constexpr const char* kBoardSilentRetract[wp::kNumBoards] = {
+    "board 0: no samples for can.stale_timeout_s, retracting",
+    "board 1: no samples for can.stale_timeout_s, retracting",
+    "board 2: no samples for can.stale_timeout_s, retracting",
+    "board 3: no samples for can.stale_timeout_s, retracting",
+    "board 4: no samples for can.stale_timeout_s, retracting",
+    "board 5: no samples for can.stale_timeout_s, retracting"};
+constexpr const char* kBoardSilentDisabled[wp::kNumBoards] = {
+    "board 0: no samples, motors disabled until every board streams",
+    "board 1: no samples, motors disabled until every board streams",
+    "board 2: no samples, motors disabled until every board streams",
+    "board 3: no samples, motors disabled until every board streams",
+    "board 4: no samples, motors disabled until every board streams",
+    "board 5: no samples, motors disabled until every board streams"};
+static_assert(wp::kNumBoards == 6, "one reason string per board above");
+
+// Moves every time of a whisk cycle by offset_us (monotonic -> epoch).
+void shift_times(rcp::WhiskCycle& c, int64_t offset_us) {
+  c.utime_start += offset_us;
+  c.utime_end += offset_us;
+  for (rcp::WhiskCycle::Sample& s : c.samples) s.utime += offset_us;
+}
 
 void load_calibration(const ParamNode& n, wp::WhiskerCalibration& c) {
   n.get("offset_x", c.offset_x, -4096.0, 4096.0);
@@ -69,6 +98,18 @@ void load(const ParamNode& root, Params& p) {
   ids.get("sample_base", sample, 0, 0x7ff - wp::kNumBoards);
   ids.get("command_base", command, 0, 0x7ff - wp::kNumBoards);
   ids.get("heartbeat_base", heartbeat, 0, 0x7ff - wp::kNumBoards);
+  // whiskerd receives samples and heartbeats through kernel filters on the aligned 8-id block
+  // (mask 0x7f8, see whiskerd_main.cpp): node ids 1..6 must fall in base's own block.
+  static_assert(wp::kNumBoards < 8, "node ids 1..kNumBoards fit one block of 8 ids");
+  for (const auto& [key, base] : {std::pair<const char*, int>{"sample_base", sample}, {"heartbeat_base", heartbeat}}) {
+    if (base % 8 != 0) {
+      char hex[8];
+      std::snprintf(hex, sizeof hex, "0x%03x", base);
+      throw ParamError(ids.source() + ": '" + ids.path_of(key) + "' = " + hex +
+                       " must be a multiple of 8 (0x...0 or 0x...8): the CAN filter covers the aligned block "
+                       "base..base+7");
+    }
+  }
   auto overlap = [](int a, int b) { return std::abs(a - b) <= wp::kNumBoards; };
   if (overlap(sample, command) || overlap(sample, heartbeat) || overlap(command, heartbeat)) {
     throw ParamError(ids.path_of("sample_base") + ", command_base, heartbeat_base: id ranges overlap");
@@ -117,6 +158,7 @@ void load(const ParamNode& root, Params& p) {
 
 WhiskerCore::WhiskerCore(const Params& params)
     : params_(params), controller_(params.controller), assembler_(params.mode) {
+  last_sample_mono_.fill(-1);
   for (int w = 0; w < kN; ++w) {
     cos_r_[w] = std::cos(params_.calibration[w].rotation);
     sin_r_[w] = std::sin(params_.calibration[w].rotation);
@@ -125,7 +167,6 @@ WhiskerCore::WhiskerCore(const Params& params)
 
 void WhiskerCore::on_frame(uint32_t id, bool fd, std::span<const uint8_t> data, int64_t mono_us) {
   ++counters_[Counters::kFrames];
-  last_frame_mono_ = mono_us;
   const wp::Decoded d = wp::decode_frame(id, fd, data, params_.mode, params_.ids);
   switch (d.kind) {
     case wp::FrameKind::kRejected:
@@ -137,10 +178,16 @@ void WhiskerCore::on_frame(uint32_t id, bool fd, std::span<const uint8_t> data, 
       }
       break;
     case wp::FrameKind::kSample:
-      if (assembler_.add(d.sample)) ++counters_[Counters::kSamples];
+      if (assembler_.add(d.sample)) {
+        ++counters_[Counters::kSamples];
+        last_sample_mono_[d.sample.board] = mono_us;
+      }
       break;
     case wp::FrameKind::kFragment:
-      if (assembler_.add(d.fragment)) ++counters_[Counters::kSamples];
+      if (assembler_.add(d.fragment)) {
+        ++counters_[Counters::kSamples];
+        last_sample_mono_[d.fragment.board] = mono_us;
+      }
       break;
     case wp::FrameKind::kHeartbeat:
       ++counters_[Counters::kHeartbeats];
@@ -151,12 +198,26 @@ void WhiskerCore::on_frame(uint32_t id, bool fd, std::span<const uint8_t> data, 
   counters_[Counters::kGaps] = assembler_.total_gaps();
   counters_[Counters::kIncomplete] = assembler_.incomplete();
   counters_[Counters::kLateSamples] = assembler_.late();
+  counters_[Counters::kBoardResyncs] = assembler_.resyncs();
   for (int b = 0; b < wp::kNumBoards; ++b) counters_[Counters::kGapsBoard0 + b] = assembler_.gaps(b);
 }
 
+bool WhiskerCore::timed_out(int64_t last_mono, int64_t mono_us) const {
+  return last_mono < 0 || static_cast<double>(mono_us - last_mono) > params_.stale_timeout_s * 1e6;
+}
+
 bool WhiskerCore::bus_stale(int64_t mono_us) const {
-  return last_frame_mono_ < 0 ||
-         static_cast<double>(mono_us - last_frame_mono_) > params_.stale_timeout_s * 1e6;
+  for (const int64_t last : last_sample_mono_) {
+    if (!timed_out(last, mono_us)) return false;
+  }
+  return true;
+}
+
+int WhiskerCore::silent_board(int64_t mono_us) const {
+  for (int b = 0; b < wp::kNumBoards; ++b) {
+    if (timed_out(last_sample_mono_[b], mono_us)) return b;
+  }
+  return -1;
 }
 
 void WhiskerCore::fault() {
@@ -182,9 +243,10 @@ void WhiskerCore::step(int64_t utime, int64_t mono_us, PeriodOutput& out) {
   out.seq = seq_;
   out.completed_cycle.reset();
 
-  // Latest sample of every board -> calibration -> controller input.
+  // Latest sample of every board -> calibration -> controller input. The controller runs on the
+  // monotonic clock: its dt, slew limit, ramps and cycle timing must not see wall-clock steps.
   rcp::WhiskerSample in;
-  in.utime = utime;
+  in.utime = mono_us;
   in.seq = seq_;
   bool all_fresh = true;
   for (int b = 0; b < wp::kNumBoards; ++b) {
@@ -223,6 +285,7 @@ void WhiskerCore::step(int64_t utime, int64_t mono_us, PeriodOutput& out) {
 
   // Safety state machine.
   const bool stale = bus_stale(mono_us);
+  const int silent = silent_board(mono_us);
   switch (safety_) {
     case Safety::kWaiting:
       if (stop_requested_) {
@@ -238,7 +301,9 @@ void WhiskerCore::step(int64_t utime, int64_t mono_us, PeriodOutput& out) {
       if (stop_requested_) {
         start_retract(mono_us, "stopping: retracting");
       } else if (stale) {
-        start_retract(mono_us, "stale bus: no CAN frames, retracting");
+        start_retract(mono_us, kBusStaleRetract);
+      } else if (silent >= 0) {
+        start_retract(mono_us, kBoardSilentRetract[silent]);
       }
       break;
     case Safety::kRetracting:
@@ -246,14 +311,13 @@ void WhiskerCore::step(int64_t utime, int64_t mono_us, PeriodOutput& out) {
           static_cast<double>(mono_us - retract_start_mono_) >= params_.retract_time_s * 1e6) {
         motors_enabled_ = false;
         safety_ = stop_requested_ ? Safety::kStopped : Safety::kDisabled;
-        if (!stop_requested_) reason_ = "stale bus: motors disabled until frames return";
       }
       break;
     case Safety::kDisabled:
       if (stop_requested_) {
         safety_ = Safety::kStopped;
-      } else if (!stale && all_fresh) {
-        safety_ = Safety::kWaiting;  // bus back: start again through the normal path
+      } else if (silent < 0 && all_fresh) {
+        safety_ = Safety::kWaiting;  // every board back: start again through the normal path
         reason_ = "bus recovered";
       }
       break;
@@ -264,6 +328,14 @@ void WhiskerCore::step(int64_t utime, int64_t mono_us, PeriodOutput& out) {
       break;
   }
   if (safety_ == Safety::kStopped) reason_ = "stopped on request";
+  // Disabled: say what it waits for now (a silent board may be joined by the rest of the bus).
+  if (safety_ == Safety::kDisabled) {
+    if (stale) {
+      reason_ = kBusStaleDisabled;
+    } else if (silent >= 0) {
+      reason_ = kBoardSilentDisabled[silent];
+    }
+  }
 
   const rcp::ControlOutput c = controller_.step(in);
   out.cycle = c.cycle;
@@ -280,7 +352,12 @@ void WhiskerCore::step(int64_t utime, int64_t mono_us, PeriodOutput& out) {
   }
   out.command.enable_mask = mask;
   out.command.seq = ++command_seq_;
-  if (c.completed_cycle) out.completed_cycle = std::make_unique<rcp::WhiskCycle>(std::move(*c.completed_cycle));
+  if (c.completed_cycle) {
+    // WHISK_CYCLE is in epoch time (slamd matches it against camera and odometry stamps): the
+    // whole cycle takes the wall-clock offset of the period that completes it.
+    out.completed_cycle = std::make_unique<rcp::WhiskCycle>(std::move(*c.completed_cycle));
+    shift_times(*out.completed_cycle, utime - mono_us);
+  }
 }
 
 bool LineGuard::poll_fault(WhiskerCore& core) {

@@ -1,8 +1,8 @@
 // whiskerd's control core, free of sockets, threads and clocks so it is unit-tested and benchmarked
 // on the host: frames in (on_frame), one control period out (step) — latest sample of every board
 // -> calibration -> rcp_whisking controller -> motor command -> the messages to publish — plus the
-// safety state machine (GPIO fault: motors off at once and latched; stop request or stale bus:
-// retract, then drop enable). The daemon (whiskerd_main.cpp) is the thin wiring around it.
+// safety state machine (GPIO fault: motors off at once and latched; stop request, stale bus or a
+// silent board: retract, then drop enable). The daemon (whiskerd_main.cpp) is the thin wiring around it.
 #pragma once
 
 #include <whiskeye/common/params.h>
@@ -37,7 +37,7 @@ struct Params {
   wp::BusMode mode = wp::BusMode::kFd;
   wp::ProtocolIds ids;
   double rate_hz = 500.0;         // control and sample rate
-  double stale_timeout_s = 0.1;   // no frame for this long -> retract, drop enable
+  double stale_timeout_s = 0.1;   // a board without a fresh sample for this long -> retract, drop enable
   // safety
   double retract_time_s = 1.0;    // longest time to wait for the retraction ramp before dropping enable
   bool whisk_on_start = true;     // start whisking as soon as every board is streaming
@@ -86,7 +86,7 @@ const char* safety_name(Safety s);
 
 // Counter names, in the order of Counters::values (DRIVER_STATUS counter_names).
 struct Counters {
-  static constexpr int kFixed = 14;
+  static constexpr int kFixed = 15;
   static constexpr int kCount = kFixed + wp::kNumBoards;
   static const char* const kNames[kCount];
   std::array<int64_t, kCount> values{};
@@ -94,8 +94,9 @@ struct Counters {
   enum : int {
     kFrames = 0, kSamples, kHeartbeats, kRejectedUnknownId, kRejectedWrongLength, kRejectedOutOfRange,
     kRejectedWrongFrameType, kGaps, kIncomplete, kStaleBoardPeriods, kDeadlineMisses, kPublishDrops,
-    kCanTxErrors, kLateSamples, kGapsBoard0
+    kCanTxErrors, kLateSamples, kBoardResyncs, kGapsBoard0
   };
+  static_assert(kGapsBoard0 == kFixed, "the per-board counters follow the fixed ones");
 };
 
 class WhiskerCore {
@@ -104,7 +105,9 @@ class WhiskerCore {
 
   // One received frame; mono_us is the receive time on the monotonic clock.
   void on_frame(uint32_t id, bool fd, std::span<const uint8_t> data, int64_t mono_us);
-  // One control period: utime = epoch time of the period, mono_us = the monotonic clock.
+  // One control period: utime = epoch time of the period, mono_us = the monotonic clock. The
+  // controller runs on mono_us; the outputs (PeriodOutput::utime, a completed cycle's times) are
+  // epoch, a completed cycle shifted by this period's utime - mono_us.
   void step(int64_t utime, int64_t mono_us, PeriodOutput& out);
 
   // GPIO fault or emergency stop: motors off from this period on, latched until restart.
@@ -115,7 +118,11 @@ class WhiskerCore {
   // What the enable line should be.
   bool motors_enabled() const { return motors_enabled_; }
   Safety safety() const { return safety_; }
+  // Staleness counts fresh samples only (accepted by the assembler: not duplicates, late, rejected
+  // or heartbeat frames). The bus is stale when no board has had one for stale_timeout_s;
+  // silent_board() is the first board without one for that long (-1: none).
   bool bus_stale(int64_t mono_us) const;
+  int silent_board(int64_t mono_us) const;
   const char* reason() const { return reason_; }
 
   Counters& counters() { return counters_; }
@@ -124,13 +131,14 @@ class WhiskerCore {
 
  private:
   void start_retract(int64_t mono_us, const char* why);
+  bool timed_out(int64_t last_mono, int64_t mono_us) const;
 
   Params params_;
   rcp::Controller controller_;
   wp::SampleAssembler assembler_;
   std::array<double, kN> cos_r_{}, sin_r_{};
   std::array<int64_t, wp::kNumBoards> used_samples_{};  // board sample count consumed last period
-  int64_t last_frame_mono_ = -1;
+  std::array<int64_t, wp::kNumBoards> last_sample_mono_;  // per board, time of its last fresh sample; -1 = none
   int64_t seq_ = 0;
   uint16_t command_seq_ = 0;
   Safety safety_ = Safety::kWaiting;

@@ -333,8 +333,9 @@ int main(int argc, char** argv) {
   std::unique_ptr<LcmBus> bus;
   try {
     sock = std::make_unique<can::Socket>(params.interface, params.mode == wp::BusMode::kFd);
-    // The 8-id blocks of samples and heartbeats (base .. base+7): node ids 1..6 plus neighbours, so
-    // a misconfigured board (an unknown id next to ours) is counted rather than silently filtered.
+    // The 8-id blocks of samples and heartbeats (base .. base+7; load() rejects a base that is not a
+    // multiple of 8): node ids 1..6 plus neighbours, so a misconfigured board (an unknown id next
+    // to ours) is counted rather than silently filtered.
     std::vector<can::Filter> filters;
     for (uint32_t base : {params.ids.sample_base, params.ids.heartbeat_base}) filters.push_back({base, 0x7f8});
     sock->set_filters(filters);

@@ -192,6 +192,41 @@ TEST(WhiskerProtocol, SequenceGapsAreCountedPerBoardAcrossWraparound) {
   EXPECT_EQ(a.total_gaps(), 2);
 }
 
+TEST(WhiskerProtocol, RebootedBoardIsResynchronisedAfterAFewLateSamples) {
+  SampleAssembler a(BusMode::kFd);
+  for (uint16_t s = 1000; s < 1010; ++s) a.add(make_sample(2, s));
+  a.add(make_sample(3, 7));
+  // Board 2 reboots: its counter restarts at 0, every new seq looks like a late frame.
+  int accepted = 0;
+  for (uint16_t s = 0; s < SampleAssembler::kResyncAfterLate; ++s) accepted += a.add(make_sample(2, s));
+  EXPECT_EQ(accepted, 1);  // the last of the run
+  EXPECT_EQ(a.resyncs(), 1);
+  EXPECT_EQ(a.late(), SampleAssembler::kResyncAfterLate - 1);
+  EXPECT_EQ(a.latest(2).seq, SampleAssembler::kResyncAfterLate - 1);
+  const int64_t gaps = a.gaps(2);
+  EXPECT_EQ(gaps, 0);
+  EXPECT_TRUE(a.add(make_sample(2, SampleAssembler::kResyncAfterLate)));
+  EXPECT_EQ(a.gaps(2), gaps);  // streaming normally again, no gap
+  EXPECT_EQ(a.latest(3).seq, 7);  // other boards untouched
+}
+
+TEST(WhiskerProtocol, SingleLateFramesNeverResynchronise) {
+  SampleAssembler a(BusMode::kClassic);
+  auto sample = [&](uint8_t seq) {
+    bool done = false;
+    for (int k = 0; k < kWhiskersPerBoard; ++k) done = a.add(WhiskerFragment{4, seq, k, 0, {}});
+    return done;
+  };
+  // Every other sample is followed by a reordered old one: late each time, but never consecutive.
+  for (int s = 100; s < 140; s += 2) {
+    EXPECT_TRUE(sample(static_cast<uint8_t>(s)));
+    EXPECT_FALSE(sample(static_cast<uint8_t>(s - 5)));
+  }
+  EXPECT_EQ(a.late(), 20);
+  EXPECT_EQ(a.resyncs(), 0);
+  EXPECT_EQ(a.latest(4).seq, 138);
+}
+
 TEST(WhiskerProtocol, CalibrationAppliesOffsetGainAndRotation) {
   WhiskerCalibration c;
   c.offset_x = 100;

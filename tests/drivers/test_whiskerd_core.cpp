@@ -7,8 +7,11 @@
 #include <whiskeye/whisk_cycle_t.hpp>
 #include <whiskeye/whisker_sample_t.hpp>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <set>
+#include <string>
 
 #include "latency_stats.h"
 #include "spsc_ring.h"
@@ -29,22 +32,31 @@ Params test_params() {
   return p;
 }
 
-// Feeds one sample of every board (board 5 optionally missing) and runs one period.
+// Feeds one sample of every board (one board optionally missing) and runs one period.
 struct Rig {
   explicit Rig(const Params& p = test_params()) : core(p) {}
-  void feed(int seq, int16_t x5 = 20, bool skip_board5 = false) {
+  void send(int b, int seq, int16_t x5 = 20) {
+    wp::BoardSample s;
+    s.board = b;
+    s.seq = static_cast<uint16_t>(seq);
+    for (int k = 0; k < 4; ++k) {
+      const int w = 4 * b + k;
+      s.whiskers[k] = {static_cast<int16_t>(w == 5 ? x5 : w), static_cast<int16_t>(-w), static_cast<int16_t>(10 * w), false};
+    }
+    std::array<uint8_t, 32> buf{};
+    wp::encode_sample_fd(s, buf);
+    core.on_frame(wp::sample_id({}, b), true, buf, mono);
+  }
+  void feed(int seq, int16_t x5 = 20, int skip_board = -1) {
     for (int b = 0; b < wp::kNumBoards; ++b) {
-      if (skip_board5 && b == 5) continue;
-      wp::BoardSample s;
-      s.board = b;
-      s.seq = static_cast<uint16_t>(seq);
-      for (int k = 0; k < 4; ++k) {
-        const int w = 4 * b + k;
-        s.whiskers[k] = {static_cast<int16_t>(w == 5 ? x5 : w), static_cast<int16_t>(-w), static_cast<int16_t>(10 * w), false};
-      }
-      std::array<uint8_t, 32> buf{};
-      wp::encode_sample_fd(s, buf);
-      core.on_frame(wp::sample_id({}, b), true, buf, mono);
+      if (b != skip_board) send(b, seq, x5);
+    }
+  }
+  void heartbeats() {
+    for (int b = 0; b < wp::kNumBoards; ++b) {
+      std::array<uint8_t, 2> buf{};
+      wp::encode_heartbeat({b, 0x05, 0}, buf);
+      core.on_frame(wp::heartbeat_id({}, b), false, buf, mono);
     }
   }
   void step() {
@@ -68,7 +80,7 @@ struct Rig {
 
 TEST(WhiskerdCore, WaitsForEveryBoardBeforeEnablingMotors) {
   Rig rig;
-  rig.feed(0, 20, /*skip_board5=*/true);
+  rig.feed(0, 20, /*skip_board=*/5);
   rig.step();
   EXPECT_EQ(rig.core.safety(), Safety::kWaiting);
   EXPECT_FALSE(rig.core.motors_enabled());
@@ -113,6 +125,46 @@ TEST(WhiskerdCore, CountsRejectedFramesByReasonAndGapsPerBoard) {
   EXPECT_EQ(c[Counters::kRejectedUnknownId], 1);
   EXPECT_EQ(c[Counters::kGapsBoard0 + 4], 3);
   EXPECT_EQ(c[Counters::kGaps], 3 * wp::kNumBoards);
+}
+
+TEST(WhiskerdCore, RebootedBoardIsFollowedAndCountedInDriverStatus) {
+  Rig rig;
+  rig.run(300);
+  ASSERT_EQ(rig.core.safety(), Safety::kRunning);
+  // Board 2 reboots: its sequence restarts at 0 while the other boards go on.
+  for (int i = 0; i < 10; ++i) {
+    rig.feed(rig.seq++, 20, /*skip_board=*/2);
+    rig.send(2, i);
+    rig.step();
+  }
+  EXPECT_EQ(rig.core.counters()[Counters::kBoardResyncs], 1);
+  EXPECT_EQ(rig.core.safety(), Safety::kRunning);
+  for (int w = 8; w < 12; ++w) EXPECT_EQ(rig.out.status[w], 0) << w;  // board 2 fresh again
+  StatusSnapshot s;
+  s.reason = "";
+  s.bus_state = "error-active";
+  s.counters = rig.core.counters().values;
+  driver_status_t m;
+  to_lcm(s, m);
+  int64_t resyncs = -1;
+  for (int i = 0; i < m.num_counters; ++i) {
+    if (m.counter_names[i] == "board_resyncs") resyncs = m.counter_values[i];
+  }
+  EXPECT_EQ(resyncs, 1);
+}
+
+TEST(WhiskerdCore, CounterNamesMatchTheirIndices) {
+  std::set<std::string> names;
+  for (const char* n : Counters::kNames) {
+    ASSERT_NE(n, nullptr);
+    names.insert(n);
+  }
+  EXPECT_EQ(names.size(), std::size_t{Counters::kCount});
+  EXPECT_STREQ(Counters::kNames[Counters::kLateSamples], "late_samples");
+  EXPECT_STREQ(Counters::kNames[Counters::kBoardResyncs], "board_resyncs");
+  for (int b = 0; b < wp::kNumBoards; ++b) {
+    EXPECT_EQ(Counters::kNames[Counters::kGapsBoard0 + b], "gaps_board" + std::to_string(b));
+  }
 }
 
 TEST(WhiskerdCore, FaultDisablesMotorsAtOnceAndLatches) {
@@ -185,6 +237,72 @@ TEST(WhiskerdCore, StaleBusRetractsThenDropsEnableThenRecovers) {
   EXPECT_TRUE(rig.core.motors_enabled());
 }
 
+TEST(WhiskerdCore, HeartbeatsAloneAreAStaleBus) {
+  Rig rig;
+  rig.run(300);
+  ASSERT_EQ(rig.core.safety(), Safety::kRunning);
+  for (int i = 0; i < 2500; ++i) {  // 5 s of heartbeats and nothing else
+    rig.heartbeats();
+    rig.step();
+  }
+  EXPECT_EQ(rig.core.safety(), Safety::kDisabled);
+  EXPECT_FALSE(rig.core.motors_enabled());
+  EXPECT_EQ(rig.out.command.enable_mask, 0u);
+  EXPECT_NE(std::string(rig.core.reason()).find("stale bus"), std::string::npos) << rig.core.reason();
+  StatusSnapshot s;
+  s.safety = rig.core.safety();
+  s.reason = rig.core.reason();
+  s.bus_state = "error-active";
+  driver_status_t m;
+  to_lcm(s, m);
+  EXPECT_NE(m.state, int8_t{driver_status_t::STATE_OK});
+}
+
+TEST(WhiskerdCore, SilentBoardRetractsNamingItThenRecoversWhenItStreamsAgain) {
+  Rig rig;
+  rig.run(300);
+  ASSERT_EQ(rig.core.safety(), Safety::kRunning);
+  auto period_without_board3 = [&] {
+    rig.feed(rig.seq++, 20, /*skip_board=*/3);
+    rig.step();
+  };
+  int periods = 0;
+  while (rig.core.safety() != Safety::kRetracting && periods < 2500) {
+    period_without_board3();
+    ++periods;
+  }
+  ASSERT_EQ(rig.core.safety(), Safety::kRetracting);
+  EXPECT_LE(periods * kPeriod, 0.02e6 + 2 * kPeriod);  // within the stale timeout
+  EXPECT_NE(std::string(rig.core.reason()).find("board 3"), std::string::npos) << rig.core.reason();
+  for (int i = 0; i < 200 && rig.core.safety() == Safety::kRetracting; ++i) period_without_board3();
+  EXPECT_EQ(rig.core.safety(), Safety::kDisabled);
+  EXPECT_FALSE(rig.core.motors_enabled());
+  EXPECT_EQ(rig.out.command.enable_mask, 0u);
+  EXPECT_NE(std::string(rig.core.reason()).find("board 3"), std::string::npos) << rig.core.reason();
+  for (int i = 0; i < 100; ++i) period_without_board3();  // the other five are not enough
+  EXPECT_EQ(rig.core.safety(), Safety::kDisabled);
+  rig.run(3);
+  EXPECT_EQ(rig.core.safety(), Safety::kRunning);
+  EXPECT_EQ(rig.out.command.enable_mask, 0xFFFFFFu);
+}
+
+TEST(WhiskerdCore, OnlyFreshSamplesKeepABoardAlive) {
+  Rig rig;
+  rig.run(300);
+  ASSERT_EQ(rig.core.safety(), Safety::kRunning);
+  const int frozen = rig.seq - 1;
+  for (int i = 0; i < 100 && rig.core.safety() == Safety::kRunning; ++i) {
+    rig.feed(rig.seq++, 20, /*skip_board=*/1);
+    rig.send(1, frozen);      // a duplicate of its last sample
+    rig.send(1, frozen - 5);  // a late one
+    std::array<uint8_t, 32> buf{};
+    rig.core.on_frame(wp::sample_id({}, 1), true, std::span(buf.data(), 8), rig.mono);  // rejected
+    rig.step();
+  }
+  EXPECT_EQ(rig.core.safety(), Safety::kRetracting);
+  EXPECT_NE(std::string(rig.core.reason()).find("board 1"), std::string::npos) << rig.core.reason();
+}
+
 TEST(WhiskerdCore, StopRequestRetractsToRestThenFinishes) {
   Params p = test_params();
   p.retract_time_s = 2.0;  // longer than the controller's ramp: the ramp decides
@@ -232,6 +350,43 @@ TEST(WhiskerdCore, CompletedCycleIsHandedOutOnce) {
   EXPECT_GE(cycles, 1);
 }
 
+TEST(WhiskerdCore, WallClockStepsNeitherStopNorJerkTheWhiskingAndCyclesStayInEpochTime) {
+  Rig rig;
+  rig.run(300);
+  const double max_step = test_params().controller.pattern.max_rate * kPeriod * 1e-6;
+  std::array<float, kN> prev = rig.out.theta_command;
+  double max_change = 0.0;
+  int64_t first_cycle = rig.out.cycle;
+  int cycles_after_back = 0, cycles_after_forward = 0;
+  constexpr int kBack = 200, kForward = 1500, kEnd = 3000;
+  for (int i = 0; i < kEnd; ++i) {
+    if (i == kBack) rig.utime -= 5'000'000;          // NTP steps the wall clock back 5 s
+    if (i == kForward) rig.utime += 3'600'000'000;   // and forward 1 h; the monotonic clock is steady
+    rig.run(1);
+    for (int w = 0; w < kN; ++w) {
+      max_change = std::max(max_change, static_cast<double>(std::abs(rig.out.theta_command[w] - prev[w])));
+    }
+    prev = rig.out.theta_command;
+    if (const auto& c = rig.out.completed_cycle) {
+      (i >= kForward ? cycles_after_forward : cycles_after_back) += i >= kBack;
+      // Its last sample is the previous period's, in the completing period's epoch time.
+      EXPECT_EQ(c->utime_end, rig.out.utime - kPeriod) << i;
+      ASSERT_FALSE(c->samples.empty());
+      EXPECT_EQ(c->utime_start, c->samples.front().utime);
+      EXPECT_EQ(c->utime_end, c->samples.back().utime);
+      for (std::size_t k = 1; k < c->samples.size(); ++k) {
+        EXPECT_EQ(c->samples[k].utime - c->samples[k - 1].utime, kPeriod) << i << " " << k;
+      }
+    }
+  }
+  EXPECT_LE(max_change, max_step + 1e-5);
+  EXPECT_EQ(rig.core.controller().stats().rejected_samples, 0);
+  EXPECT_GE(cycles_after_back, 2);     // 2.6 s of whisking at 1 Hz between the steps
+  EXPECT_GE(cycles_after_forward, 2);  // 3 s after
+  EXPECT_GE(rig.out.cycle - first_cycle, 5);
+  EXPECT_EQ(rig.core.safety(), Safety::kRunning);
+}
+
 TEST(WhiskerdCore, StatusMessageCarriesCountersAndLatencies) {
   StatusSnapshot s;
   s.safety = Safety::kRunning;
@@ -277,6 +432,28 @@ TEST(WhiskerdConfig, ClassicModeDefaultsToAFeasibleRateAndRejectsTooFast) {
 TEST(WhiskerdConfig, OverlappingIdRangesAreRejected) {
   Params p;
   EXPECT_THROW(load(ParamNode::from_string("can: {ids: {sample_base: 0x200}}\n"), p), ParamError);
+}
+
+TEST(WhiskerdConfig, ReceivedIdBasesMustStartAnAlignedBlockOfEight) {
+  // The kernel filters cover base .. base+7 with mask 0x7f8: an unaligned base would silently drop
+  // the upper boards' frames (0x183: 0x188 and 0x189).
+  const std::pair<const char*, const char*> bad[] = {{"sample_base", "0x183"}, {"sample_base", "0x305"},
+                                                     {"sample_base", "0x7f1"}, {"heartbeat_base", "0x703"},
+                                                     {"heartbeat_base", "0x305"}, {"heartbeat_base", "0x7f1"}};
+  for (const auto& [key, base] : bad) {
+    Params p;
+    const std::string yaml = std::string("can: {ids: {") + key + ": " + base + "}}\n";
+    try {
+      load(ParamNode::from_string(yaml), p);
+      ADD_FAILURE() << yaml << " loaded";
+    } catch (const ParamError& e) {
+      EXPECT_NE(std::string(e.what()).find(std::string("can.ids.") + key), std::string::npos) << e.what();
+    }
+  }
+  Params p;
+  load(ParamNode::from_string("can: {ids: {sample_base: 0x188, heartbeat_base: 0x708}}\n"), p);
+  EXPECT_EQ(p.ids.sample_base, 0x188u);
+  EXPECT_EQ(p.ids.heartbeat_base, 0x708u);
 }
 
 TEST(WhiskerdConfig, ShippedConfigLoads) {

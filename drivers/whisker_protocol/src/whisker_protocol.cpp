@@ -228,15 +228,28 @@ std::size_t encode_command_classic(const MotorCommand& c, int board, std::span<u
 bool SampleAssembler::accept(Board& b, const BoardSample& s) {
   if (b.have) {
     const uint32_t modulus = mode_ == BusMode::kFd ? 0x10000u : 0x100u;
-    const uint32_t step = (static_cast<uint32_t>(s.seq) + modulus - b.latest.seq) % modulus;
+    auto steps = [modulus](uint16_t from, uint16_t to) {
+      return (static_cast<uint32_t>(to) + modulus - from) % modulus;
+    };
+    const uint32_t step = steps(b.latest.seq, s.seq);
     if (step == 0) return false;  // duplicate
-    // A step in the upper half of the sequence space is a late (reordered) frame, not a gap.
     if (step > modulus / 2) {
-      ++late_;
-      return false;
+      // A step in the upper half of the sequence space is a late (reordered) frame, not a gap —
+      // unless it starts a run of them that advances by itself: the board restarted its sequence.
+      const uint32_t run_step = steps(b.last_late_seq, s.seq);
+      const bool continues = b.late_run > 0 && run_step > 0 && run_step <= modulus / 2;
+      b.late_run = continues ? b.late_run + 1 : 1;
+      b.last_late_seq = s.seq;
+      if (b.late_run < kResyncAfterLate) {
+        ++late_;
+        return false;
+      }
+      ++resyncs_;  // follow the new sequence; the samples skipped in the run are not gaps
+    } else {
+      b.gaps += step - 1;
     }
-    b.gaps += step - 1;
   }
+  b.late_run = 0;
   b.latest = s;
   b.have = true;
   ++b.samples;

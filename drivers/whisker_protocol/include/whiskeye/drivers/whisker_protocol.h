@@ -148,8 +148,14 @@ struct DecodeCounters {
 
 // Keeps the latest complete sample of each board and counts sequence gaps per board. Classic-mode
 // fragments are assembled: a board sample is complete when all 4 whiskers of one seq have arrived.
+// A board that reboots restarts its sequence at 0, which looks like a run of late samples: after
+// kResyncAfterLate consecutive late samples of one board (each ahead of the previous one, with no
+// accepted sample in between) the last of them is accepted as the board's new sequence and counted
+// in resyncs(); a single reordered frame stays late.
 class SampleAssembler {
  public:
+  static constexpr int kResyncAfterLate = 3;
+
   explicit SampleAssembler(BusMode mode) : mode_(mode) {}
   // Returns true when a new complete board sample is available (latest(board)).
   bool add(const BoardSample& s);
@@ -163,6 +169,8 @@ class SampleAssembler {
   int64_t incomplete() const { return incomplete_; }
   // Samples that arrived after a newer one of their board (reordered): ignored, their seq stays a gap.
   int64_t late() const { return late_; }
+  // Times a board's sequence was resynchronised after a run of late samples (a reboot).
+  int64_t resyncs() const { return resyncs_; }
   // Count of complete samples per board since start.
   int64_t samples(int board) const { return boards_[board].samples; }
 
@@ -175,12 +183,15 @@ class SampleAssembler {
     BoardSample pending;
     uint8_t pending_mask = 0;
     bool pending_active = false;
+    int late_run = 0;            // consecutive late samples since the last accepted one
+    uint16_t last_late_seq = 0;  // seq of the last of them
   };
   bool accept(Board& b, const BoardSample& s);
   BusMode mode_;
   std::array<Board, kNumBoards> boards_{};
   int64_t incomplete_ = 0;
   int64_t late_ = 0;
+  int64_t resyncs_ = 0;
 };
 
 // Per-whisker calibration: deflection = R(rotation) * (gain .* (raw - offset)), theta = theta_gain *
