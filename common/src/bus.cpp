@@ -3,6 +3,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <fcntl.h>
 #include <regex>
@@ -94,8 +95,15 @@ LcmBus::LcmBus(const std::string& url) : lcm_(std::make_unique<lcm::LCM>(url)) {
 LcmBus::~LcmBus() = default;
 
 void LcmBus::publish_raw(const std::string& channel, std::span<const uint8_t> data) {
-  if (lcm_->publish(channel, data.data(), static_cast<unsigned int>(data.size())) != 0) {
-    throw std::runtime_error("LCM publish on " + channel + " failed");
+  errno = 0;
+  if (lcm_->publish(channel, data.data(), static_cast<unsigned int>(data.size())) == 0) return;
+  const int err = errno;
+  const int64_t n = publish_errors_.fetch_add(1) + 1;
+  int64_t power = 1;
+  while (power * 10 <= n) power *= 10;
+  if (n == power) {
+    std::fprintf(stderr, "LCM: cannot send on %s (%zu bytes): %s; %lld message(s) dropped so far\n", channel.c_str(),
+                 data.size(), err != 0 ? std::strerror(err) : "send failed", static_cast<long long>(n));
   }
 }
 

@@ -280,6 +280,9 @@ void publisher_thread(const Params& p, Bus& bus, Shared& shared, ServiceNotifier
         std::cerr << item.text.data() << "\n";
       } else if (item.kind == Item::Kind::kStatus) {
         to_lcm(item.status, status);
+        status.counter_names.push_back("lcm_publish_errors");
+        status.counter_values.push_back(bus.publish_errors());
+        status.num_counters = static_cast<int32_t>(status.counter_names.size());
         publish(bus, p.channel_status, status);
       }
     }

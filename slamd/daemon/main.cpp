@@ -246,6 +246,7 @@ int run_live(const Loaded& cfg, const Options& o) {
       st.checkpoints_written = written.written;
       st.checkpoint_errors = written.errors;
       st.checkpoints_superseded = written.superseded;
+      st.publish_errors = bus.publish_errors();
       publish(bus, "SLAM_STATUS", st);
       next_tick = now + 1'000'000;
     }

@@ -346,6 +346,8 @@ driver_status_t BasedNode::make_status() {
     const auto it = counters_.find(name);
     s.counter_values.push_back(it == counters_.end() ? 0 : it->second);
   }
+  s.counter_names.push_back("lcm_publish_errors");
+  s.counter_values.push_back(bus_.publish_errors());
   s.num_counters = static_cast<int32_t>(s.counter_names.size());
   const double interval_s = std::max(1e-6, static_cast<double>(now - interval_start_us_) * 1e-6);
   const auto stat = [&](const char* name, double v) {

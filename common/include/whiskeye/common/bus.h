@@ -42,6 +42,8 @@ class Bus {
   virtual void publish_raw(const std::string& channel, std::span<const uint8_t> data) = 0;
   // `channel` is a POSIX extended regex matched against the whole channel name, as in LCM.
   virtual void subscribe_raw(const std::string& channel, RawHandler handler) = 0;
+  // Messages a transport could not send and dropped (see LcmBus); daemons report it in their status.
+  virtual int64_t publish_errors() const { return 0; }
 };
 
 // Counts messages that failed to decode, per channel; optionally tells a callback (to log).
@@ -159,8 +161,13 @@ class LcmBus : public Bus {
   LcmBus(const LcmBus&) = delete;
   LcmBus& operator=(const LcmBus&) = delete;
 
+  // A message that cannot be sent (ENOBUFS with the socket's buffer full, ENETUNREACH or ENETDOWN
+  // with the interface down) is lost, as a datagram lost on the wire would be: it is counted in
+  // publish_errors(), logged to stderr at the 1st, 10th, 100th, ... failure, and never thrown, so a
+  // network hiccup cannot end a daemon (or its real-time publisher thread). Thread-safe.
   void publish_raw(const std::string& channel, std::span<const uint8_t> data) override;
   void subscribe_raw(const std::string& channel, RawHandler handler) override;
+  int64_t publish_errors() const override { return publish_errors_.load(); }
   // Dispatches at most one message; 0 on timeout, >0 if handled, <0 on error.
   int handle_timeout(int timeout_ms);
   int fileno();
@@ -169,6 +176,7 @@ class LcmBus : public Bus {
   struct Adapter;
   std::unique_ptr<lcm::LCM> lcm_;
   std::vector<std::unique_ptr<Adapter>> adapters_;
+  std::atomic<int64_t> publish_errors_{0};
 };
 
 // One event of an LCM log file.
