@@ -4,6 +4,7 @@
 #include "whiskeye/common/utime.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <cstdlib>
 
 namespace whiskeye::slamd {
@@ -51,43 +52,85 @@ CameraFrame camera_frame(const image_t& image) {
 
 CycleSynchroniser::CycleSynchroniser(const SyncParams& params) : params_(params) {}
 
+namespace {
+
+// a + b for b >= 0, without overflowing past INT64_MAX.
+int64_t plus(int64_t a, int64_t b) { return a > INT64_MAX - b ? INT64_MAX : a + b; }
+
+std::string seconds(int64_t us) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3f", static_cast<double>(us) * 1e-6);
+  return text;
+}
+
+std::string out_of_order(const char* name, int64_t utime, int64_t newest) {
+  return std::string(name) + ": sample time " + seconds(newest - utime) + " s before the newest already taken (out of order)";
+}
+
+}  // namespace
+
 void CycleSynchroniser::advance_data_time(int64_t utime) { data_time_ = std::max(data_time_, utime); }
 
-void CycleSynchroniser::add_camera(CameraFrame frame) {
+std::string CycleSynchroniser::check_jump(int input, int64_t utime, const char* name) {
+  const int64_t limit = seconds_to_utime(params_.max_jump_s);
+  if (data_time_ == INT64_MIN || utime <= plus(data_time_, limit)) {
+    if (input == jump_input_) jump_input_ = -1;  // that input is back in line: it was one bad time
+    return {};
+  }
+  if (jump_input_ >= 0 && jump_input_ != input && std::llabs(utime - jump_time_) <= limit) {
+    ++counters_.jumps_followed;  // two inputs agree: the clock (or the recording) moved on
+    jump_input_ = -1;
+    return {};
+  }
+  jump_input_ = input;
+  jump_time_ = utime;
+  ++counters_.time_jumps;
+  return std::string(name) + ": sample time " + seconds(utime - data_time_) +
+         " s past the other inputs (dropped until another input confirms the jump)";
+}
+
+std::string CycleSynchroniser::add_camera(CameraFrame frame) {
   if (frame.utime < newest_camera_) {
     ++counters_.out_of_order;
-    return;
+    return out_of_order("CAMERA", frame.utime, newest_camera_);
   }
+  if (std::string why = check_jump(0, frame.utime, "CAMERA"); !why.empty()) return why;
   newest_camera_ = frame.utime;
   advance_data_time(frame.utime);
   frames_.push_back(std::move(frame));
   while (static_cast<int>(frames_.size()) > params_.camera_buffer) frames_.pop_front();
+  return {};
 }
 
-void CycleSynchroniser::add_odometry(const odometry_t& odometry) {
-  if (odometry.utime <= newest_odometry_ || odometry.utime <= consumed_until_) {
+std::string CycleSynchroniser::add_odometry(const odometry_t& odometry) {
+  const int64_t newest = std::max(newest_odometry_, consumed_until_);
+  if (odometry.utime <= newest) {
     ++counters_.out_of_order;
-    return;
+    return out_of_order("ODOMETRY", odometry.utime, newest);
   }
+  if (std::string why = check_jump(1, odometry.utime, "ODOMETRY"); !why.empty()) return why;
   newest_odometry_ = odometry.utime;
   advance_data_time(odometry.utime);
   odometry_.push_back(odometry);
+  return {};
 }
 
-void CycleSynchroniser::add_whisk_cycle(const whisk_cycle_t& cycle) {
+std::string CycleSynchroniser::add_whisk_cycle(const whisk_cycle_t& cycle) {
   const int64_t last_pending = pending_.empty() ? consumed_until_ : pending_.back().utime_end;
   if (cycle.utime_end <= last_pending) {
     ++counters_.out_of_order;
-    return;
+    return out_of_order("WHISK_CYCLE", cycle.utime_end, last_pending);
   }
+  if (std::string why = check_jump(2, cycle.utime_end, "WHISK_CYCLE"); !why.empty()) return why;
   advance_data_time(cycle.utime_end);
   pending_.push_back(cycle);
+  return {};
 }
 
 bool CycleSynchroniser::ready(const whisk_cycle_t& cycle) const {
   const int64_t end = cycle.utime_end;
-  if (data_time_ >= end + seconds_to_utime(params_.max_wait_s)) return true;
-  const bool camera_settled = newest_camera_ >= end + seconds_to_utime(params_.camera_tolerance_s);
+  if (data_time_ >= plus(end, seconds_to_utime(params_.max_wait_s))) return true;
+  const bool camera_settled = newest_camera_ >= plus(end, seconds_to_utime(params_.camera_tolerance_s));
   const bool odometry_settled = newest_odometry_ >= end;
   return camera_settled && odometry_settled;
 }

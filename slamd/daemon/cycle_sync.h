@@ -7,6 +7,12 @@
 //     closer frame can still come), or until data time reaches E + max_wait (camera missing);
 //   - and until odometry has reached E (or data time E + max_wait).
 // Data time = the newest sample time seen on any input channel.
+//
+// Sample times are checked on the way in; each add_*() returns "" or why the message was dropped
+// (the node counts and logs it): older than what that input already delivered (out of order), or
+// more than max_jump_s past data time. The latter is one bad timestamp (dropping it keeps one
+// message from stalling every cycle behind it, or from ending the run early) until a second input
+// confirms the jump (a clock step forward, or a new recording), which is then followed.
 #pragma once
 
 #include <whiskeye/image_t.hpp>
@@ -49,6 +55,7 @@ struct SyncParams {
   double camera_tolerance_s = 0.15;  // a frame farther than this from the cycle's end is not used
   double max_wait_s = 1.0;           // data time to wait for a late or missing camera / odometry
   int camera_buffer = 16;            // frames kept
+  double max_jump_s = 10.0;          // a sample time this far past data time waits for confirmation
   bool operator==(const SyncParams&) const = default;
 };
 
@@ -61,6 +68,8 @@ struct SyncedCycle {
 struct SyncCounters {
   int64_t cycles_without_camera = 0;
   int64_t out_of_order = 0;            // messages older than what was already consumed: dropped
+  int64_t time_jumps = 0;              // messages too far ahead of the others, dropped
+  int64_t jumps_followed = 0;          // jumps confirmed by a second input and followed
   bool operator==(const SyncCounters&) const = default;
 };
 
@@ -68,10 +77,11 @@ class CycleSynchroniser {
  public:
   explicit CycleSynchroniser(const SyncParams& params);
 
-  void add_camera(CameraFrame frame);
-  void add_camera(const image_t& image) { add_camera(camera_frame(image)); }
-  void add_odometry(const odometry_t& odometry);
-  void add_whisk_cycle(const whisk_cycle_t& cycle);
+  // Each returns "" when the message was taken, else why it was dropped.
+  std::string add_camera(CameraFrame frame);
+  std::string add_camera(const image_t& image) { return add_camera(camera_frame(image)); }
+  std::string add_odometry(const odometry_t& odometry);
+  std::string add_whisk_cycle(const whisk_cycle_t& cycle);
 
   // Cycles whose inputs are complete, oldest first.
   std::vector<SyncedCycle> take_ready();
@@ -85,6 +95,8 @@ class CycleSynchroniser {
   bool ready(const whisk_cycle_t& cycle) const;
   SyncedCycle assemble(const whisk_cycle_t& cycle);
   void advance_data_time(int64_t utime);
+  // "" if `utime` on input `input` (0 camera, 1 odometry, 2 whisk) may advance data time.
+  std::string check_jump(int input, int64_t utime, const char* name);
 
   SyncParams params_;
   std::deque<CameraFrame> frames_;
@@ -94,6 +106,8 @@ class CycleSynchroniser {
   int64_t newest_camera_ = INT64_MIN;
   int64_t newest_odometry_ = INT64_MIN;
   int64_t consumed_until_ = INT64_MIN;  // end of the last cycle handed out
+  int jump_input_ = -1;                 // the input whose jump awaits confirmation
+  int64_t jump_time_ = 0;               // its newest sample time
   SyncCounters counters_;
 };
 

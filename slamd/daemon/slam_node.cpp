@@ -18,6 +18,7 @@ void load(const ParamNode& node, NodeParams& p) {
   node.get("camera_tolerance_s", p.sync.camera_tolerance_s, 0.0, 2.0);
   node.get("max_wait_s", p.sync.max_wait_s, 0.05, 30.0);
   node.get("camera_buffer", p.sync.camera_buffer, 1, 1000);
+  node.get("max_jump_s", p.sync.max_jump_s, 1.0, 86400.0);
   node.get("map_period_s", p.map_period_s, 0.0, 3600.0);
 }
 
@@ -45,6 +46,14 @@ int8_t event_code(slam::EventType type) {
 
 bool finite(double v) { return std::isfinite(v); }
 
+// "" for a sample time that can be one (after 1970, before 2100), else why not: one corrupt time
+// (INT64_MAX, a negative one) would otherwise become data time and hold every later message back.
+std::string check_time(const char* name, int64_t utime) {
+  constexpr int64_t kYear2100 = 4'102'444'800'000'000;
+  if (utime > 0 && utime < kYear2100) return "";
+  return std::string(name) + ": sample time " + std::to_string(utime) + " us is not a plausible epoch time";
+}
+
 // Bytes per pixel of the uncompressed formats we accept; 0 for compressed, -1 for unknown.
 int bytes_per_pixel(int32_t fourcc) {
   if (fourcc == image_t::PIXEL_FORMAT_GREY) return 1;
@@ -55,6 +64,7 @@ int bytes_per_pixel(int32_t fourcc) {
 }
 
 std::string check_image(const CameraFrame& m) {
+  if (std::string bad = check_time("CAMERA", m.utime); !bad.empty()) return bad;
   if (m.width <= 0 || m.height <= 0 || m.width > 10000 || m.height > 10000) {
     return "CAMERA: bad size " + std::to_string(m.width) + "x" + std::to_string(m.height);
   }
@@ -69,6 +79,8 @@ std::string check_image(const CameraFrame& m) {
 }
 
 std::string check_whisk_cycle(const whisk_cycle_t& m) {
+  if (std::string bad = check_time("WHISK_CYCLE", m.utime_start); !bad.empty()) return bad;
+  if (std::string bad = check_time("WHISK_CYCLE", m.utime_end); !bad.empty()) return bad;
   if (m.num_whiskers != kNumWhiskers) return "WHISK_CYCLE: num_whiskers " + std::to_string(m.num_whiskers) + " (expected 24)";
   if (m.num_samples <= 0 || m.num_samples > kMaxSamplesPerCycle) {
     return "WHISK_CYCLE: num_samples " + std::to_string(m.num_samples) + " out of range";
@@ -87,6 +99,7 @@ std::string check_whisk_cycle(const whisk_cycle_t& m) {
 }
 
 std::string check_odometry(const odometry_t& m) {
+  if (std::string bad = check_time("ODOMETRY", m.utime); !bad.empty()) return bad;
   for (double v : {m.x, m.y, m.theta, m.vx, m.vy, m.omega}) {
     if (!finite(v)) return "ODOMETRY: non-finite value";
   }
@@ -162,13 +175,14 @@ SlamNode::SlamNode(Bus& in, Bus& out, std::unique_ptr<slam::VitaSlam> slam, cons
   });
 }
 
-void SlamNode::reject(const std::string& what) {
+void SlamNode::reject(Input input, const std::string& what) {
   ++counters_.validation_errors;
-  // Log the first of a burst and then every 100th, so a broken sender cannot flood the journal.
-  if (logger_ && (rejects_in_burst_ % 100) == 0) {
+  // Per input, so a broken sender is logged once per burst and then every 100th even while the other
+  // inputs are fine, and cannot flood the journal.
+  if (logger_ && (rejects_in_burst_[input] % 100) == 0) {
     logger_("rejected " + what + " (" + std::to_string(counters_.validation_errors) + " rejected so far)");
   }
-  ++rejects_in_burst_;
+  ++rejects_in_burst_[input];
 }
 
 void SlamNode::on_camera(std::span<const uint8_t> data, const MessageInfo& info) {
@@ -176,30 +190,31 @@ void SlamNode::on_camera(std::span<const uint8_t> data, const MessageInfo& info)
   std::string reason;
   if (!decode_camera_frame(data, frame, &reason)) return decode_errors_.record(info.channel, reason);
   const std::string err = check_image(frame);
-  if (!err.empty()) return reject(err);
-  rejects_in_burst_ = 0;
+  if (!err.empty()) return reject(kCamera, err);
   if (info.data_owner) {
     frame.owner = info.data_owner;  // the bytes outlive this call: keep a view
   } else {
     own_pixels(frame);
   }
-  sync_.add_camera(std::move(frame));
+  if (const std::string why = sync_.add_camera(std::move(frame)); !why.empty()) return reject(kCamera, why);
+  accepted(kCamera);
   process(sync_.take_ready());
 }
 
 void SlamNode::on_whisk_cycle(const whisk_cycle_t& msg) {
   const std::string err = check_whisk_cycle(msg);
-  if (!err.empty()) return reject(err);
-  rejects_in_burst_ = 0;
-  sync_.add_whisk_cycle(msg);
+  if (!err.empty()) return reject(kWhisk, err);
+  if (const std::string why = sync_.add_whisk_cycle(msg); !why.empty()) return reject(kWhisk, why);
+  accepted(kWhisk);
   process(sync_.take_ready());
 }
 
 void SlamNode::on_odometry(const odometry_t& msg) {
   const std::string err = check_odometry(msg);
-  if (!err.empty()) return reject(err);
-  rejects_in_burst_ = 0;
-  sync_.add_odometry(msg);
+  if (!err.empty()) return reject(kOdometry, err);
+  // A dropped sample is not dead-reckoned either (a pose back in time, or an hour ahead).
+  if (const std::string why = sync_.add_odometry(msg); !why.empty()) return reject(kOdometry, why);
+  accepted(kOdometry);
   process(sync_.take_ready());
   if (!have_cycle_) return;
   // Dead-reckon from the last cycle's end with the base's own odometry pose.
@@ -240,6 +255,9 @@ void SlamNode::process_one(const SyncedCycle& cycle) {
 
   const slam::CycleResult r = slam_->process_cycle(input);
   ++counters_.cycles;
+  // A frame the core could not use (an MJPEG frame that does not decode, a crop outside it): the
+  // cycle went on without vision, and the frame counts as rejected, with the reason logged.
+  if (!r.input_warning.empty()) reject(kCycle, "cycle " + std::to_string(cycle.whisk.cycle) + ": " + r.input_warning);
   if (!cycle.image) ++counters_.cycles_without_camera;
   if (!contact) ++counters_.cycles_without_contact;
   if (!cycle.odometry.empty()) {

@@ -19,6 +19,7 @@
 #include <whiskeye/slam_status_t.hpp>
 #include <whiskeye/whisk_cycle_t.hpp>
 
+#include <array>
 #include <deque>
 #include <functional>
 #include <memory>
@@ -78,7 +79,10 @@ class SlamNode {
   void process(std::vector<SyncedCycle> cycles);
   void process_one(const SyncedCycle& cycle);
   void publish_map(int64_t utime);
-  void reject(const std::string& what);
+  enum Input { kCamera, kOdometry, kWhisk, kCycle, kInputs };
+  // Counts a rejected message; logs the first of a burst on that input and then every 100th.
+  void reject(Input input, const std::string& what);
+  void accepted(Input input) { rejects_in_burst_[input] = 0; }
 
   Bus& out_;
   std::unique_ptr<slam::VitaSlam> slam_;
@@ -96,7 +100,7 @@ class SlamNode {
   bool map_dirty_ = false;
   int last_template_id_ = -1;
   std::deque<double> latencies_ms_;  // last 1000 cycles
-  int64_t rejects_in_burst_ = 0;
+  std::array<int64_t, kInputs> rejects_in_burst_{};
 };
 
 }  // namespace whiskeye::slamd

@@ -150,6 +150,51 @@ TEST(CycleSync, DropsOutOfOrderMessages) {
   EXPECT_EQ(s.take_ready().size(), 1u);
 }
 
+TEST(CycleSync, DroppedMessagesSayWhy) {
+  CycleSynchroniser s(SyncParams{});
+  feed(s, 20'000, 3 * kS);
+  EXPECT_EQ(s.add_whisk_cycle(cycle(1, 2 * kS)), "");
+  const std::string why = s.add_odometry(odo(kS));
+  EXPECT_NE(why.find("ODOMETRY: sample time 2.000 s before the newest"), std::string::npos) << why;
+}
+
+TEST(CycleSync, OneSampleTimeFarAheadIsDroppedAndStallsNothing) {
+  // An odometry sample an hour ahead used to become data time: every pending cycle was handed out
+  // at once without its camera, and every later odometry sample was dropped as out of order.
+  CycleSynchroniser s(SyncParams{});
+  feed(s, 20'000, kS + 100'000);
+  s.add_whisk_cycle(cycle(1, kS));
+  const std::string why = s.add_odometry(odo(3600 * kS));
+  EXPECT_NE(why.find("ODOMETRY: sample time 3598.900 s past the other inputs"), std::string::npos) << why;
+  EXPECT_TRUE(s.take_ready().empty()) << "still waiting for a frame at 1.15 s";
+  feed(s, kS + 120'000, 3 * kS);
+  s.add_whisk_cycle(cycle(2, 2 * kS));
+  const auto ready = s.take_ready();
+  ASSERT_EQ(ready.size(), 2u);
+  EXPECT_TRUE(ready[0].image && ready[1].image);
+  EXPECT_EQ(ready[1].odometry.size(), 50u);
+  EXPECT_EQ(s.counters().time_jumps, 1);
+  EXPECT_EQ(s.counters().cycles_without_camera, 0);
+  // A whisk cycle ending at INT64_MAX cannot overflow the waiting arithmetic either.
+  EXPECT_NE(s.add_whisk_cycle(cycle(3, INT64_MAX)), "");
+}
+
+TEST(CycleSync, AJumpTwoInputsAgreeOnIsFollowed) {
+  // A clock step forward, or a new recording played after the first: every input jumps.
+  CycleSynchroniser s(SyncParams{});
+  feed(s, 20'000, 2 * kS);
+  const int64_t later = 3600 * kS;
+  EXPECT_NE(s.add_odometry(odo(later)), "");
+  EXPECT_EQ(s.add_camera(frame(later + 10'000)), "") << "a second input confirms it";
+  EXPECT_EQ(s.add_odometry(odo(later + 20'000)), "");
+  EXPECT_EQ(s.counters().jumps_followed, 1);
+  feed(s, later + 40'000, later + 3 * kS);
+  s.add_whisk_cycle(cycle(9, later + kS));
+  const auto ready = s.take_ready();
+  ASSERT_EQ(ready.size(), 1u);
+  EXPECT_TRUE(ready[0].image);
+}
+
 TEST(CycleSync, FlushHandsOutEverythingPending) {
   CycleSynchroniser s(SyncParams{});
   feed(s, 20'000, kS);

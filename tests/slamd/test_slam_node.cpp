@@ -173,6 +173,44 @@ TEST_F(SlamNodeTest, AWhiskCycleWhoseCountsDoNotFitItsLengthIsADecodeErrorNotACr
   EXPECT_EQ(node_->counters().cycles, before + 1);
 }
 
+TEST_F(SlamNodeTest, ImplausibleSampleTimesAreRejectedAndNeitherStallNorMovePoses) {
+  stream({8, 8});
+  node_->flush();
+  const std::size_t poses = poses_.size();
+  const int64_t errors = node_->counters().validation_errors;
+  whisk_cycle_t forever = free_cycle(9, kT0 + 3 * kS);
+  forever.utime_end = INT64_MAX;
+  publish(in_, "WHISK_CYCLE", forever);
+  odometry_t ahead{};
+  ahead.utime = kT0 + 3600 * kS;  // one corrupt sample an hour ahead
+  publish(in_, "ODOMETRY", ahead);
+  odometry_t behind{};
+  behind.utime = kT0 + kS;  // already delivered
+  publish(in_, "ODOMETRY", behind);
+  EXPECT_EQ(node_->counters().validation_errors, errors + 3);
+  EXPECT_EQ(poses_.size(), poses) << "no pose published for a dropped sample";
+}
+
+TEST_F(SlamNodeTest, AFrameTheCoreCannotUseIsCountedAndLoggedAndTheCycleRunsWithoutVision) {
+  std::vector<std::string> lines;
+  node_->set_logger([&](const std::string& l) { lines.push_back(l); });
+  image_t junk{};
+  junk.utime = kT0 + kS;
+  junk.width = 640;
+  junk.height = 480;
+  junk.pixelformat = image_t::PIXEL_FORMAT_MJPEG;
+  junk.data.assign(500, 0x42);
+  junk.size = 500;
+  publish(in_, "CAMERA", junk);
+  publish(in_, "WHISK_CYCLE", free_cycle(0, kT0 + kS));
+  node_->flush();
+  ASSERT_EQ(matches_.size(), 1u);
+  EXPECT_FALSE(matches_[0].visual_used);
+  EXPECT_EQ(node_->counters().validation_errors, 1);
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_NE(lines[0].find("cycle 0: image: MJPEG frame"), std::string::npos) << lines[0];
+}
+
 TEST_F(SlamNodeTest, RejectsBadMessagesCountsThemAndCarriesOn) {
   stream({8});
   // Undecodable bytes, then decodable but inconsistent messages.

@@ -257,7 +257,7 @@ TEST_F(SlamdBinary, ShippedConfigEqualsTheCompiledDefaults) {
     std::vector<std::string> lines;
     std::istringstream in(text);
     for (std::string line; std::getline(in, line);) {
-      if (line.rfind("slam.", 0) != 0) continue;
+      if (line.rfind("slam.", 0) != 0 && line.rfind("slamd.", 0) != 0) continue;
       const auto tag = line.find("  (default)");
       if (tag != std::string::npos) line.erase(tag);
       lines.push_back(line);
