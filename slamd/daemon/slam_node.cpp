@@ -103,6 +103,10 @@ std::string check_odometry(const odometry_t& m) {
   for (double v : {m.x, m.y, m.theta, m.vx, m.vy, m.omega}) {
     if (!finite(v)) return "ODOMETRY: non-finite value";
   }
+  if (std::hypot(m.vx, m.vy) > slam::kMaxSpeed || std::abs(m.omega) > slam::kMaxTurnRate) {
+    return "ODOMETRY: velocity (" + std::to_string(m.vx) + ", " + std::to_string(m.vy) + " m/s, " +
+           std::to_string(m.omega) + " rad/s) beyond any base's";
+  }
   return "";
 }
 

@@ -113,6 +113,25 @@ TEST(VitaSlam, AMissingSenseDegradesToTheOtherAndNeverStops) {
   EXPECT_NEAR(r3.pose.x, 0.09, 1e-9);  // 9 of the 10 samples have a previous sample to integrate from
 }
 
+TEST(VitaSlam, OdometryNoBaseCanProduceIsSkippedAndTheNextSampleCoversItsInterval) {
+  World w;
+  VitaSlam a(SlamParams{}, w.geometry), b(SlamParams{}, w.geometry);
+  std::vector<OdometrySample> clean = odometry(1, 0.1, 0.0, 0.0);
+  std::vector<OdometrySample> dirty = clean;
+  dirty[4].vx = 1e300;  // would be ~1e299 pose-cell sub-steps (an int overflow) and a jump
+  dirty[6].omega = std::nan("");
+  // Without the two bad samples, the clean run covers the same time with the same velocity.
+  clean.erase(clean.begin() + 6);
+  clean.erase(clean.begin() + 4);
+  const CycleResult ra = a.process_cycle(input(w.place(0), 1, clean));
+  const CycleResult rb = b.process_cycle(input(w.place(0), 1, dirty));
+  EXPECT_EQ(b.stats().odometry_rejected, 2);
+  EXPECT_EQ(a.stats().odometry_rejected, 0);
+  EXPECT_DOUBLE_EQ(rb.pose.x, ra.pose.x);
+  EXPECT_NEAR(rb.pose.x, 0.09, 1e-9);
+  EXPECT_DOUBLE_EQ(rb.pose.y, ra.pose.y);
+}
+
 TEST(VitaSlam, WithoutAFrameAndWithoutContactViTaMatchesNothing) {
   World w;
   VitaSlam slam(SlamParams{}, w.geometry);

@@ -48,12 +48,16 @@ CycleResult VitaSlam::process_cycle(const CycleInput& in) {
     acc_vx = acc_vy = acc_omega = acc_dt = 0.0;
   };
   for (const OdometrySample& o : in.odometry) {
+    // A sample no base can produce is skipped before it takes the clock: the next good one
+    // integrates the whole interval (and the pose cells' sub-steps stay bounded).
+    const bool usable = std::isfinite(o.vx) && std::isfinite(o.vy) && std::isfinite(o.omega) &&
+                        std::hypot(o.vx, o.vy) <= kMaxSpeed && std::abs(o.omega) <= kMaxTurnRate;
+    if (!usable || (have_odometry_time_ && o.utime < last_odometry_utime_)) {
+      ++stats_.odometry_rejected;
+      continue;
+    }
     double dt = 0.0;
     if (have_odometry_time_) {
-      if (o.utime < last_odometry_utime_) {
-        ++stats_.odometry_out_of_order;
-        continue;
-      }
       dt = static_cast<double>(o.utime - last_odometry_utime_) * 1e-6;
       if (dt > params_.max_odometry_dt) {
         ++stats_.odometry_gaps;
@@ -62,10 +66,6 @@ CycleResult VitaSlam::process_cycle(const CycleInput& in) {
     }
     have_odometry_time_ = true;
     last_odometry_utime_ = o.utime;
-    if (!std::isfinite(o.vx) || !std::isfinite(o.vy) || !std::isfinite(o.omega)) {
-      ++stats_.odometry_out_of_order;
-      continue;
-    }
     map_.integrate(o.vx, o.vy, o.omega, dt);
     if (dt <= 0.0) continue;
     acc_vx += o.vx * dt;
@@ -180,7 +180,7 @@ std::vector<uint8_t> VitaSlam::serialise_unsealed() const {
   bin::put<int64_t>(out, stats_.cycles);
   bin::put<int64_t>(out, stats_.bad_images);
   bin::put<int64_t>(out, stats_.empty_whisk_cycles);
-  bin::put<int64_t>(out, stats_.odometry_out_of_order);
+  bin::put<int64_t>(out, stats_.odometry_rejected);
   bin::put<int64_t>(out, stats_.odometry_gaps);
   store_.serialise(out);
   cells_.serialise(out);
@@ -213,7 +213,7 @@ VitaSlam VitaSlam::deserialise(std::span<const uint8_t> data, const SlamParams& 
   s.stats_.cycles = bin::get<int64_t>(in, pos);
   s.stats_.bad_images = bin::get<int64_t>(in, pos);
   s.stats_.empty_whisk_cycles = bin::get<int64_t>(in, pos);
-  s.stats_.odometry_out_of_order = bin::get<int64_t>(in, pos);
+  s.stats_.odometry_rejected = bin::get<int64_t>(in, pos);
   s.stats_.odometry_gaps = bin::get<int64_t>(in, pos);
   s.store_ = TemplateStore::deserialise(in, pos, params.visual.template_width, params.visual.template_height);
   s.cells_.deserialise(in, pos);

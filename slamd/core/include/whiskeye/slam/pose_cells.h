@@ -10,8 +10,10 @@
 // (an exact cyclic shift: no interpolation blur, and no pinning — with OpenRatSLAM's bilinear
 // sub-cell shift the attractor pulls the packet back to cell centres and it under-reports motion
 // by ≈13 % at 0.1 cell per step); each layer carries its sub-cell remainder, which moves with its
-// activity on rotation and is added to the best estimate. Correct at any speed; a step that moves
-// more than one cell is split into sub-steps so that an arc (v and ω together) is followed.
+// activity on rotation and is added to the best estimate. Each shift is exact at any speed (the
+// network's excitation and inhibition still drag a moving packet a little, docs/slam-core.md); a
+// step that moves more than one cell is split into sub-steps so that an arc (v and ω together) is
+// followed.
 // Rotation along θ likewise.
 #pragma once
 

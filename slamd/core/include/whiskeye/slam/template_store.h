@@ -104,8 +104,10 @@ class TemplateStore {
   double pc_y(int id) const { return pc_[static_cast<size_t>(id) * 3 + 1]; }
   double pc_theta(int id) const { return pc_[static_cast<size_t>(id) * 3 + 2]; }
 
-  // Injection decay (OpenRatSLAM's rule): each match of a template adds `active`, every cycle all
-  // templates relax by `restore` back towards `active`.
+  // Injection decay, after OpenRatSLAM's rule with two differences: each match of a template adds
+  // `active` (also while it is among the newest, which inject nothing), and every cycle all templates
+  // relax by `restore` towards `floor` (0 in VitaSlam, where OpenRatSLAM relaxes to `active`), so a
+  // first match injects inject·(30 − e^{1.2·active})/30 and a run of matches fades a cycle later.
   double decay(int id) const { return decay_[static_cast<size_t>(id)]; }
   void bump_decay(int id, double active) { decay_[static_cast<size_t>(id)] += active; }
   void restore_decay(double restore, double floor);

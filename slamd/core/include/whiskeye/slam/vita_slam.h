@@ -1,7 +1,7 @@
 // ViTa-SLAM (paper Algorithm 1): one call per whisk cycle with the camera frame, the whisk cycle and
 // the odometry since the previous cycle. Per cycle:
-//   1. path integration: every odometry sample steps the pose cells and the experience map's
-//      offset (body-frame vx, vy, ω);
+//   1. path integration: every odometry sample moves the experience map's offset, and the pose
+//      cells take one step per path_integration_period with the samples' mean (body-frame vx, vy, ω);
 //   2. templates: visual (if the mode uses vision and a frame came) and tactile (if the mode uses
 //      touch and a whisk cycle came); the terms compared are the mode's terms that are present —
 //      a missing sense degrades, never stops; a whisk cycle without contact adds no tactile terms
@@ -55,11 +55,15 @@ struct SlamParams {
 // are ParamErrors naming the key.
 void load(const ParamNode& node, SlamParams& p);
 
+// Odometry beyond these is a corrupt sample, not motion (a Robotino drives at most ~1 m/s).
+constexpr double kMaxSpeed = 20.0;      // m/s
+constexpr double kMaxTurnRate = 50.0;   // rad/s
+
 struct SlamStats {
   int64_t cycles = 0;
   int64_t bad_images = 0;           // frames refused (InputError); the cycle went on without vision
   int64_t empty_whisk_cycles = 0;   // whisk cycles without a valid sample; went on without touch
-  int64_t odometry_out_of_order = 0;
+  int64_t odometry_rejected = 0;    // samples out of order, non-finite or faster than kMaxSpeed: skipped
   int64_t odometry_gaps = 0;        // dt > max_odometry_dt, clamped
 };
 
