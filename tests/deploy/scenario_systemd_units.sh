@@ -102,7 +102,19 @@ check slamd_publishes_slam_status_over_lcm test "$n" -ge 2
 check slamd_state_directory_belongs_to_whiskeye \
   bash -c '[ "$(stat -c %U:%a /var/lib/slamd)" = whiskeye:750 ] || { stat -c %U:%a /var/lib/slamd; false; }'
 check slamd_stops_cleanly stopped_cleanly slamd.service
-check slamd_wrote_its_final_checkpoint bash -c 'ls /var/lib/slamd | grep -q . || { ls -la /var/lib/slamd; false; }'
+check slamd_wrote_its_final_checkpoint bash -c 'ls /var/lib/slamd/checkpoint-*.vslam || { ls -la /var/lib/slamd; false; }'
+# The next start resumes from it: the file is a checkpoint this slamd loads, in the sandbox.
+resumes() {
+  systemctl start slamd.service || return 1
+  for _ in $(seq 60); do
+    journal slamd.service | grep -q "resuming from /var/lib/slamd/checkpoint-" && return 0
+    sleep 1
+  done
+  journal slamd.service | tail -n 5
+  return 1
+}
+check slamd_resumes_from_its_checkpoint_on_the_next_start resumes
+check slamd_stops_cleanly_again stopped_cleanly slamd.service
 journal slamd.service > "$RESULTS_DIR/slamd.journal"
 
 # --- based, against the fake Robotino server ---

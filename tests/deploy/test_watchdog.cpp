@@ -29,7 +29,6 @@ void expect_watchdog_contract(const WatchdogReport& r) {
   EXPECT_GT(r.pings_in_window, 0) << r.summary();
   EXPECT_TRUE(r.stall_logged) << r.summary();
   EXPECT_EQ(r.pings_after_stall, 0) << r.summary();
-  EXPECT_GE(r.quiet_s, 3 * 0.4) << r.summary();
   EXPECT_TRUE(r.alive_while_stalled) << r.summary();
 }
 

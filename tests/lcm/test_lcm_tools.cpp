@@ -67,7 +67,19 @@ class LcmTools : public ::testing::Test {
     EXPECT_TRUE(wait_until([&] { return fs::exists(log); }, 10.0)) << logger.output();
     LcmBus bus;
     const auto samples = all_type_samples();
-    for (int round = 0; round < 20; ++round) {
+    std::uintmax_t round_bytes = 0;
+    for (const auto& s : samples) round_bytes += s.bytes.size();
+    // Rounds until the file holds more than two rounds' worth (so a whole round was logged however
+    // late lcm-logger subscribed), then a few more.
+    const bool logged = wait_until(
+        [&] {
+          for (const auto& s : samples) bus.publish_raw(s.channel, s.bytes);
+          std::this_thread::sleep_for(std::chrono::milliseconds(25));
+          return fs::file_size(log) > 2 * round_bytes;
+        },
+        20.0);
+    EXPECT_TRUE(logged) << "lcm-logger wrote " << fs::file_size(log) << " bytes\n" << logger.output();
+    for (int round = 0; round < 5; ++round) {
       for (const auto& s : samples) bus.publish_raw(s.channel, s.bytes);
       std::this_thread::sleep_for(std::chrono::milliseconds(25));
     }

@@ -29,17 +29,34 @@ TEST(LcmTypes, EverySampleRoundTripsInMemory) {
 }
 
 TEST(LcmTypes, ContractFieldNamesAndConstants) {
-  // Names other tools rely on (vita-eval, plots, scripts): a rename must fail here.
+  // Names other tools rely on (vita-eval, plots, scripts): a rename fails to compile here, a
+  // renumbered constant fails the test.
   pose2d_t p{};
   p.utime = 1;
   p.x = p.y = p.theta = 0.0;
+  EXPECT_EQ(encode_message(p).size(), 8u + 8 + 3 * 8);
   EXPECT_EQ(vita_event_t::NEW_EXPERIENCE, 1);
   EXPECT_EQ(vita_event_t::RELOCALISE, 2);
+}
+
+TEST(LcmTypes, WhiskCycleWireLayoutIsWhatSlamdChecksBeforeDecoding) {
+  // slamd checks a WHISK_CYCLE's counts against its length before decoding it (the generated decoder
+  // would size its arrays first): fingerprint, 4 int64, 3 int32, then per sample 8 + 1 + 1 bytes and
+  // per sample and whisker 3 floats and a byte.
   whisk_cycle_t c{};
-  c.num_samples = 1;
+  c.num_samples = 3;
   c.num_whiskers = 2;
-  c.theta = {{0.0f, 0.0f}};
-  EXPECT_EQ(c.theta[0].size(), 2u);
+  c.sample_utime = {1, 2, 3};
+  c.sample_valid = {1, 1, 0};
+  c.phase = {0, 1, 2};
+  c.theta = c.deflection_x = c.deflection_y = {{0.5f, 0.25f}, {0.0f, 1.0f}, {2.0f, 3.0f}};
+  c.contact = {{1, 0}, {0, 0}, {0, 1}};
+  const std::vector<uint8_t> bytes = encode_message(c);
+  EXPECT_EQ(bytes.size(), 8u + 4 * 8 + 3 * 4 + 3 * 10 + 3 * 2 * 13);
+  whisk_cycle_t back;
+  ASSERT_TRUE(decode_message(bytes, back));
+  EXPECT_EQ(back.theta, c.theta);
+  EXPECT_EQ(back.contact, c.contact);
 }
 
 }  // namespace
