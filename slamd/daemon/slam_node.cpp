@@ -371,10 +371,22 @@ slam_status_t SlamNode::status(int64_t utime) const {
   s.validation_errors = counters_.validation_errors;
   s.cycles_without_camera = counters_.cycles_without_camera;
   s.cycles_without_contact = counters_.cycles_without_contact;
-  const bool degraded = s.decode_errors > 0 || s.validation_errors > 0;
-  s.state = degraded ? driver_status_t::STATE_DEGRADED : driver_status_t::STATE_OK;
-  s.message = degraded ? "rejected input: see decode_errors / validation_errors" : "";
+  constexpr int64_t kWindow = 10 * kUtimePerSecond;
+  const bool rejecting = recent_errors_.changed_within(s.decode_errors + s.validation_errors, utime, kWindow);
+  const bool blind = slam::uses_visual(slam_->params().mode) &&
+                     recent_without_camera_.changed_within(s.cycles_without_camera, utime, kWindow);
+  s.state = rejecting || blind ? driver_status_t::STATE_DEGRADED : driver_status_t::STATE_OK;
+  if (rejecting) s.message = "rejected input in the last 10 s: see decode_errors / validation_errors";
+  if (blind) s.message += std::string(s.message.empty() ? "" : "; ") + "cycles without a camera frame in the last 10 s";
   return s;
+}
+
+bool SlamNode::Recent::changed_within(int64_t now_value, int64_t utime, int64_t window_us) {
+  if (now_value != value) {
+    value = now_value;
+    changed_at = utime;
+  }
+  return changed_at != INT64_MIN && utime - changed_at < window_us;
 }
 
 void SlamNode::publish_status(int64_t utime) { publish(out_, "SLAM_STATUS", status(utime)); }

@@ -67,6 +67,8 @@ class SlamNode {
   void flush();
   // Publishes SLAM_STATUS stamped `utime`.
   void publish_status(int64_t utime);
+  // SLAM_STATUS at `utime`: DEGRADED while input was rejected, or (when the mode uses vision) cycles
+  // ran without a frame, within the last 10 s of the times status() was asked at; OK again after.
   slam_status_t status(int64_t utime) const;
 
   const slam::VitaSlam& slam() const { return *slam_; }
@@ -101,6 +103,13 @@ class SlamNode {
   int last_template_id_ = -1;
   std::deque<double> latencies_ms_;  // last 1000 cycles
   std::array<int64_t, kInputs> rejects_in_burst_{};
+  // A counter's value and the status time it last changed at.
+  struct Recent {
+    int64_t value = 0;
+    int64_t changed_at = INT64_MIN;
+    bool changed_within(int64_t now_value, int64_t utime, int64_t window_us);
+  };
+  mutable Recent recent_errors_, recent_without_camera_;
 };
 
 }  // namespace whiskeye::slamd

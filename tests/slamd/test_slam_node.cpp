@@ -248,6 +248,11 @@ TEST_F(SlamNodeTest, RejectsBadMessagesCountsThemAndCarriesOn) {
   publish(in_, "WHISK_CYCLE", free_cycle(1, kT0 + 2 * kS));
   node_->flush();
   EXPECT_EQ(events_.size(), before + 1 + 1) << "the first cycle (pending) and the new one";
+  // Degraded while it happens, not forever: 10 s without a new rejection is OK again.
+  EXPECT_EQ(node_->status(kT0 + 5 * kS).state, driver_status_t::STATE_DEGRADED);
+  const slam_status_t later = node_->status(kT0 + 11 * kS);
+  EXPECT_EQ(later.state, driver_status_t::STATE_OK) << later.message;
+  EXPECT_EQ(later.validation_errors, 4) << "the counters stay";
 }
 
 TEST_F(SlamNodeTest, MissingCameraDegradesToTouchAndIsCounted) {
@@ -256,7 +261,10 @@ TEST_F(SlamNodeTest, MissingCameraDegradesToTouchAndIsCounted) {
   ASSERT_EQ(matches_.size(), 3u);
   for (const auto& m : matches_) EXPECT_FALSE(m.visual_used);
   EXPECT_EQ(node_->counters().cycles_without_camera, 3);
-  EXPECT_EQ(node_->status(kT0).cycles_without_camera, 3);
+  const slam_status_t st = node_->status(kT0);
+  EXPECT_EQ(st.cycles_without_camera, 3);
+  EXPECT_EQ(st.state, driver_status_t::STATE_DEGRADED) << "a camera that is gone is worth a look";
+  EXPECT_NE(st.message.find("without a camera frame"), std::string::npos) << st.message;
 }
 
 TEST_F(SlamNodeTest, StatusReportsMapSizeAndOkState) {
