@@ -1,12 +1,13 @@
 #!/bin/bash
 # VM scenario: whiskerd on vcan0 (FD MTU) against the board emulator, in CAN FD mode then in
 # classic mode; LCM over loopback multicast.
-#   scenario_whiskerd.sh RESULTS_DIR WHISKERD WHISKER_VM_CHECK CONFIG
+#   scenario_whiskerd.sh RESULTS_DIR WHISKERD WHISKER_VM_CHECK CONFIG DRIVER_STATUS_PROBE
 set -u
 RESULTS_DIR=$1
 WHISKERD=$2
 CHECK=$3
 CONFIG=$4
+PROBE=$5
 source "$(dirname "$0")/lib.sh"
 
 setup_lcm_loopback
@@ -54,4 +55,36 @@ check candump_sees_8_byte_classic_motor_frames_per_board \
 # Every board's last classic command disables all four whiskers (0x8000 = disabled).
 check classic_last_motor_frames_are_disabled \
   bash -c "for id in 201 202 203 204 205 206; do grep \"vcan0 \$id#\" /tmp/motor_classic.log | tail -n 1 | grep -q '#0080008000800080' || exit 1; done"
+
+# The CAN interface going away under whiskerd: taken down and up (an adapter reset), then deleted
+# and created again (a USB adapter unplugged and plugged back). whiskerd reopens it, with backoff
+# while it does not exist, and receives frames again; it never exits.
+log=$RESULTS_DIR/whiskerd_reopen.log
+"$WHISKERD" -c "$CONFIG" --no-gpio > "$log" 2>&1 &
+wd=$!
+wait_for "$log" "vcan0 (CAN FD" 60 || echo "whiskerd did not start"
+# heartbeats N: N heartbeat frames from board 1 (ignored for control, counted as received frames).
+heartbeats() { for _ in $(seq "$1"); do cansend vcan0 701#05; sleep 0.01; done; }
+ip link set vcan0 down
+check whiskerd_notices_the_interface_going_down wait_for "$log" "reopening" 20
+ip link set vcan0 up
+heartbeats 20
+"$PROBE" --driver whiskerd --seconds 3 > /tmp/status_up.txt
+cat /tmp/status_up.txt
+check whiskerd_receives_again_after_down_and_up \
+  bash -c "grep -Eq '^can_reopens=[1-9]' /tmp/status_up.txt && grep -Eq '^can_rx_frames=([2-9][0-9]|[1-9][0-9]{2,})$' /tmp/status_up.txt"
+ip link del vcan0
+sleep 2  # whiskerd retries with backoff while vcan0 does not exist
+setup_vcan vcan0
+check whiskerd_reopens_a_recreated_interface wait_for "$log" "CAN vcan0 reopened" 30
+heartbeats 20
+"$PROBE" --driver whiskerd --seconds 3 > /tmp/status_new.txt
+cat /tmp/status_new.txt
+check whiskerd_receives_on_the_recreated_interface \
+  bash -c "grep -Eq '^can_rx_frames=([4-9][0-9]|[1-9][0-9]{2,})$' /tmp/status_new.txt"
+check whiskerd_survives_its_interface_going_away kill -0 $wd
+kill -TERM $wd
+wait $wd
+check whiskerd_exits_cleanly_after_losing_its_interface test $? = 0
+cat "$log"
 exit 0

@@ -148,11 +148,13 @@ Socket::Rx Socket::receive(Frame& frame, int64_t timeout_us) {
   const int n = ::poll(&p, 1, timeout_ms);
   if (n == 0 || (n < 0 && errno == EINTR)) return Rx::kTimeout;
   if (n < 0 || (p.revents & (POLLERR | POLLHUP | POLLNVAL))) {
-    last_error_ = "CAN " + interface_ + ": poll failed or interface gone";
     // A pending socket error (e.g. ENETDOWN) is cleared by reading it.
-    int err = 0;
+    int err = n < 0 ? errno : 0;
     socklen_t len = sizeof(err);
-    ::getsockopt(fd_, SOL_SOCKET, SO_ERROR, &err, &len);
+    if (n >= 0) ::getsockopt(fd_, SOL_SOCKET, SO_ERROR, &err, &len);
+    last_error_ = "CAN " + interface_ + ": " +
+                  (err != 0 ? std::string(std::strerror(err)) : std::string("socket error (poll events ") +
+                                                                    std::to_string(p.revents) + ")");
     if (err == ENETDOWN || err == ENODEV || (p.revents & (POLLHUP | POLLNVAL))) return Rx::kDown;
     return Rx::kTimeout;
   }
