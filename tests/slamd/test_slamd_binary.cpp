@@ -274,6 +274,34 @@ TEST_F(SlamdBinary, ShippedConfigEqualsTheCompiledDefaults) {
 }
 
 // Runs inside a private network namespace (the test binary is started by scripts/netns-run).
+TEST_F(SlamdBinary, KilledWithoutWarningItResumesFromItsNewestCheckpoint) {
+  // SIGKILL (power loss, the OOM killer, a watchdog's SIGABRT) at any moment, also while a
+  // checkpoint is being written: what is on disk must load, and the next start resumes from it.
+  const fs::path state = dir_ / "killed_state";
+  fs::remove_all(state);
+  Subprocess slamd({kSlamd, "--config", kConfig, "--state-dir", state.string()});
+  ASSERT_TRUE(wait_until([&] { return slamd.output().find("running in vita mode") != std::string::npos; }, 20))
+      << slamd.output();
+  Subprocess player({"lcm-logplayer", "--speed", "4", sim_log_});
+  ASSERT_TRUE(wait_until([&] { return fs::exists(state) && checkpoints(state).size() >= 3; }, 30)) << slamd.output();
+  slamd.signal(SIGKILL);
+  EXPECT_EQ(slamd.wait(10), 128 + SIGKILL);
+  player.stop(5, SIGINT);
+  const auto files = checkpoints(state);
+  ASSERT_FALSE(files.empty());
+  const slamd::Checkpoint newest = slamd::read_checkpoint(files.back().string());
+  EXPECT_GT(newest.sequence, 0u);
+
+  const std::string out = (dir_ / "after_kill.lcmlog").string();
+  std::string log;
+  ASSERT_EQ(replay(out, {"--state-dir", state.string()}, &log), 0) << log;
+  EXPECT_THAT(log, HasSubstr("resuming from " + files.back().string() + " (after cycle " +
+                             std::to_string(newest.sequence) + ")"));
+  for (const auto& e : fs::directory_iterator(state)) {
+    EXPECT_NE(e.path().extension(), ".tmp") << "an interrupted write is cleaned up: " << e.path();
+  }
+}
+
 TEST_F(SlamdBinary, LiveRunFedByLcmLogplayerTakesTheSameDecisionsAsReplay) {
   const std::string replayed = (dir_ / "reference.lcmlog").string();
   ASSERT_EQ(replay(replayed), 0);
