@@ -112,6 +112,12 @@ std::string CycleSynchroniser::add_odometry(const odometry_t& odometry) {
   newest_odometry_ = odometry.utime;
   advance_data_time(odometry.utime);
   odometry_.push_back(odometry);
+  // Without whisk cycles (whisking stopped, whiskerd down) nothing consumes odometry: bounded memory
+  // over keeping every sample; the next cycle's path integration then starts at the oldest kept.
+  if (static_cast<int>(odometry_.size()) > params_.odometry_buffer) {
+    odometry_.pop_front();
+    ++counters_.odometry_overflow;
+  }
   return {};
 }
 

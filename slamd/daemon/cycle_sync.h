@@ -56,6 +56,7 @@ struct SyncParams {
   double max_wait_s = 1.0;           // data time to wait for a late or missing camera / odometry
   int camera_buffer = 16;            // frames kept
   double max_jump_s = 10.0;          // a sample time this far past data time waits for confirmation
+  int odometry_buffer = 180000;      // samples kept while no whisk cycle comes (1 h at 50 Hz); oldest dropped
   bool operator==(const SyncParams&) const = default;
 };
 
@@ -70,6 +71,7 @@ struct SyncCounters {
   int64_t out_of_order = 0;            // messages older than what was already consumed: dropped
   int64_t time_jumps = 0;              // messages too far ahead of the others, dropped
   int64_t jumps_followed = 0;          // jumps confirmed by a second input and followed
+  int64_t odometry_overflow = 0;       // oldest samples dropped from a full buffer (no whisk cycles)
   bool operator==(const SyncCounters&) const = default;
 };
 

@@ -19,6 +19,7 @@ void load(const ParamNode& node, NodeParams& p) {
   node.get("max_wait_s", p.sync.max_wait_s, 0.05, 30.0);
   node.get("camera_buffer", p.sync.camera_buffer, 1, 1000);
   node.get("max_jump_s", p.sync.max_jump_s, 1.0, 86400.0);
+  node.get("odometry_buffer", p.sync.odometry_buffer, 100, 10000000);
   node.get("map_period_s", p.map_period_s, 0.0, 3600.0);
 }
 
@@ -219,6 +220,10 @@ void SlamNode::on_odometry(const odometry_t& msg) {
   // A dropped sample is not dead-reckoned either (a pose back in time, or an hour ahead).
   if (const std::string why = sync_.add_odometry(msg); !why.empty()) return reject(kOdometry, why);
   accepted(kOdometry);
+  if (sync_.counters().odometry_overflow == 1 && logger_) {
+    logger_("no whisk cycle for " + std::to_string(params_.sync.odometry_buffer) +
+            " odometry samples: dropping the oldest (their motion is lost to the map) until whisking resumes");
+  }
   process(sync_.take_ready());
   if (!have_cycle_) return;
   // Dead-reckon from the last cycle's end with the base's own odometry pose.

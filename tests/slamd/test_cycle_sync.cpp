@@ -195,6 +195,21 @@ TEST(CycleSync, AJumpTwoInputsAgreeOnIsFollowed) {
   EXPECT_TRUE(ready[0].image);
 }
 
+TEST(CycleSync, OdometryWithoutWhiskCyclesIsBounded) {
+  // Whisking stopped while the base drives: nothing consumes odometry, and it used to pile up
+  // (~15 MB an hour at 50 Hz, forever).
+  SyncParams p;
+  p.odometry_buffer = 100;
+  CycleSynchroniser s(p);
+  feed(s, 20'000, 3 * kS, /*camera=*/false);  // 150 samples
+  EXPECT_EQ(s.counters().odometry_overflow, 50);
+  s.add_whisk_cycle(cycle(1, 3 * kS));
+  const auto ready = s.flush();
+  ASSERT_EQ(ready.size(), 1u);
+  ASSERT_EQ(ready[0].odometry.size(), 100u) << "the newest 100";
+  EXPECT_EQ(ready[0].odometry.front().utime, kS + 20'000);
+}
+
 TEST(CycleSync, FlushHandsOutEverythingPending) {
   CycleSynchroniser s(SyncParams{});
   feed(s, 20'000, kS);
