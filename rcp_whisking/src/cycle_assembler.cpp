@@ -1,6 +1,7 @@
 // Whisk-cycle assembler (see cycle_assembler.h).
 #include <whiskeye/rcp/cycle_assembler.h>
 
+#include <limits>
 #include <utility>
 
 namespace whiskeye::rcp {
@@ -96,11 +97,12 @@ std::optional<WhiskCycle> CycleAssembler::push(const WhiskerSample& sample, cons
   s.valid = true;
   s.phase = tag.phase;
   for (int w = 0; w < kNumWhiskers; ++w) {
-    if (sample.valid[w]) {
-      s.theta[w] = static_cast<float>(sample.theta[w]);
-      s.deflection_x[w] = static_cast<float>(sample.deflection_x[w]);
-      s.deflection_y[w] = static_cast<float>(sample.deflection_y[w]);
-    }
+    // A whisker not measured in this sample (stale board, fault) is NaN, not a made-up 0 rad with
+    // no deflection: a consumer skips it (slamd's tactile template does).
+    constexpr float kMissing = std::numeric_limits<float>::quiet_NaN();
+    s.theta[w] = sample.valid[w] ? static_cast<float>(sample.theta[w]) : kMissing;
+    s.deflection_x[w] = sample.valid[w] ? static_cast<float>(sample.deflection_x[w]) : kMissing;
+    s.deflection_y[w] = sample.valid[w] ? static_cast<float>(sample.deflection_y[w]) : kMissing;
     s.contact[w] = contact[w];
   }
   if (current_.samples.size() == 1) current_.utime_start = sample.utime;

@@ -91,7 +91,10 @@ std::string check_whisk_cycle(const whisk_cycle_t& m) {
     if (s > 0 && m.sample_utime[s] < m.sample_utime[s - 1]) return "WHISK_CYCLE: sample times go backwards";
     if (!m.sample_valid[s]) continue;
     for (int w = 0; w < kNumWhiskers; ++w) {
-      if (!finite(m.theta[s][w]) || !finite(m.deflection_x[s][w]) || !finite(m.deflection_y[s][w])) {
+      // A whisker not measured in a sample is NaN in all three values (docs/lcm-channels.md).
+      const bool missing =
+          std::isnan(m.theta[s][w]) && std::isnan(m.deflection_x[s][w]) && std::isnan(m.deflection_y[s][w]);
+      if (!missing && (!finite(m.theta[s][w]) || !finite(m.deflection_x[s][w]) || !finite(m.deflection_y[s][w]))) {
         return "WHISK_CYCLE: non-finite value at sample " + std::to_string(s) + ", whisker " + std::to_string(w);
       }
     }

@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 #include <whiskeye/rcp/cycle_assembler.h>
 
+#include <cmath>
+
 #include "helpers.h"
 
 using namespace whiskeye::rcp;
@@ -80,6 +82,23 @@ TEST(CycleAssembler, MarksLostSamplesAsInvalidAtTheirExpectedTimes) {
       EXPECT_EQ(s.phase, k < 250 ? Phase::Protract : Phase::Retract);
     }
   }
+}
+
+TEST(CycleAssembler, AWhiskerNotMeasuredInASampleIsNaNNotZero) {
+  CycleAssembler a;
+  PerWhisker<bool> contact{};
+  std::vector<WhiskCycle> cycles;
+  for (int64_t seq = 0; seq < 500 + 1; ++seq) {
+    WhiskerSample s = make_sample(seq, 0.3, 0.1);
+    if (seq == 100) s.valid[7] = false;  // its board was stale this period
+    if (auto c = a.push(s, tag_for(seq), contact)) cycles.push_back(std::move(*c));
+  }
+  ASSERT_EQ(cycles.size(), 1u);
+  const auto& missing = cycles[0].samples[100];
+  EXPECT_TRUE(missing.valid) << "the sample itself was measured";
+  EXPECT_TRUE(std::isnan(missing.theta[7]) && std::isnan(missing.deflection_x[7]) && std::isnan(missing.deflection_y[7]));
+  EXPECT_FLOAT_EQ(missing.deflection_x[6], 0.3f) << "its neighbours were measured";
+  EXPECT_FLOAT_EQ(cycles[0].samples[101].deflection_x[7], 0.3f);
 }
 
 TEST(CycleAssembler, GapAcrossCycleBoundarySplitsLostSamplesBetweenCycles) {

@@ -173,6 +173,19 @@ TEST_F(SlamNodeTest, AWhiskCycleWhoseCountsDoNotFitItsLengthIsADecodeErrorNotACr
   EXPECT_EQ(node_->counters().cycles, before + 1);
 }
 
+TEST_F(SlamNodeTest, AWhiskerNotMeasuredIsNaNAndAcceptedButAHalfNaNWhiskerIsRejected) {
+  whisk_cycle_t gap = free_cycle(0, kT0 + kS);
+  const float nan = std::nanf("");
+  gap.theta[10][3] = gap.deflection_x[10][3] = gap.deflection_y[10][3] = nan;  // its board was stale
+  publish(in_, "WHISK_CYCLE", gap);
+  whisk_cycle_t broken = free_cycle(1, kT0 + 2 * kS);
+  broken.deflection_x[10][3] = nan;  // theta and deflection_y measured: not a missing whisker
+  publish(in_, "WHISK_CYCLE", broken);
+  node_->flush();
+  EXPECT_EQ(node_->counters().validation_errors, 1);
+  EXPECT_EQ(node_->counters().cycles, 1);
+}
+
 TEST_F(SlamNodeTest, ImplausibleSampleTimesAreRejectedAndNeitherStallNorMovePoses) {
   stream({8, 8});
   node_->flush();

@@ -41,7 +41,8 @@ const char* to_string(Phase phase);
 
 // Every sample of one whisk cycle (protraction + retraction), the input of slamd's tactile
 // template. Samples lost on the bus are present with valid = false and zero values at their
-// expected times; they are never interpolated.
+// expected times; they are never interpolated. In a measured sample, a whisker that was not (its
+// board stale or faulty that period) has NaN theta and deflections.
 struct WhiskCycle {
   int64_t cycle = 0;        // whisk cycle number (+1 at each cycle start)
   int64_t utime_start = 0;  // time of the first sample (measured or missing) of the cycle
