@@ -69,3 +69,37 @@ TEST(ControllerAllocation, RecyclingCompletedCyclesRemovesAllAllocations) {
   EXPECT_EQ(completed, 4);
   EXPECT_EQ(g_allocations.load() - before, 0);
 }
+
+// The cycle storage is reserved for the rate the controller is stepped at: at 1 kHz a 1 Hz cycle
+// holds 1000 samples, and storage sized for 500 Hz would grow (allocate) in the middle of a cycle.
+TEST(ControllerAllocation, StorageIsSizedForTheActualSampleRate) {
+  constexpr int64_t kPeriod1kHz = 1000;
+  Controller c{ControllerParams{}, 1000.0};
+  c.enable();
+  auto sample = [&](int64_t seq) {
+    WhiskerSample s = make_sample(seq, 0.003, 0.0);
+    s.utime = whiskeye::rcp::test::kStartUtime + seq * kPeriod1kHz;
+    return s;
+  };
+  for (int64_t seq = 0; seq < 3000; ++seq) c.step(sample(seq));  // past learning, no recycling
+  long inside_cycle = 0;
+  int completed = 0;
+  for (int64_t seq = 3000; seq < 7000; ++seq) {
+    const long before = g_allocations.load();
+    const ControlOutput out = c.step(sample(seq));
+    const long used = g_allocations.load() - before;
+    if (out.completed_cycle) {
+      ++completed;
+      EXPECT_EQ(out.completed_cycle->samples.size(), 1000u);
+    } else {
+      inside_cycle += used;
+    }
+  }
+  EXPECT_EQ(completed, 4);
+  EXPECT_EQ(inside_cycle, 0);
+}
+
+TEST(ControllerAllocation, RejectsANonPositiveSampleRate) {
+  EXPECT_THROW(Controller(ControllerParams{}, 0.0), whiskeye::ParamError);
+  EXPECT_THROW(Controller(ControllerParams{}, -500.0), whiskeye::ParamError);
+}
