@@ -3,29 +3,15 @@
 // of rejected CAN frames, at 500 Hz and at 1 kHz. Its own binary: it replaces the global operator new.
 #include <gtest/gtest.h>
 
-#include <atomic>
-#include <cstdlib>
 #include <memory>
-#include <new>
 #include <utility>
 
+#include "counting_new.h"
 #include "whiskerd_core.h"
 #include "whiskerd_rig.h"
 
-namespace {
-std::atomic<long> g_allocations{0};
-}  // namespace
-
-// Counting replacements of the global allocation functions (this test binary only).
-void* operator new(std::size_t n) {
-  ++g_allocations;
-  if (void* p = std::malloc(n == 0 ? 1 : n)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-
 using namespace whiskeye;
+using whiskeye::test::allocations;
 using namespace whiskeye::whiskerd;
 using namespace whiskeye::whiskerd::test;
 
@@ -64,9 +50,9 @@ void expect_no_allocation_in_steady_state(double rate_hz) {
   ASSERT_GE(loop.cycles, 1);
 
   const int cycles_before = loop.cycles;
-  const long before = g_allocations.load();
+  const long before = allocations();
   for (int i = 0; i < 4 * per_cycle; ++i) loop.period();
-  const long used = g_allocations.load() - before;
+  const long used = allocations() - before;
   EXPECT_EQ(loop.cycles - cycles_before, 4);
   EXPECT_EQ(loop.last_cycle_samples, static_cast<std::size_t>(per_cycle));
   EXPECT_GE(loop.rig.core.counters()[Counters::kRejectedUnknownId], 7 * per_cycle);
@@ -84,12 +70,12 @@ TEST(WhiskerdAllocation, SteadyStateAt1kHzAllocatesNothing) { expect_no_allocati
 TEST(WhiskerdAllocation, RejectedFramesAllocateNothing) {
   Rig rig;
   std::array<uint8_t, 64> junk{};
-  const long before = g_allocations.load();
+  const long before = allocations();
   for (int i = 0; i < 100; ++i) {
     rig.core.on_frame(0x555 + i % 3, true, junk, rig.mono);
     rig.core.on_frame(wp::sample_id({}, i % 6), true, std::span(junk.data(), 5 + i % 20), rig.mono);
   }
-  EXPECT_EQ(g_allocations.load() - before, 0);
+  EXPECT_EQ(allocations() - before, 0);
   EXPECT_EQ(rig.core.counters()[Counters::kRejectedUnknownId] + rig.core.counters()[Counters::kRejectedWrongLength], 200);
 }
 
@@ -116,4 +102,11 @@ TEST(WhiskerdAllocation, RecycledCyclesCarryOnlyTheirOwnSamples) {
     }
   }
   EXPECT_GE(cycles, 10);
+}
+
+// The counter is live in this binary (otherwise every "0 allocations" above would prove nothing).
+TEST(WhiskerdAllocation, CounterSeesAnAllocation) {
+  const long before = allocations();
+  auto p = std::make_unique<rcp::WhiskCycle>();
+  EXPECT_GT(allocations(), before);
 }
