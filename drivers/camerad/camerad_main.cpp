@@ -116,6 +116,14 @@ int main(int argc, char** argv) {
   int64_t next_open_us = 0;
   std::string last_open_error;
   int64_t frames = 0, reopens = 0, device_lost = 0, open_failures = 0, sequence_gaps = 0;
+  // Totals of the capture sessions already closed; the open one adds its own (Capture counts since open).
+  int64_t closed_corrupt_frames = 0, closed_requeue_failures = 0;
+  bool corrupt_logged = false;  // one log line per capture session, the counter says how many
+  auto close_capture = [&] {
+    closed_corrupt_frames += cap->corrupt_frames();
+    closed_requeue_failures += cap->requeue_failures();
+    cap.reset();
+  };
   int64_t interval_frames = 0;
   double interval_latency_max_us = 0, interval_latency_sum_us = 0;
   int64_t last_frame_us = 0;
@@ -138,6 +146,7 @@ int main(int argc, char** argv) {
         last_open_error.clear();
         last_frame_us = now;
         last_sequence = -1;
+        corrupt_logged = false;
       } catch (const v4l2::CaptureError& e) {
         ++open_failures;
         if (e.what() != last_open_error) std::cerr << "camerad: " << e.what() << "; retrying\n";
@@ -170,12 +179,19 @@ int main(int argc, char** argv) {
         if (last_sequence >= 0 && f.sequence > last_sequence + 1) sequence_gaps += f.sequence - last_sequence - 1;
         last_sequence = f.sequence;
         last_frame_us = monotonic_us();
-      } else if (r == v4l2::Capture::Result::kGone ||
-                 monotonic_us() - last_frame_us > static_cast<int64_t>(p.frame_timeout_s * 1e6)) {
+      } else if (r == v4l2::Capture::Result::kSkipped && !corrupt_logged) {
+        // Not a frame: last_frame_us stays, so a camera sending only damaged frames gets reopened.
+        std::cerr << "camerad: " << cap->device() << ": skipping a frame "
+                  << v4l2::frame_check_name(cap->last_skip()) << " (counted in corrupt_frames)\n";
+        corrupt_logged = true;
+      }
+      if (r != v4l2::Capture::Result::kFrame &&
+          (r == v4l2::Capture::Result::kGone ||
+           monotonic_us() - last_frame_us > static_cast<int64_t>(p.frame_timeout_s * 1e6))) {
         ++device_lost;
         std::cerr << "camerad: " << (r == v4l2::Capture::Result::kGone ? cap->last_error() : cap->device() + ": no frames")
                   << "; closing and reopening\n";
-        cap.reset();
+        close_capture();
         next_open_us = monotonic_us() + static_cast<int64_t>(backoff.next() * 1e6);
       }
     } else {
@@ -193,8 +209,12 @@ int main(int argc, char** argv) {
       st.message = cap ? cap->device() + " " + std::to_string(cap->width()) + "x" + std::to_string(cap->height()) +
                              " " + v4l2::fourcc_name(cap->pixelformat())
                        : "no camera: " + (last_open_error.empty() ? std::string("reopening") : last_open_error);
-      st.counter_names = {"frames", "device_lost", "reopens", "open_failures", "sequence_gaps", "lcm_publish_errors"};
-      st.counter_values = {frames, device_lost, reopens, open_failures, sequence_gaps, bus->publish_errors()};
+      const int64_t corrupt_frames = closed_corrupt_frames + (cap ? cap->corrupt_frames() : 0);
+      const int64_t requeue_failures = closed_requeue_failures + (cap ? cap->requeue_failures() : 0);
+      st.counter_names = {"frames",        "device_lost",    "reopens",          "open_failures",
+                          "sequence_gaps", "corrupt_frames", "requeue_failures", "lcm_publish_errors"};
+      st.counter_values = {frames,        device_lost,    reopens,          open_failures,
+                           sequence_gaps, corrupt_frames, requeue_failures, bus->publish_errors()};
       st.num_counters = static_cast<int32_t>(st.counter_names.size());
       st.stat_names = {"fps", "latency_mean_us", "latency_max_us"};
       st.stat_values = {static_cast<double>(interval_frames) / p.status_period_s,

@@ -157,8 +157,9 @@ void load(const ParamNode& root, Params& p) {
 }
 
 WhiskerCore::WhiskerCore(const Params& params)
-    : params_(params), controller_(params.controller), assembler_(params.mode) {
+    : params_(params), controller_(params.controller, params.rate_hz), assembler_(params.mode) {
   last_sample_mono_.fill(-1);
+  for (; pooled_cycles_ < 2; ++pooled_cycles_) cycle_pool_[pooled_cycles_] = std::make_unique<rcp::WhiskCycle>();
   for (int w = 0; w < kN; ++w) {
     cos_r_[w] = std::cos(params_.calibration[w].rotation);
     sin_r_[w] = std::sin(params_.calibration[w].rotation);
@@ -237,10 +238,17 @@ void WhiskerCore::start_retract(int64_t mono_us, const char* why) {
   reason_ = why;
 }
 
+void WhiskerCore::recycle(std::unique_ptr<rcp::WhiskCycle> used) {
+  if (!used) return;
+  controller_.recycle(std::move(*used));
+  if (pooled_cycles_ < kCyclePool) cycle_pool_[pooled_cycles_++] = std::move(used);
+}
+
 void WhiskerCore::step(int64_t utime, int64_t mono_us, PeriodOutput& out) {
   ++seq_;
   out.utime = utime;
   out.seq = seq_;
+  recycle(std::move(out.completed_cycle));  // not handed on (e.g. the ring was full)
   out.completed_cycle.reset();
 
   // Latest sample of every board -> calibration -> controller input. The controller runs on the
@@ -337,7 +345,7 @@ void WhiskerCore::step(int64_t utime, int64_t mono_us, PeriodOutput& out) {
     }
   }
 
-  const rcp::ControlOutput c = controller_.step(in);
+  rcp::ControlOutput c = controller_.step(in);  // not const: its completed cycle is moved out
   out.cycle = c.cycle;
   out.phase = static_cast<int8_t>(c.phase);
   out.cycle_phase = c.cycle_phase;
@@ -355,7 +363,12 @@ void WhiskerCore::step(int64_t utime, int64_t mono_us, PeriodOutput& out) {
   if (c.completed_cycle) {
     // WHISK_CYCLE is in epoch time (slamd matches it against camera and odometry stamps): the
     // whole cycle takes the wall-clock offset of the period that completes it.
-    out.completed_cycle = std::make_unique<rcp::WhiskCycle>(std::move(*c.completed_cycle));
+    if (pooled_cycles_ > 0) {
+      out.completed_cycle = std::move(cycle_pool_[--pooled_cycles_]);
+    } else {
+      out.completed_cycle = std::make_unique<rcp::WhiskCycle>();  // only if cycles are not handed back
+    }
+    *out.completed_cycle = std::move(*c.completed_cycle);
     shift_times(*out.completed_cycle, utime - mono_us);
   }
 }

@@ -65,7 +65,8 @@ struct Params {
 // naming the key.
 void load(const ParamNode& root, Params& p);
 
-// Everything one control period produces, as plain data (no allocation except a completed cycle).
+// Everything one control period produces, as plain data. A completed cycle comes from the core's
+// pool; hand it back with WhiskerCore::recycle() once published so that step() never allocates.
 struct PeriodOutput {
   int64_t utime = 0;
   int64_t seq = 0;
@@ -108,7 +109,12 @@ class WhiskerCore {
   // One control period: utime = epoch time of the period, mono_us = the monotonic clock. The
   // controller runs on mono_us; the outputs (PeriodOutput::utime, a completed cycle's times) are
   // epoch, a completed cycle shifted by this period's utime - mono_us.
+  // A completed cycle still in `out` from an earlier period is recycled first.
   void step(int64_t utime, int64_t mono_us, PeriodOutput& out);
+  // Gives back a completed cycle once it is published (from any thread's hands, but called on the
+  // control thread): its sample storage goes back to the controller and the object to the pool, so
+  // the next completions reuse both instead of allocating. Null is ignored.
+  void recycle(std::unique_ptr<rcp::WhiskCycle> used);
 
   // GPIO fault or emergency stop: motors off from this period on, latched until restart.
   void fault();
@@ -133,8 +139,14 @@ class WhiskerCore {
   void start_retract(int64_t mono_us, const char* why);
   bool timed_out(int64_t last_mono, int64_t mono_us) const;
 
+  // Cycle objects waiting for the next completion. Two are made up front; a cycle that is never
+  // handed back (a dropped period) only costs one allocation at a later completion.
+  static constexpr int kCyclePool = 4;
+
   Params params_;
   rcp::Controller controller_;
+  std::array<std::unique_ptr<rcp::WhiskCycle>, kCyclePool> cycle_pool_;
+  int pooled_cycles_ = 0;
   wp::SampleAssembler assembler_;
   std::array<double, kN> cos_r_{}, sin_r_{};
   std::array<int64_t, wp::kNumBoards> used_samples_{};  // board sample count consumed last period

@@ -111,6 +111,9 @@ void send_command(can::Socket& sock, const Params& p, const wp::MotorCommand& cm
 
 struct Shared {
   Ring ring;
+  // Published whisk cycles travel back to the control thread, which recycles their storage: the
+  // real-time loop then never allocates at a cycle completion. A full ring frees the cycle here.
+  SpscRing<std::unique_ptr<rcp::WhiskCycle>, 8> used_cycles;
   std::atomic<int64_t> rt_periods{0};
   std::atomic<bool> rt_done{false};
   std::atomic<int> exit_code{0};
@@ -146,6 +149,7 @@ void control_thread(const Params& p, can::Socket& sock, gpio::MotorLines& lines,
   int64_t last_wake = 0;
   can::Frame frame;
   can::BusState bus_state = sock.state();
+  std::unique_ptr<rcp::WhiskCycle> used_cycle;
 
   timespec next;
   clock_gettime(CLOCK_MONOTONIC, &next);
@@ -161,6 +165,7 @@ void control_thread(const Params& p, can::Socket& sock, gpio::MotorLines& lines,
       wake.add(static_cast<double>(woke - deadline));
       if (last_wake != 0) jitter.add(static_cast<double>(std::llabs(woke - last_wake - period_us)));
       last_wake = woke;
+      while (shared.used_cycles.try_pop(used_cycle)) core.recycle(std::move(used_cycle));
 
       // Drain the socket without waiting.
       if (sock.is_open()) {
@@ -275,6 +280,7 @@ void publisher_thread(const Params& p, Bus& bus, Shared& shared, ServiceNotifier
         if (item.period.completed_cycle) {
           to_lcm(*item.period.completed_cycle, cycle);
           publish(bus, p.channel_cycle, cycle);
+          shared.used_cycles.try_push(item.period.completed_cycle);
         }
       } else if (item.kind == Item::Kind::kLog) {
         std::cerr << item.text.data() << "\n";

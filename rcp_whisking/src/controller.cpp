@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
 
 namespace whiskeye::rcp {
 
@@ -20,13 +21,25 @@ int64_t utime_at(int64_t origin, double cycles, double frequency_hz) {
   return origin + static_cast<int64_t>(std::ceil(cycles * 1e6 / frequency_hz - 1e-6));
 }
 
+double valid_rate(double sample_rate_hz) {
+  if (!(sample_rate_hz > 0.0 && sample_rate_hz <= 1e6)) {
+    throw ParamError("controller sample rate " + std::to_string(sample_rate_hz) + " Hz must be in (0, 1e6]");
+  }
+  return sample_rate_hz;
+}
+
+int64_t sample_period_us(double sample_rate_hz) {
+  return std::max<int64_t>(1, std::llround(1e6 / valid_rate(sample_rate_hz)));
+}
+
 }  // namespace
 
-Controller::Controller(const ControllerParams& params)
+Controller::Controller(const ControllerParams& params, double sample_rate_hz)
     : params_(params),
       pattern_(params.pattern),
       detector_(params.detector),
-      assembler_(2000, static_cast<int>(std::ceil(500.0 / params.pattern.frequency_hz))) {
+      assembler_(sample_period_us(sample_rate_hz),
+                 static_cast<int>(std::ceil(valid_rate(sample_rate_hz) / params.pattern.frequency_hz))) {
   validate(params_);
   command_.fill(params_.pattern.theta_rest);
   for (int w = 0; w < kNumWhiskers; ++w) reset_cycle_state(w);

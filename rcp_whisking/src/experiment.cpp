@@ -26,7 +26,7 @@ RunMetrics run_closed_loop(const ControllerParams& controller_params, const Plan
     throw std::invalid_argument("experiment: cycles must exceed warmup_cycles");
   }
   if (spec.period_us <= 0) throw std::invalid_argument("experiment: period_us must be > 0");
-  Controller controller(controller_params);
+  Controller controller(controller_params, 1e6 / static_cast<double>(spec.period_us));
   WhiskerPlant plant(plant_params, spec.seed);
   PerWhisker<bool> in_reach{};
   for (int w = 0; w < kNumWhiskers; ++w) {

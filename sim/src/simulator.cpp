@@ -28,7 +28,7 @@ Simulator::Simulator(const World& world, const RobotGeometry& robot, const rcp::
     : world_(world),
       robot_(robot),
       params_(params),
-      controller_(controller),
+      controller_(controller, params.period_us > 0 ? 1e6 / static_cast<double>(params.period_us) : 500.0),
       plant_(plant_params_for(robot, plant), derive_seed(params.seed, 0)),
       renderer_(world_, robot_),
       camera_rng_(derive_seed(params.seed, 1)),

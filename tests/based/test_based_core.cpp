@@ -119,6 +119,7 @@ OdometrySample sample(int64_t seq, int64_t utime, double x, double y, double the
   OdometrySample s;
   s.seq = seq;
   s.utime = utime;
+  s.mono_us = utime;  // the clocks agree unless a test steps the wall clock
   s.x = x;
   s.y = y;
   s.theta = theta;
@@ -213,6 +214,55 @@ TEST(OdometryTracker, PassesTheNewOriginThroughWhenAskedTo) {
   ASSERT_EQ(r.kind, SampleKind::kJump);
   EXPECT_EQ(r.publish->x, 0.0);
   EXPECT_EQ(r.publish->theta, 0.0);
+}
+
+// The wall clock steps (NTP); the monotonic clock does not. The checks must follow the monotonic one.
+OdometrySample with_wall_clock(OdometrySample s, int64_t utime) {
+  s.utime = utime;
+  return s;
+}
+
+TEST(OdometryTracker, WallClockStepBackDoesNotMakeNormalMotionAJump) {
+  OdometryTracker t{OdometryParams{}};
+  // 1 m/s and 1.5 rad/s, two samples 0.1 s apart (replies lost in between): 0.1 m and 0.15 rad are
+  // explained by the velocity. The wall clock is stepped back 5 s between them.
+  t.track(with_wall_clock(sample(10, 1'000'000, 0.0, 0.0, 0.0, 1.0, 0.0, 1.5), 1'700'000'005'000'000));
+  const TrackResult r =
+      t.track(with_wall_clock(sample(15, 1'100'000, 0.1, 0.0, 0.15, 1.0, 0.0, 1.5), 1'700'000'000'100'000));
+  EXPECT_EQ(r.kind, SampleKind::kNew) << r.detail;
+  ASSERT_TRUE(r.publish);
+  EXPECT_EQ(r.publish->utime, 1'700'000'000'100'000);  // published with its wall-clock time all the same
+}
+
+TEST(OdometryTracker, WallClockStepForwardDoesNotHideAJump) {
+  OdometryTracker t{OdometryParams{}};
+  const double vx = 0.2, omega = 0.4;
+  t.track(with_wall_clock(sample(10, 1'000'000, 3.0, 1.0, 0.5, vx, 0.0, omega), 1'700'000'000'000'000));
+  // The base zeroes its odometry 20 ms later; meanwhile the wall clock jumped 1 h ahead.
+  const TrackResult r =
+      t.track(with_wall_clock(sample(11, 1'020'000, 0.0, 0.0, 0.0, vx, 0.0, omega), 1'700'003'600'020'000));
+  ASSERT_EQ(r.kind, SampleKind::kJump);
+  EXPECT_NE(r.detail.find("in 0.02 s"), std::string::npos) << r.detail;
+  // Re-anchored on the 20 ms the base really moved, not on an hour (clamped to 1 s) of wall clock.
+  const Pose2 predicted = integrate_body_velocity(Pose2{3.0, 1.0, 0.5}, vx, 0.0, omega, 0.02);
+  EXPECT_NEAR(r.publish->x, predicted.x, 1e-12);
+  EXPECT_NEAR(r.publish->y, predicted.y, 1e-12);
+  EXPECT_NEAR(r.publish->theta, predicted.theta, 1e-12);
+}
+
+TEST(OdometryTracker, StaleFollowsTheMonotonicClock) {
+  OdometryParams p;
+  p.stale_after_s = 0.5;
+  OdometryTracker t{p};
+  EXPECT_FALSE(t.stale(10'000'000));  // nothing yet: not stale, unreachable is another fault
+  t.track(with_wall_clock(sample(10, 1'000'000, 0, 0, 0), 1'700'000'000'000'000));
+  EXPECT_FALSE(t.stale(1'400'000));
+  EXPECT_TRUE(t.stale(1'600'000));
+  // A new seq whose wall-clock time stepped back 1 h: fresh, as the monotonic clock says.
+  t.track(with_wall_clock(sample(11, 1'600'000, 0, 0, 0), 1'699'996'400'600'000));
+  EXPECT_EQ(t.last_new_mono_us(), 1'600'000);
+  EXPECT_FALSE(t.stale(1'700'000));
+  EXPECT_TRUE(t.stale(2'200'000));
 }
 
 // ---- health and logging ----

@@ -55,3 +55,55 @@ TEST(V4l2Capture, NoMatchingCardIsAnError) {
   c.match_card = "no-such-camera-model";
   EXPECT_THROW(find_device(c), CaptureError);
 }
+
+TEST(V4l2FrameCheck, WholeFramesAreUsable) {
+  // 640x480 YUYV: stride 1280, 614400 bytes; GREY: stride 640; MJPG: any non-empty size.
+  EXPECT_EQ(check_frame(0, 614400, kYUYV, 1280, 480), FrameCheck::kUsable);
+  EXPECT_EQ(check_frame(0, 700000, kYUYV, 1280, 480), FrameCheck::kUsable);  // driver padding
+  EXPECT_EQ(check_frame(0, 307200, kGREY, 640, 480), FrameCheck::kUsable);
+  EXPECT_EQ(check_frame(0, 23456, kMJPG, 0, 480), FrameCheck::kUsable);
+  EXPECT_EQ(check_frame(~kBufFlagError, 614400, kYUYV, 1280, 480), FrameCheck::kUsable);  // other flags
+}
+
+TEST(V4l2FrameCheck, BufferFlaggedAsErrorIsSkippedWhateverItsSize) {
+  EXPECT_EQ(check_frame(kBufFlagError, 614400, kYUYV, 1280, 480), FrameCheck::kErrorFlag);
+  EXPECT_EQ(check_frame(kBufFlagError | 0x1, 23456, kMJPG, 0, 480), FrameCheck::kErrorFlag);
+}
+
+TEST(V4l2FrameCheck, TruncatedRawFrameIsSkipped) {
+  EXPECT_EQ(check_frame(0, 614399, kYUYV, 1280, 480), FrameCheck::kShortPayload);
+  EXPECT_EQ(check_frame(0, 1280 * 240, kYUYV, 1280, 480), FrameCheck::kShortPayload);
+  EXPECT_EQ(check_frame(0, 640 * 479, kGREY, 640, 480), FrameCheck::kShortPayload);
+  // A compressed frame has no fixed size: a small JPEG is whole.
+  EXPECT_EQ(check_frame(0, 1000, kMJPG, 0, 480), FrameCheck::kUsable);
+}
+
+TEST(V4l2FrameCheck, EmptyBufferIsSkipped) {
+  EXPECT_EQ(check_frame(0, 0, kMJPG, 0, 480), FrameCheck::kEmpty);
+  EXPECT_EQ(check_frame(0, 0, kYUYV, 1280, 480), FrameCheck::kEmpty);
+}
+
+TEST(V4l2FrameCheck, EveryReasonHasAName) {
+  for (FrameCheck c : {FrameCheck::kUsable, FrameCheck::kErrorFlag, FrameCheck::kShortPayload, FrameCheck::kEmpty}) {
+    EXPECT_STRNE(frame_check_name(c), "?");
+  }
+  EXPECT_STREQ(frame_check_name(FrameCheck::kShortPayload), "shorter than stride x height");
+}
+
+TEST(V4l2Requeue, BufferWhoseQbufFailsIsKeptAndRetried) {
+  std::vector<uint32_t> pending{2, 0};
+  std::vector<uint32_t> queued;
+  bool fail_buffer_2 = true;
+  auto qbuf = [&](uint32_t index) {
+    if (index == 2 && fail_buffer_2) return false;
+    queued.push_back(index);
+    return true;
+  };
+  EXPECT_EQ(requeue_all(pending, qbuf), 1);
+  EXPECT_EQ(pending, std::vector<uint32_t>{2});
+  EXPECT_EQ(queued, std::vector<uint32_t>{0});
+  fail_buffer_2 = false;  // transient (e.g. EAGAIN, ENOMEM): the next call gives it back
+  EXPECT_EQ(requeue_all(pending, qbuf), 0);
+  EXPECT_TRUE(pending.empty());
+  EXPECT_EQ(queued, (std::vector<uint32_t>{0, 2}));
+}

@@ -63,7 +63,7 @@ TEST(WhiskerProtocol, RejectsTruncatedFrame) {
   const Decoded d = decode_frame(0x181, true, std::span(buf.data(), 24), BusMode::kFd);
   EXPECT_EQ(d.kind, FrameKind::kRejected);
   EXPECT_EQ(d.reject, Reject::kWrongLength);
-  EXPECT_NE(d.reason.find("24 bytes"), std::string::npos) << d.reason;
+  EXPECT_NE(reject_text(d).find("24 bytes, expected 32"), std::string::npos) << reject_text(d);
 }
 
 TEST(WhiskerProtocol, RejectsUnknownId) {
@@ -71,7 +71,7 @@ TEST(WhiskerProtocol, RejectsUnknownId) {
   for (uint32_t id : {0x180u, 0x187u, 0x555u, 0x700u}) {
     const Decoded d = decode_frame(id, true, buf, BusMode::kFd);
     EXPECT_EQ(d.reject, Reject::kUnknownId) << std::hex << id;
-    EXPECT_NE(d.reason.find("unknown CAN id"), std::string::npos);
+    EXPECT_NE(reject_text(d).find("unknown CAN id"), std::string::npos) << reject_text(d);
   }
 }
 
@@ -81,6 +81,8 @@ TEST(WhiskerProtocol, RejectsOutOfRangeHallAndEncoderValues) {
   s.whiskers[1].x = 3000;
   encode_sample_fd(s, buf);
   EXPECT_EQ(decode_frame(0x182, true, buf, BusMode::kFd).reject, Reject::kOutOfRange);
+  EXPECT_EQ(reject_text(decode_frame(0x182, true, buf, BusMode::kFd)),
+            "sample value out of range, id 0x182, whisker 1");
   s = make_sample(1, 5);
   s.whiskers[3].theta = -2000;
   encode_sample_fd(s, buf);
@@ -92,7 +94,17 @@ TEST(WhiskerProtocol, RejectsOutOfRangeHallAndEncoderValues) {
 
 TEST(WhiskerProtocol, RejectsClassicSampleOnFdBus) {
   std::array<uint8_t, 8> buf{};
-  EXPECT_EQ(decode_frame(0x181, false, buf, BusMode::kFd).reject, Reject::kWrongFrameType);
+  const Decoded d = decode_frame(0x181, false, buf, BusMode::kFd);
+  EXPECT_EQ(d.reject, Reject::kWrongFrameType);
+  EXPECT_EQ(reject_text(d), "sample frame is classic on an FD bus, id 0x181");
+}
+
+TEST(WhiskerProtocol, AcceptedFrameHasNoRejectText) {
+  std::array<uint8_t, 32> buf{};
+  encode_sample_fd(make_sample(0, 1), buf);
+  const Decoded d = decode_frame(0x181, true, buf, BusMode::kFd);
+  ASSERT_EQ(d.kind, FrameKind::kSample);
+  EXPECT_EQ(reject_text(d), "");
 }
 
 TEST(WhiskerProtocol, ConfigurableIdsAreHonoured) {
@@ -311,7 +323,7 @@ TEST(WhiskerProtocol, RandomBytesNeverCrashAndAreCounted) {
     const Decoded d = decode_frame(id, rng() % 2, std::span(buf.data(), len), i % 3 ? BusMode::kFd : BusMode::kClassic);
     counters.count(d);
     if (d.kind == FrameKind::kRejected) {
-      EXPECT_FALSE(d.reason.empty());
+      EXPECT_STRNE(d.reason, "");
     }
   }
   EXPECT_EQ(counters.frames, 20000);

@@ -2,26 +2,11 @@
 #include <gtest/gtest.h>
 #include <whiskeye/rcp/controller.h>
 
-#include <atomic>
-#include <cstdlib>
-#include <new>
-
+#include "counting_new.h"
 #include "helpers.h"
 
-namespace {
-std::atomic<long> g_allocations{0};
-}  // namespace
-
-// Counting replacements of the global allocation functions (this test binary only).
-void* operator new(std::size_t n) {
-  ++g_allocations;
-  if (void* p = std::malloc(n == 0 ? 1 : n)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-
 using namespace whiskeye::rcp;
+using whiskeye::test::allocations;
 using whiskeye::rcp::test::make_sample;
 
 TEST(ControllerAllocation, StepAllocatesOnlyWhenACycleCompletes) {
@@ -34,9 +19,9 @@ TEST(ControllerAllocation, StepAllocatesOnlyWhenACycleCompletes) {
   for (int64_t seq = 1500; seq < 3500; ++seq) {
     WhiskerSample s = make_sample(seq, 0.003, 0.0);
     if (seq % 97 == 0) s.deflection_x[seq % 24] = -0.3;  // some contacts too
-    const long before = g_allocations.load();
+    const long before = allocations();
     const ControlOutput out = c.step(s);
-    const long used = g_allocations.load() - before;
+    const long used = allocations() - before;
     if (out.completed_cycle) {
       ++completed;
       at_boundary += used;
@@ -56,7 +41,7 @@ TEST(ControllerAllocation, RecyclingCompletedCyclesRemovesAllAllocations) {
     ControlOutput out = c.step(make_sample(seq, 0.003, 0.0));
     if (out.completed_cycle) c.recycle(std::move(*out.completed_cycle));
   }
-  const long before = g_allocations.load();
+  const long before = allocations();
   int completed = 0;
   for (int64_t seq = 1500; seq < 3500; ++seq) {
     ControlOutput out = c.step(make_sample(seq, 0.003, 0.0));
@@ -67,5 +52,39 @@ TEST(ControllerAllocation, RecyclingCompletedCyclesRemovesAllAllocations) {
     }
   }
   EXPECT_EQ(completed, 4);
-  EXPECT_EQ(g_allocations.load() - before, 0);
+  EXPECT_EQ(allocations() - before, 0);
+}
+
+// The cycle storage is reserved for the rate the controller is stepped at: at 1 kHz a 1 Hz cycle
+// holds 1000 samples, and storage sized for 500 Hz would grow (allocate) in the middle of a cycle.
+TEST(ControllerAllocation, StorageIsSizedForTheActualSampleRate) {
+  constexpr int64_t kPeriod1kHz = 1000;
+  Controller c{ControllerParams{}, 1000.0};
+  c.enable();
+  auto sample = [&](int64_t seq) {
+    WhiskerSample s = make_sample(seq, 0.003, 0.0);
+    s.utime = whiskeye::rcp::test::kStartUtime + seq * kPeriod1kHz;
+    return s;
+  };
+  for (int64_t seq = 0; seq < 3000; ++seq) c.step(sample(seq));  // past learning, no recycling
+  long inside_cycle = 0;
+  int completed = 0;
+  for (int64_t seq = 3000; seq < 7000; ++seq) {
+    const long before = allocations();
+    const ControlOutput out = c.step(sample(seq));
+    const long used = allocations() - before;
+    if (out.completed_cycle) {
+      ++completed;
+      EXPECT_EQ(out.completed_cycle->samples.size(), 1000u);
+    } else {
+      inside_cycle += used;
+    }
+  }
+  EXPECT_EQ(completed, 4);
+  EXPECT_EQ(inside_cycle, 0);
+}
+
+TEST(ControllerAllocation, RejectsANonPositiveSampleRate) {
+  EXPECT_THROW(Controller(ControllerParams{}, 0.0), whiskeye::ParamError);
+  EXPECT_THROW(Controller(ControllerParams{}, -500.0), whiskeye::ParamError);
 }

@@ -153,7 +153,7 @@ struct Decoded {
           break;
         default:
           ++rejected;
-          ADD_FAILURE() << d.reason;
+          ADD_FAILURE() << wp::reject_text(d);
       }
       if (complete) {
         current[board] = assembler.latest(board);
@@ -255,7 +255,7 @@ TEST(BoardTraffic, LargeDeflectionsSaturateAt2047AndInvalidWhiskersCarryTheFault
   t.add(s, frames);
   ASSERT_GE(frames.size(), 2u);
   const wp::Decoded b0 = wp::decode_frame(frames[0].id, true, frames[0].data, wp::BusMode::kFd);
-  ASSERT_EQ(b0.kind, wp::FrameKind::kSample) << b0.reason;
+  ASSERT_EQ(b0.kind, wp::FrameKind::kSample) << wp::reject_text(b0);
   EXPECT_EQ(b0.sample.whiskers[0].x, wp::kHallLimit);
   EXPECT_EQ(b0.sample.whiskers[0].y, -wp::kHallLimit);
   EXPECT_EQ(b0.sample.whiskers[1].theta, wp::kThetaLimit);

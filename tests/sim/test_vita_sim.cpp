@@ -204,7 +204,7 @@ CandumpCheck check_candump(const std::string& candump, const std::string& lcmlog
     }
     if (d.kind == wp::FrameKind::kSample && assembler.add(d.sample)) board = d.sample.board;
     if (d.kind == wp::FrameKind::kFragment && assembler.add(d.fragment)) board = d.fragment.board;
-    if (d.kind == wp::FrameKind::kRejected) ADD_FAILURE() << d.reason << ": " << line;
+    if (d.kind == wp::FrameKind::kRejected) ADD_FAILURE() << wp::reject_text(d) << ": " << line;
     if (board < 0) continue;
     ++r.board_samples;
     r.sample_times[board].push_back(f.utime);

@@ -204,7 +204,8 @@ void BasedNode::poll_loop() {
           break;
         }
         count("replies_ok");
-        raw.utime = sample_utime(reply.recv_utime, reply.round_trip_us);
+        raw.utime = sample_utime(reply.recv_utime, reply.round_trip_us);      // published
+        raw.mono_us = sample_utime(reply.recv_mono_us, reply.round_trip_us);  // timing checks
         const TrackResult r = tracker.track(raw);
         switch (r.kind) {
           // Routine when polling faster than the base samples; only a long run (stale) degrades.
@@ -247,8 +248,8 @@ void BasedNode::poll_loop() {
     }
     {
       // Stale: replies come but the base's seq has not moved for stale_after_s. One event per episode.
-      const int64_t last_new = tracker.last_new_utime();
-      const bool stale_now = last_new > 0 && static_cast<double>(reply.recv_utime - last_new) * 1e-6 > params_.odometry.stale_after_s;
+      // Monotonic: a wall-clock step must neither raise nor hide a stale episode.
+      const bool stale_now = tracker.stale(reply.recv_mono_us);
       bool report = false;
       {
         std::lock_guard<std::mutex> lock(mutex_);

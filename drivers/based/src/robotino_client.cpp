@@ -57,6 +57,7 @@ Reply classify(const httplib::Result& res, int64_t t0_us, double reply_timeout_s
   Reply r;
   const int64_t t1_us = monotonic_us();
   r.recv_utime = now_utime();
+  r.recv_mono_us = t1_us;
   r.round_trip_us = t1_us - t0_us;
   if (res) {
     r.http_status = res->status;

@@ -39,7 +39,7 @@ TrackResult OdometryTracker::track(const OdometrySample& raw) {
     r.kind = SampleKind::kSeqBackwards;
     r.detail = "seq went back from " + std::to_string(last_raw_.seq) + " to " + std::to_string(raw.seq);
   } else {
-    const double dt = std::max(0.0, static_cast<double>(raw.utime - last_raw_.utime) * 1e-6);
+    const double dt = std::max(0.0, static_cast<double>(raw.mono_us - last_raw_.mono_us) * 1e-6);
     const double speed = std::max(std::hypot(last_raw_.vx, last_raw_.vy), std::hypot(raw.vx, raw.vy));
     const double turn = std::max(std::abs(last_raw_.omega), std::abs(raw.omega));
     const double moved = std::hypot(raw.x - last_raw_.x, raw.y - last_raw_.y);
@@ -62,7 +62,7 @@ TrackResult OdometryTracker::track(const OdometrySample& raw) {
       params_.continuous_after_reset) {
     // Continue from where the last published pose would be now, moving at the last velocity: the
     // base's new origin is arbitrary, the motion since the last sample is the best guess we have.
-    const double dt = std::clamp(static_cast<double>(raw.utime - last_published_.utime) * 1e-6, 0.0, 1.0);
+    const double dt = std::clamp(static_cast<double>(raw.mono_us - last_published_.mono_us) * 1e-6, 0.0, 1.0);
     const Pose2 predicted =
         integrate_body_velocity(Pose2{last_published_.x, last_published_.y, last_published_.theta},
                                 last_published_.vx, last_published_.vy, last_published_.omega, dt);

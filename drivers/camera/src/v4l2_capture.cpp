@@ -38,6 +38,30 @@ std::string card_of(const v4l2_capability& cap) {
 
 }  // namespace
 
+static_assert(kBufFlagError == V4L2_BUF_FLAG_ERROR);
+
+const char* frame_check_name(FrameCheck c) {
+  switch (c) {
+    case FrameCheck::kUsable: return "usable";
+    case FrameCheck::kErrorFlag: return "flagged as damaged by the driver";
+    case FrameCheck::kShortPayload: return "shorter than stride x height";
+    case FrameCheck::kEmpty: return "empty";
+  }
+  return "?";
+}
+
+bool is_raw_format(uint32_t pixelformat) { return pixelformat == kYUYV || pixelformat == kGREY; }
+
+FrameCheck check_frame(uint32_t buffer_flags, std::size_t bytesused, uint32_t pixelformat, uint32_t stride,
+                       uint32_t height) {
+  if (buffer_flags & kBufFlagError) return FrameCheck::kErrorFlag;
+  if (bytesused == 0) return FrameCheck::kEmpty;
+  if (is_raw_format(pixelformat) && bytesused < static_cast<std::size_t>(stride) * height) {
+    return FrameCheck::kShortPayload;
+  }
+  return FrameCheck::kUsable;
+}
+
 std::string fourcc_name(uint32_t code) {
   std::string s(4, ' ');
   for (int i = 0; i < 4; ++i) {
@@ -87,6 +111,7 @@ Capture::Capture(const CaptureConfig& config, Log log) : log_(std::move(log)) {
     }
     negotiate(config);
     map_buffers(config.buffers);
+    pending_.reserve(buffers_.size());
     for (unsigned i = 0; i < buffers_.size(); ++i) {
       v4l2_buffer b{};
       b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
@@ -117,6 +142,7 @@ void Capture::close_device() {
     if (b.start != nullptr && b.start != MAP_FAILED) ::munmap(b.start, b.length);
   }
   buffers_.clear();
+  pending_.clear();
   if (fd_ >= 0) ::close(fd_);
   fd_ = -1;
 }
@@ -187,19 +213,24 @@ void Capture::map_buffers(unsigned count) {
   }
 }
 
-Capture::Result Capture::next(FrameView& frame, int timeout_ms) {
-  if (fd_ < 0) return Result::kGone;
-  if (held_ >= 0) {
+bool Capture::requeue_pending() {
+  bool gone = false;
+  requeue_failures_ += requeue_all(pending_, [&](uint32_t index) {
     v4l2_buffer b{};
     b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
     b.memory = V4L2_MEMORY_MMAP;
-    b.index = static_cast<uint32_t>(held_);
-    held_ = -1;
-    if (xioctl(fd_, VIDIOC_QBUF, &b) < 0) {
-      last_error_ = device_ + ": QBUF: " + std::strerror(errno);
-      if (gone_errno(errno)) return Result::kGone;
-    }
-  }
+    b.index = index;
+    if (xioctl(fd_, VIDIOC_QBUF, &b) == 0) return true;
+    last_error_ = device_ + ": QBUF: " + std::strerror(errno);
+    gone = gone || gone_errno(errno);
+    return false;
+  });
+  return !gone;
+}
+
+Capture::Result Capture::next(FrameView& frame, int timeout_ms) {
+  if (fd_ < 0) return Result::kGone;
+  if (!requeue_pending()) return Result::kGone;
   pollfd p{fd_, POLLIN, 0};
   const int n = ::poll(&p, 1, timeout_ms);
   if (n == 0 || (n < 0 && errno == EINTR)) return Result::kTimeout;
@@ -225,7 +256,12 @@ Capture::Result Capture::next(FrameView& frame, int timeout_ms) {
     last_error_ = device_ + ": DQBUF: " + std::strerror(errno);
     return gone_errno(errno) ? Result::kGone : Result::kTimeout;
   }
-  held_ = static_cast<int>(b.index);
+  pending_.push_back(b.index);  // lent to the caller (or skipped): back to the driver at the next call
+  if (const FrameCheck c = check_frame(b.flags, b.bytesused, pixelformat_, stride_, height_); c != FrameCheck::kUsable) {
+    ++corrupt_frames_;
+    last_skip_ = c;
+    return requeue_pending() ? Result::kSkipped : Result::kGone;
+  }
   frame.data = static_cast<const uint8_t*>(buffers_[b.index].start);
   frame.size = b.bytesused;
   frame.width = width_;

@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <string>
 
 namespace whiskeye::wp {
 namespace {
@@ -19,19 +21,22 @@ void put_u16(std::span<uint8_t> d, std::size_t at, uint16_t v) {
 }
 void put_i16(std::span<uint8_t> d, std::size_t at, int16_t v) { put_u16(d, at, static_cast<uint16_t>(v)); }
 
-Decoded reject(Reject r, std::string reason) {
+// `reason` must be a static string (Decoded::reason outlives this call).
+Decoded reject(Reject r, const char* reason, uint32_t id, int whisker = -1) {
   Decoded d;
   d.kind = FrameKind::kRejected;
   d.reject = r;
-  d.reason = std::move(reason);
+  d.reason = reason;
+  d.id = id;
+  d.whisker = whisker;
   return d;
 }
 
-std::string hex_id(uint32_t id) {
-  static const char* digits = "0123456789abcdef";
-  std::string s = "0x";
-  for (int shift = 8; shift >= 0; shift -= 4) s += digits[(id >> shift) & 0xf];
-  return s;
+Decoded reject_length(const char* reason, uint32_t id, std::size_t got, std::size_t want) {
+  Decoded d = reject(Reject::kWrongLength, reason, id);
+  d.length = static_cast<int>(got);
+  d.expected_length = static_cast<int>(want);
+  return d;
 }
 
 bool whisker_in_range(const WhiskerRaw& w) {
@@ -58,10 +63,6 @@ int board_of(uint32_t id, uint32_t base) {
   return static_cast<int>(id - base - 1);
 }
 
-std::string length_reason(const char* what, std::size_t got, std::size_t want) {
-  return std::string(what) + ": " + std::to_string(got) + " bytes, expected " + std::to_string(want);
-}
-
 }  // namespace
 
 const char* reject_name(Reject r) {
@@ -76,13 +77,26 @@ const char* reject_name(Reject r) {
   return "?";
 }
 
+std::string reject_text(const Decoded& d) {
+  if (d.kind != FrameKind::kRejected) return "";
+  char text[192];
+  int n = std::snprintf(text, sizeof text, "%s", d.reason);
+  auto add = [&](const char* fmt, auto... args) {
+    if (n >= 0 && n < static_cast<int>(sizeof text)) n += std::snprintf(text + n, sizeof text - n, fmt, args...);
+  };
+  if (d.length >= 0) add(" (%d bytes, expected %d)", d.length, d.expected_length);
+  add(", id 0x%03x", static_cast<unsigned>(d.id));
+  if (d.whisker >= 0) add(", whisker %d", d.whisker);
+  return text;
+}
+
 Decoded decode_frame(uint32_t id, bool fd, std::span<const uint8_t> data, BusMode mode,
                      const ProtocolIds& ids) {
   const bool want_fd = mode == BusMode::kFd;
   if (int board = board_of(id, ids.heartbeat_base); board >= 0) {
     // Heartbeats are the same in both modes and may be sent as classic frames on an FD bus.
     if (data.size() != kHeartbeatBytes) {
-      return reject(Reject::kWrongLength, length_reason("heartbeat", data.size(), kHeartbeatBytes));
+      return reject_length("heartbeat: wrong length", id, data.size(), kHeartbeatBytes);
     }
     Decoded d;
     d.kind = FrameKind::kHeartbeat;
@@ -92,12 +106,12 @@ Decoded decode_frame(uint32_t id, bool fd, std::span<const uint8_t> data, BusMod
   if (int board = board_of(id, ids.sample_base); board >= 0) {
     if (fd != want_fd) {
       return reject(Reject::kWrongFrameType,
-                    std::string("sample frame ") + hex_id(id) + (fd ? " is FD on a classic bus" : " is classic on an FD bus"));
+                    fd ? "sample frame is FD on a classic bus" : "sample frame is classic on an FD bus", id);
     }
     Decoded d;
     if (want_fd) {
       if (data.size() != kFdSampleBytes) {
-        return reject(Reject::kWrongLength, length_reason("FD sample", data.size(), kFdSampleBytes));
+        return reject_length("FD sample: wrong length", id, data.size(), kFdSampleBytes);
       }
       d.kind = FrameKind::kSample;
       BoardSample& s = d.sample;
@@ -109,13 +123,12 @@ Decoded decode_frame(uint32_t id, bool fd, std::span<const uint8_t> data, BusMod
         s.whiskers[k] = read_whisker(data, 4 + 6 * static_cast<std::size_t>(k));
         s.whiskers[k].fault = (faults >> k) & 1;
         if (!whisker_in_range(s.whiskers[k])) {
-          return reject(Reject::kOutOfRange, "sample " + hex_id(id) + " whisker " + std::to_string(k) +
-                                                 " value out of range");
+          return reject(Reject::kOutOfRange, "sample value out of range", id, k);
         }
       }
     } else {
       if (data.size() != kClassicBytes) {
-        return reject(Reject::kWrongLength, length_reason("classic sample", data.size(), kClassicBytes));
+        return reject_length("classic sample: wrong length", id, data.size(), kClassicBytes);
       }
       d.kind = FrameKind::kFragment;
       WhiskerFragment& f = d.fragment;
@@ -126,7 +139,7 @@ Decoded decode_frame(uint32_t id, bool fd, std::span<const uint8_t> data, BusMod
       f.whisker = read_whisker(data, 2);
       f.whisker.fault = (data[1] >> 2) & 1;
       if (!whisker_in_range(f.whisker)) {
-        return reject(Reject::kOutOfRange, "sample " + hex_id(id) + " value out of range");
+        return reject(Reject::kOutOfRange, "sample value out of range", id, f.index);
       }
     }
     return d;
@@ -137,27 +150,27 @@ Decoded decode_frame(uint32_t id, bool fd, std::span<const uint8_t> data, BusMod
     MotorCommand& c = d.command;
     if (want_fd) {
       if (id != ids.command_base || !fd) {
-        return reject(Reject::kWrongFrameType, "command " + hex_id(id) + " is not the FD broadcast command");
+        return reject(Reject::kWrongFrameType, "command is not the FD broadcast command", id);
       }
       if (data.size() != kFdCommandBytes) {
-        return reject(Reject::kWrongLength, length_reason("FD command", data.size(), kFdCommandBytes));
+        return reject_length("FD command: wrong length", id, data.size(), kFdCommandBytes);
       }
       c.seq = get_u16(data, 0);
       c.enable_mask = data[2] | (data[3] << 8) | (static_cast<uint32_t>(data[4]) << 16);
       for (int w = 0; w < kNumWhiskers; ++w) {
         c.theta_target[w] = get_i16(data, 6 + 2 * static_cast<std::size_t>(w));
         if (std::abs(c.theta_target[w]) > kThetaLimit) {
-          return reject(Reject::kOutOfRange, "command target of whisker " + std::to_string(w) + " out of range");
+          return reject(Reject::kOutOfRange, "command target out of range", id, w);
         }
       }
       return d;
     }
     const int board = board_of(id, ids.command_base);
     if (board < 0 || fd) {
-      return reject(Reject::kWrongFrameType, "command " + hex_id(id) + " is not a classic per-board command");
+      return reject(Reject::kWrongFrameType, "command is not a classic per-board command", id);
     }
     if (data.size() != kClassicBytes) {
-      return reject(Reject::kWrongLength, length_reason("classic command", data.size(), kClassicBytes));
+      return reject_length("classic command: wrong length", id, data.size(), kClassicBytes);
     }
     d.command_board = board;
     for (int k = 0; k < kWhiskersPerBoard; ++k) {
@@ -165,14 +178,14 @@ Decoded decode_frame(uint32_t id, bool fd, std::span<const uint8_t> data, BusMod
       const int16_t t = get_i16(data, 2 * static_cast<std::size_t>(k));
       if (t == kClassicDisabled) continue;
       if (std::abs(t) > kThetaLimit) {
-        return reject(Reject::kOutOfRange, "command target of whisker " + std::to_string(w) + " out of range");
+        return reject(Reject::kOutOfRange, "command target out of range", id, w);
       }
       c.theta_target[w] = t;
       c.enable_mask |= 1u << w;
     }
     return d;
   }
-  return reject(Reject::kUnknownId, "unknown CAN id " + hex_id(id));
+  return reject(Reject::kUnknownId, "unknown CAN id", id);
 }
 
 std::size_t encode_sample_fd(const BoardSample& s, std::span<uint8_t> out) {

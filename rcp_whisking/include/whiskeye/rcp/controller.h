@@ -1,5 +1,5 @@
 // The whisking controller: pattern generator + contact detector + rapid cessation of protraction
-// (RCP) + whisk-cycle assembler, stepped once per 500 Hz sample. Pure: the controller's time is the
+// (RCP) + whisk-cycle assembler, stepped once per sample (500 Hz on WhiskEye). Pure: the controller's time is the
 // sample's utime (no clock reads, no I/O); the same code runs in whiskerd and in vita-sim.
 // step() is allocation-free except at the step that completes a whisk cycle.
 #pragma once
@@ -39,7 +39,10 @@ struct ControllerStats {
 
 class Controller {
  public:
-  explicit Controller(const ControllerParams& params);
+  // sample_rate_hz: how often step() is called. It sizes the whisk-cycle storage reserved up front
+  // (a cycle holds sample_rate_hz / frequency_hz samples), so a faster loop does not grow it
+  // mid-cycle, and sets the assembler's nominal sample period.
+  explicit Controller(const ControllerParams& params, double sample_rate_hz = 500.0);
 
   // One control period. Returns the command for this period computed from this sample (the
   // reaction to a contact seen in this sample is already in theta_command).

@@ -24,7 +24,9 @@ bool parse_base_url(std::string_view url, BaseUrl& out, std::string& error);
 
 // One odometry sample as the base reports it (pose in the base's odometry frame, body velocity).
 struct OdometrySample {
-  int64_t utime = 0;  // sample time, set by the caller (see sample_utime)
+  int64_t utime = 0;    // sample time on the wall clock (odometry_t.utime), set by the caller (see sample_utime)
+  int64_t mono_us = 0;  // the same instant on the monotonic clock: every timing check uses this one,
+                        // so an NTP step of the wall clock neither fakes nor hides a jump
   int64_t seq = 0;
   double x = 0.0;
   double y = 0.0;

@@ -27,7 +27,8 @@ struct Reply {
   int http_status = 0;
   std::string body;
   std::string error;        // what went wrong, for logs
-  int64_t recv_utime = 0;   // wall clock when the reply (or the failure) came
+  int64_t recv_utime = 0;   // wall clock when the reply (or the failure) came: for timestamps only
+  int64_t recv_mono_us = 0; // the same instant on the monotonic clock: for intervals and timeouts
   int64_t round_trip_us = 0;
 };
 

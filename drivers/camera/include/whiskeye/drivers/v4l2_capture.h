@@ -30,6 +30,32 @@ inline int64_t monotonic_to_utime(int64_t ts_mono_us, int64_t now_mono_us, int64
   return ts_mono_us + (now_real_us - now_mono_us);
 }
 
+// Whether a dequeued buffer holds a whole frame. The driver flags a frame it knows is damaged
+// (V4L2_BUF_FLAG_ERROR: lost USB packets, a resync); an uncompressed frame (YUYV, GREY) shorter than
+// stride x height is truncated; an empty buffer holds nothing. A compressed frame (MJPG) has no
+// fixed size and is usable whenever it is not empty or flagged. Such buffers are requeued, counted
+// (camerad's corrupt_frames) and never published.
+enum class FrameCheck { kUsable, kErrorFlag, kShortPayload, kEmpty };
+const char* frame_check_name(FrameCheck c);
+inline constexpr uint32_t kBufFlagError = 0x00000040;  // V4L2_BUF_FLAG_ERROR (checked in the source)
+bool is_raw_format(uint32_t pixelformat);
+FrameCheck check_frame(uint32_t buffer_flags, std::size_t bytesused, uint32_t pixelformat, uint32_t stride,
+                       uint32_t height);
+
+// Gives every pending (dequeued) buffer back through `qbuf(index)` (true on success). A buffer that
+// qbuf refuses stays in `pending` for the next try instead of being forgotten: a lost buffer would
+// shrink the driver's ring for the rest of the session. Returns the number of refusals.
+template <typename QBuf>
+int requeue_all(std::vector<uint32_t>& pending, QBuf&& qbuf) {
+  std::size_t kept = 0;
+  for (const uint32_t index : pending) {
+    if (!qbuf(index)) pending[kept++] = index;
+  }
+  const int refused = static_cast<int>(kept);
+  pending.resize(kept);
+  return refused;
+}
+
 // Exponential reopen backoff: initial, doubling, capped; reset() after success.
 class Backoff {
  public:
@@ -85,7 +111,9 @@ class Capture {
   Capture(const Capture&) = delete;
   Capture& operator=(const Capture&) = delete;
 
-  enum class Result { kFrame, kTimeout, kGone };
+  // kSkipped: a buffer arrived but failed check_frame(); it went straight back to the driver and is
+  // counted in corrupt_frames() (last_skip() says why).
+  enum class Result { kFrame, kTimeout, kGone, kSkipped };
   // Waits up to timeout_ms for the next frame. The view stays valid until the next call.
   Result next(FrameView& frame, int timeout_ms);
 
@@ -97,11 +125,19 @@ class Capture {
   double fps() const { return fps_; }
   std::size_t num_buffers() const { return buffers_.size(); }
   const std::string& last_error() const { return last_error_; }
+  // Buffers skipped by check_frame() since open.
+  int64_t corrupt_frames() const { return corrupt_frames_; }
+  FrameCheck last_skip() const { return last_skip_; }
+  // QBUF calls that failed since open. The buffer is kept and given back at the next call, so a
+  // transient failure does not shrink the buffer ring.
+  int64_t requeue_failures() const { return requeue_failures_; }
 
  private:
   void negotiate(const CaptureConfig& config);
   void map_buffers(unsigned count);
   void close_device();
+  // Gives every dequeued buffer back to the driver; false if the device is gone.
+  bool requeue_pending();
 
   struct Buffer {
     void* start = nullptr;
@@ -111,7 +147,12 @@ class Capture {
   std::string device_;
   int fd_ = -1;
   std::vector<Buffer> buffers_;
-  int held_ = -1;  // buffer lent to the caller, requeued at the next call
+  // Dequeued buffers not yet given back (the one lent to the caller, or one whose QBUF failed):
+  // requeued at the next call. At most one entry per buffer.
+  std::vector<uint32_t> pending_;
+  int64_t corrupt_frames_ = 0;
+  int64_t requeue_failures_ = 0;
+  FrameCheck last_skip_ = FrameCheck::kUsable;
   bool streaming_ = false;
   uint32_t width_ = 0, height_ = 0, stride_ = 0, pixelformat_ = 0;
   double fps_ = 0;

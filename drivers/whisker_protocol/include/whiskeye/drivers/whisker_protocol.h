@@ -100,13 +100,23 @@ enum class FrameKind { kRejected, kSample, kFragment, kHeartbeat, kCommand };
 struct Decoded {
   FrameKind kind = FrameKind::kRejected;
   Reject reject = Reject::kNone;
-  std::string reason;  // human-readable, set when rejected
+  // Why a frame was rejected, without allocating (whiskerd decodes on its real-time thread): a
+  // static phrase plus the numbers it refers to. reject_text() formats the whole sentence on demand.
+  const char* reason = "";
+  uint32_t id = 0;           // the rejected frame's CAN id
+  int length = -1;           // kWrongLength: bytes received
+  int expected_length = -1;  // kWrongLength: bytes the frame type has
+  int whisker = -1;          // kOutOfRange: the offending whisker (board-local for samples), -1 = n/a
   BoardSample sample;
   WhiskerFragment fragment;
   Heartbeat heartbeat;
   MotorCommand command;
   int command_board = -1;  // classic command frames: the board whose 4 entries were decoded
 };
+
+// The reason of a rejected frame as one line, e.g. "FD sample: wrong length (24 bytes, expected 40),
+// id 0x181"; "" for a frame that was not rejected. Allocates: not for the real-time path.
+std::string reject_text(const Decoded& d);
 
 // Decodes any frame of the protocol. `fd` is whether the frame arrived as a CAN FD frame.
 Decoded decode_frame(uint32_t id, bool fd, std::span<const uint8_t> data, BusMode mode,
