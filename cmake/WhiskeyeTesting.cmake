@@ -1,10 +1,11 @@
-# whiskeye_add_gtest(NAME LABEL <unit|integration|vm> SOURCES ... [LIBS ...] [TIMEOUT s] [NETNS])
+# whiskeye_add_gtest(NAME LABEL <unit|integration|vm> SOURCES ... [LIBS ...] [TIMEOUT s] [NETNS]
+#                    [SERIAL_WITH_VM])
 # One gtest binary, each TEST discovered as its own ctest test and labelled, so
 # `ctest -L unit` runs the fast suite and the sanitizer build can build only what it runs.
 include(GoogleTest)
 
 function(whiskeye_add_gtest name)
-  cmake_parse_arguments(ARG "NETNS" "LABEL;TIMEOUT" "SOURCES;LIBS" ${ARGN})
+  cmake_parse_arguments(ARG "NETNS;SERIAL_WITH_VM" "LABEL;TIMEOUT" "SOURCES;LIBS" ${ARGN})
   if(NOT ARG_LABEL)
     message(FATAL_ERROR "whiskeye_add_gtest(${name}): LABEL is required")
   endif()
@@ -17,8 +18,14 @@ function(whiskeye_add_gtest name)
     set_target_properties(${name} PROPERTIES CROSSCOMPILING_EMULATOR ${PROJECT_SOURCE_DIR}/scripts/netns-run)
   endif()
   target_link_libraries(${name} PRIVATE ${ARG_LIBS} GTest::gmock GTest::gtest_main)
+  set(extra)
+  if(ARG_SERIAL_WITH_VM)
+    # Tests that hold a real-time property (periods, deadlines, keep-alive gaps) do not run beside a
+    # TCG guest, which takes a whole core of the 2-core runner (tests/vm: RESOURCE_LOCK qemu_vm).
+    set(extra RESOURCE_LOCK qemu_vm)
+  endif()
   gtest_discover_tests(${name}
-    PROPERTIES LABELS ${ARG_LABEL} TIMEOUT ${ARG_TIMEOUT}
+    PROPERTIES LABELS ${ARG_LABEL} TIMEOUT ${ARG_TIMEOUT} ${extra}
     DISCOVERY_TIMEOUT 60)
   set_property(GLOBAL APPEND PROPERTY WHISKEYE_TESTS_${ARG_LABEL} ${name})
 endfunction()

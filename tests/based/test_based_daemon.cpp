@@ -19,7 +19,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -121,14 +123,20 @@ TEST(BasedDaemon, PublishesOdometryOverUdpmFollowsBaseCmdAndStopsOnSigterm) {
   }
   ASSERT_GE(odom.size(), 30u) << d.stderr_text();
   ASSERT_FALSE(status.empty()) << d.stderr_text();
+  std::vector<double> stamp_error_us;
   for (const odometry_t& m : odom) {
     const testing::FakePose p = FakeRobotino::expected_pose(m.seq);
     EXPECT_NEAR(m.x, p.x, 1e-12);
     EXPECT_NEAR(m.y, p.y, 1e-12);
     EXPECT_NEAR(m.theta, wrap_angle(p.theta), 1e-12);
     EXPECT_EQ(m.vy, p.vy);
-    EXPECT_NEAR(static_cast<double>(m.utime - base.sample_utime(m.seq)), 0.0, 20'000.0);
+    stamp_error_us.push_back(std::abs(static_cast<double>(m.utime - base.sample_utime(m.seq))));
   }
+  // Stamped when the base sampled it: the median within 20 ms, none beyond 250 ms (one late wake-up
+  // of a loaded runner is not a stamping error, a stamp a poll period or more off is).
+  std::sort(stamp_error_us.begin(), stamp_error_us.end());
+  EXPECT_LE(stamp_error_us[stamp_error_us.size() / 2], 20'000.0);
+  EXPECT_LE(stamp_error_us.back(), 250'000.0);
   EXPECT_EQ(status.back().driver, "based");
   EXPECT_EQ(errors.total(), 0);
   bool moved = false;

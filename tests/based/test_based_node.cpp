@@ -363,7 +363,7 @@ TEST_F(BasedNodeTest, PublishesDriverStatusOncePerSecond) {
   EXPECT_EQ(status_counter(s[1], "replies_malformed"), 1);
   EXPECT_EQ(int{s[1].state}, int{driver_status_t::STATE_DEGRADED});
   EXPECT_NE(s[1].message.find("not JSON"), std::string::npos) << s[1].message;
-  EXPECT_NEAR(static_cast<double>(s[1].utime - s[0].utime), 1e6, 0.1e6);
+  EXPECT_NEAR(static_cast<double>(s[1].utime - s[0].utime), 1e6, 0.3e6) << "1 Hz (a loaded runner delays a wake-up)";
   ASSERT_EQ(s[0].num_stats, static_cast<int32_t>(s[0].stat_names.size()));
   EXPECT_EQ(s[0].stat_names[0], "odometry_rate_hz");
   EXPECT_GT(s[0].stat_values[0], 20.0);
