@@ -1,12 +1,13 @@
 #!/bin/bash
 # VM scenario: camerad captures from vivid (a virtual V4L2 camera in the guest kernel); mid-stream the
 # device is unbound and the driver unloaded and reloaded; camerad must recover on its own.
-#   scenario_camerad.sh RESULTS_DIR CAMERAD CAMERA_VM_CHECK CONFIG
+#   scenario_camerad.sh RESULTS_DIR CAMERAD CAMERA_VM_CHECK CONFIG DRIVER_STATUS_PROBE
 set -u
 RESULTS_DIR=$1
 CAMERAD=$2
 CHECK=$3
 CONFIG=$4
+PROBE=$5
 source "$(dirname "$0")/lib.sh"
 
 setup_lcm_loopback
@@ -25,6 +26,19 @@ wait $fb_pid
 check camerad_logs_the_fallback_to_the_nearest_mode \
   grep -q "700x500 MJPG not supported, using the nearest mode [0-9]*x[0-9]* YUYV" "$RESULTS_DIR/camerad_fallback.log"
 check camerad_streams_in_the_fallback_mode grep -q "streaming /dev/video[0-9]* [0-9]*x[0-9]* YUYV" "$RESULTS_DIR/camerad_fallback.log"
+
+# Grey frames (8-bit mono cameras): captured and published, none refused as damaged.
+printf 'camera: {match_card: vivid, formats: [GREY]}\n' > /tmp/grey.yaml
+"$CAMERAD" -c /tmp/grey.yaml > "$RESULTS_DIR/camerad_grey.log" 2>&1 &
+grey_pid=$!
+wait_for "$RESULTS_DIR/camerad_grey.log" streaming 60 || true
+"$PROBE" --driver camerad --seconds 4 > /tmp/grey_status.txt
+cat /tmp/grey_status.txt
+kill -TERM $grey_pid
+wait $grey_pid
+check camerad_streams_grey grep -q "streaming /dev/video[0-9]* 640x480 GREY" "$RESULTS_DIR/camerad_grey.log"
+check camerad_publishes_grey_frames_none_damaged \
+  bash -c "grep -Eq '^frames=([5-9]|[1-9][0-9]+)$' /tmp/grey_status.txt && grep -q '^corrupt_frames=0$' /tmp/grey_status.txt"
 
 "$CAMERAD" -c "$CONFIG" > "$RESULTS_DIR/camerad.log" 2>&1 &
 cam_pid=$!
