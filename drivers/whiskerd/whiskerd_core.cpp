@@ -17,7 +17,7 @@ const char* const Counters::kNames[Counters::kCount] = {
     "frames", "samples", "heartbeats", "rejected_unknown_id", "rejected_wrong_length",
     "rejected_out_of_range", "rejected_wrong_frame_type", "gaps", "incomplete_samples",
     "stale_board_periods", "deadline_misses", "publish_drops", "can_tx_errors", "late_samples",
-    "board_resyncs", "gaps_board0", "gaps_board1", "gaps_board2", "gaps_board3", "gaps_board4", "gaps_board5"};
+    "board_resyncs", "overtemp_board_periods", "gaps_board0", "gaps_board1", "gaps_board2", "gaps_board3", "gaps_board4", "gaps_board5"};
 
 const char* safety_name(Safety s) {
   switch (s) {
@@ -266,6 +266,7 @@ void WhiskerCore::step(int64_t utime, int64_t mono_us, PeriodOutput& out) {
       all_fresh = false;
     }
     const wp::BoardSample& s = assembler_.latest(b);
+    if (have && (s.status & wp::kBoardOvertemp)) ++counters_[Counters::kOvertempBoardPeriods];
     for (int k = 0; k < wp::kWhiskersPerBoard; ++k) {
       const int w = b * wp::kWhiskersPerBoard + k;
       const wp::WhiskerRaw& raw = s.whiskers[k];
@@ -274,7 +275,9 @@ void WhiskerCore::step(int64_t utime, int64_t mono_us, PeriodOutput& out) {
       if (have && (std::abs(raw.x) >= wp::kHallLimit || std::abs(raw.y) >= wp::kHallLimit)) {
         status |= whisker_sample_t::STATUS_SATURATED;
       }
-      const bool faulty = have && (raw.fault || (s.status & wp::kBoardFault));
+      // An over-temperature board has its motors taken out of the enable mask, as a faulty one
+      // (its driver heats its motors: driving them on would cook them), until it cools down.
+      const bool faulty = have && (raw.fault || (s.status & (wp::kBoardFault | wp::kBoardOvertemp)));
       if (faulty) status |= whisker_sample_t::STATUS_FAULT;
       out.status[w] = status;
       out.raw_x[w] = raw.x;

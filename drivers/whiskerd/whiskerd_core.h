@@ -87,7 +87,7 @@ const char* safety_name(Safety s);
 
 // Counter names, in the order of Counters::values (DRIVER_STATUS counter_names).
 struct Counters {
-  static constexpr int kFixed = 15;
+  static constexpr int kFixed = 16;
   static constexpr int kCount = kFixed + wp::kNumBoards;
   static const char* const kNames[kCount];
   std::array<int64_t, kCount> values{};
@@ -95,7 +95,7 @@ struct Counters {
   enum : int {
     kFrames = 0, kSamples, kHeartbeats, kRejectedUnknownId, kRejectedWrongLength, kRejectedOutOfRange,
     kRejectedWrongFrameType, kGaps, kIncomplete, kStaleBoardPeriods, kDeadlineMisses, kPublishDrops,
-    kCanTxErrors, kLateSamples, kBoardResyncs, kGapsBoard0
+    kCanTxErrors, kLateSamples, kBoardResyncs, kOvertempBoardPeriods, kGapsBoard0
   };
   static_assert(kGapsBoard0 == kFixed, "the per-board counters follow the fixed ones");
 };

@@ -113,6 +113,33 @@ TEST(WhiskerdCore, CounterNamesMatchTheirIndices) {
   }
 }
 
+TEST(WhiskerdCore, AnOverTemperatureBoardHasItsMotorsOffUntilItCoolsDown) {
+  Rig r;
+  r.run(5);
+  ASSERT_EQ(r.out.command.enable_mask, 0xffffffu);
+  auto hot = [&](bool overtemp) {
+    for (int b = 0; b < wp::kNumBoards; ++b) {
+      wp::BoardSample s;
+      s.board = b;
+      s.seq = static_cast<uint16_t>(r.seq);
+      if (b == 2 && overtemp) s.status = wp::kBoardOvertemp;
+      std::array<uint8_t, 32> buf{};
+      wp::encode_sample_fd(s, buf);
+      r.core.on_frame(wp::sample_id({}, b), true, buf, r.mono);
+    }
+    ++r.seq;
+    r.step();
+  };
+  for (int i = 0; i < 3; ++i) hot(true);
+  EXPECT_EQ(r.out.command.enable_mask, 0xffffffu & ~(0xfu << 8)) << "board 2's whiskers 8..11 off";
+  EXPECT_EQ(r.core.safety(), Safety::kRunning) << "the other boards go on whisking";
+  EXPECT_TRUE(r.out.status[9] & whisker_sample_t::STATUS_FAULT);
+  EXPECT_FALSE(r.out.status[4] & whisker_sample_t::STATUS_FAULT);
+  EXPECT_EQ(r.core.counters()[Counters::kOvertempBoardPeriods], 3);
+  hot(false);
+  EXPECT_EQ(r.out.command.enable_mask, 0xffffffu) << "cooled down: back on";
+}
+
 TEST(WhiskerdCore, FaultDisablesMotorsAtOnceAndLatches) {
   Rig rig;
   rig.run(20);
