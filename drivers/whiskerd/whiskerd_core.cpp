@@ -266,7 +266,10 @@ void WhiskerCore::step(int64_t utime, int64_t mono_us, PeriodOutput& out) {
       all_fresh = false;
     }
     const wp::BoardSample& s = assembler_.latest(b);
-    if (have && (s.status & wp::kBoardOvertemp)) ++counters_[Counters::kOvertempBoardPeriods];
+    // An over-temperature board has its motors taken out of the enable mask (its driver heats its
+    // motors: driving them on would cook them) until it cools down; its Hall sensors still measure.
+    const bool overtemp = have && (s.status & wp::kBoardOvertemp);
+    if (fresh && overtemp) ++counters_[Counters::kOvertempBoardPeriods];
     for (int k = 0; k < wp::kWhiskersPerBoard; ++k) {
       const int w = b * wp::kWhiskersPerBoard + k;
       const wp::WhiskerRaw& raw = s.whiskers[k];
@@ -275,10 +278,9 @@ void WhiskerCore::step(int64_t utime, int64_t mono_us, PeriodOutput& out) {
       if (have && (std::abs(raw.x) >= wp::kHallLimit || std::abs(raw.y) >= wp::kHallLimit)) {
         status |= whisker_sample_t::STATUS_SATURATED;
       }
-      // An over-temperature board has its motors taken out of the enable mask, as a faulty one
-      // (its driver heats its motors: driving them on would cook them), until it cools down.
-      const bool faulty = have && (raw.fault || (s.status & (wp::kBoardFault | wp::kBoardOvertemp)));
+      const bool faulty = have && (raw.fault || (s.status & wp::kBoardFault));
       if (faulty) status |= whisker_sample_t::STATUS_FAULT;
+      if (overtemp) status |= whisker_sample_t::STATUS_OVERTEMP;
       out.status[w] = status;
       out.raw_x[w] = raw.x;
       out.raw_y[w] = raw.y;
@@ -359,7 +361,8 @@ void WhiskerCore::step(int64_t utime, int64_t mono_us, PeriodOutput& out) {
     out.theta_ceiling[w] = static_cast<float>(c.theta_ceiling[w]);
     out.theta_command[w] = static_cast<float>(c.theta_command[w]);
     out.command.theta_target[w] = wp::theta_to_counts(c.theta_command[w], params_.calibration[w]);
-    if (motors_enabled_ && !(out.status[w] & whisker_sample_t::STATUS_FAULT)) mask |= 1u << w;
+    constexpr int8_t kMotorOff = whisker_sample_t::STATUS_FAULT | whisker_sample_t::STATUS_OVERTEMP;
+    if (motors_enabled_ && !(out.status[w] & kMotorOff)) mask |= 1u << w;
   }
   out.command.enable_mask = mask;
   out.command.seq = ++command_seq_;

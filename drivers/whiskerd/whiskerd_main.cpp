@@ -161,7 +161,10 @@ void control_thread(const Params& p, can::Socket& sock, gpio::MotorLines& lines,
       // Test-only (WHISKEYE_FAULT_INJECT): a stuck control loop, to prove the watchdog notices.
       service.stall_if_injected(mono_now_us(), [] { return g_stop.load(); });
       const int64_t deadline = timespec_us(next);
+      // Both clocks read together: the period's epoch stamp is `woke` plus the wall-clock offset, not
+      // shifted by however long draining the socket takes.
       const int64_t woke = mono_now_us();
+      const int64_t woke_utime = now_utime();
       wake.add(static_cast<double>(woke - deadline));
       if (last_wake != 0) jitter.add(static_cast<double>(std::llabs(woke - last_wake - period_us)));
       last_wake = woke;
@@ -200,7 +203,7 @@ void control_thread(const Params& p, can::Socket& sock, gpio::MotorLines& lines,
       if (g_stop.load(std::memory_order_relaxed)) core.request_stop();
 
       const Safety before = core.safety();
-      core.step(now_utime(), woke, item.period);
+      core.step(woke_utime, woke, item.period);
       if (core.safety() != before) {
         rt_log(shared, "whiskerd: %s -> %s%s%s%s", safety_name(before), safety_name(core.safety()),
                core.reason()[0] ? " (" : "", core.reason(), core.reason()[0] ? ")" : "");

@@ -117,8 +117,9 @@ TEST(WhiskerdCore, AnOverTemperatureBoardHasItsMotorsOffUntilItCoolsDown) {
   Rig r;
   r.run(5);
   ASSERT_EQ(r.out.command.enable_mask, 0xffffffu);
-  auto hot = [&](bool overtemp) {
+  auto hot = [&](bool overtemp, bool board2_sends = true) {
     for (int b = 0; b < wp::kNumBoards; ++b) {
+      if (b == 2 && !board2_sends) continue;
       wp::BoardSample s;
       s.board = b;
       s.seq = static_cast<uint16_t>(r.seq);
@@ -133,9 +134,12 @@ TEST(WhiskerdCore, AnOverTemperatureBoardHasItsMotorsOffUntilItCoolsDown) {
   for (int i = 0; i < 3; ++i) hot(true);
   EXPECT_EQ(r.out.command.enable_mask, 0xffffffu & ~(0xfu << 8)) << "board 2's whiskers 8..11 off";
   EXPECT_EQ(r.core.safety(), Safety::kRunning) << "the other boards go on whisking";
-  EXPECT_TRUE(r.out.status[9] & whisker_sample_t::STATUS_FAULT);
-  EXPECT_FALSE(r.out.status[4] & whisker_sample_t::STATUS_FAULT);
+  EXPECT_EQ(r.out.status[9], whisker_sample_t::STATUS_OVERTEMP) << "motor off, the reading still valid";
+  EXPECT_EQ(r.out.status[4], whisker_sample_t::STATUS_OK);
   EXPECT_EQ(r.core.counters()[Counters::kOvertempBoardPeriods], 3);
+  hot(true, false);  // board 2 silent for a period: its last (hot) sample is not counted again
+  EXPECT_EQ(r.core.counters()[Counters::kOvertempBoardPeriods], 3);
+  EXPECT_EQ(r.out.status[9], whisker_sample_t::STATUS_OVERTEMP | whisker_sample_t::STATUS_STALE);
   hot(false);
   EXPECT_EQ(r.out.command.enable_mask, 0xffffffu) << "cooled down: back on";
 }

@@ -89,14 +89,29 @@ wait $wd
 cat "$log"
 
 # SIGTERM while the motors are powered: whiskerd retracts, then drops the enable line before it exits.
+# The line's value after the exit proves nothing (gpio-mockup sets a released line to its pull), so
+# the kernel's gpio_value trace event records what whiskerd itself wrote to the line, in order.
+tracing=/sys/kernel/tracing
+mountpoint -q "$tracing" || mount -t tracefs nodev "$tracing"
+check gpio_trace_events_available test -w "$tracing/events/gpio/gpio_value/enable"
+enable_gpio=$(sed -n "s/^$(basename "$chip"): GPIOs \([0-9]*\)-.*/\1/p" /sys/kernel/debug/gpio)
+check enable_line_number_known test -n "$enable_gpio"
+echo > "$tracing/trace"
+echo 1 > "$tracing/events/gpio/gpio_value/enable"
 start_streaming "$RESULTS_DIR/whiskerd_sigterm.log"
 check enable_goes_high_again_with_the_boards_streaming poll_enable 1
 kill -TERM $wd
 wait $wd
 code=$?
+echo 0 > "$tracing/events/gpio/gpio_value/enable"
+grep -E "gpio_value: $enable_gpio set [01]" "$tracing/trace" > "$RESULTS_DIR/enable_trace.txt"
+tail -3 "$RESULTS_DIR/enable_trace.txt"
 check whiskerd_stops_cleanly_while_powered test $code = 0
-check sigterm_while_powered_leaves_the_enable_line_low test "$(cat "$chip/0")" = 0
-check whiskerd_retracted_before_dropping_enable grep -q "running -> retracting" "$log"
+check whiskerd_drove_the_enable_line_high grep -q "set 1$" "$RESULTS_DIR/enable_trace.txt"
+check whiskerd_itself_drove_the_enable_line_low_last \
+  sh -c "tail -1 '$RESULTS_DIR/enable_trace.txt' | grep -q 'set 0$'"
+check whiskerd_retracted_then_stopped \
+  sh -c "grep -A1 'running -> retracting (stopping: retracting)' '$log' | grep -q 'retracting -> stopped'"
 kill $player 2>/dev/null
 wait $player 2>/dev/null
 cat "$log"

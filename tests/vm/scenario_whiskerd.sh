@@ -63,8 +63,9 @@ log=$RESULTS_DIR/whiskerd_reopen.log
 "$WHISKERD" -c "$CONFIG" --no-gpio > "$log" 2>&1 &
 wd=$!
 wait_for "$log" "vcan0 (CAN FD" 60 || echo "whiskerd did not start"
-# heartbeats N: N heartbeat frames from board 1 (ignored for control, counted as received frames).
-heartbeats() { for _ in $(seq "$1"); do cansend vcan0 701#05; sleep 0.01; done; }
+# heartbeats N: N well-formed heartbeat frames from board 1 (2 bytes: NMT operational, no status
+# bits); they do not feed control, and are counted as received frames and as heartbeats.
+heartbeats() { for _ in $(seq "$1"); do cansend vcan0 701#0500; sleep 0.01; done; }
 ip link set vcan0 down
 check whiskerd_notices_the_interface_going_down wait_for "$log" "reopening" 20
 ip link set vcan0 up
@@ -72,7 +73,7 @@ heartbeats 20
 "$PROBE" --driver whiskerd --seconds 3 > /tmp/status_up.txt
 cat /tmp/status_up.txt
 check whiskerd_receives_again_after_down_and_up \
-  bash -c "grep -Eq '^can_reopens=[1-9]' /tmp/status_up.txt && grep -Eq '^can_rx_frames=([2-9][0-9]|[1-9][0-9]{2,})$' /tmp/status_up.txt"
+  bash -c "grep -Eq '^can_reopens=[1-9]' /tmp/status_up.txt && grep -Eq '^can_rx_frames=([2-9][0-9]|[1-9][0-9]{2,})$' /tmp/status_up.txt && grep -Eq '^heartbeats=([2-9][0-9]|[1-9][0-9]{2,})$' /tmp/status_up.txt"
 ip link del vcan0
 sleep 2  # whiskerd retries with backoff while vcan0 does not exist
 setup_vcan vcan0
