@@ -77,22 +77,64 @@ std::string CycleSynchroniser::check_jump(int input, int64_t utime, const char* 
     if (input == jump_input_) jump_input_ = -1;  // that input is back in line: it was one bad time
     return {};
   }
+  bool confirmed = false;
   if (jump_input_ >= 0 && jump_input_ != input && std::llabs(utime - jump_time_) <= limit) {
-    ++counters_.jumps_followed;  // two inputs agree: the clock (or the recording) moved on
+    confirmed = true;  // two inputs agree: the clock (or the recording) moved on
+  } else if (jump_input_ == input && utime > jump_time_ && utime - jump_time_ <= limit) {
+    jump_time_ = utime;  // the same input goes on from its new time: after a pause, or a clock step
+    confirmed = ++jump_samples_ >= kConfirmSamples;
+  } else {
+    jump_input_ = input;
+    jump_time_ = utime;
+    jump_samples_ = 1;
+  }
+  if (confirmed) {
+    ++counters_.jumps_followed;
     jump_input_ = -1;
     return {};
   }
-  jump_input_ = input;
-  jump_time_ = utime;
   ++counters_.time_jumps;
   return std::string(name) + ": sample time " + seconds(utime - data_time_) +
-         " s past the other inputs (dropped until another input confirms the jump)";
+         " s past the other inputs (dropped until another input, or " + std::to_string(kConfirmSamples) +
+         " samples in a row of this one, confirm the jump)";
+}
+
+int64_t CycleSynchroniser::others_newest(int input) const {
+  int64_t newest = INT64_MIN;
+  if (input != 0) newest = std::max(newest, newest_camera_);
+  if (input != 1) newest = std::max(newest, newest_odometry_);
+  if (input != 2) newest = std::max(newest, newest_cycle_);
+  return newest;
+}
+
+bool CycleSynchroniser::own_time_was_corrupt(int input, int64_t utime, int64_t own_newest) {
+  const int64_t limit = seconds_to_utime(params_.max_jump_s);
+  const int64_t others = others_newest(input);
+  const bool outlying = others != INT64_MIN && own_newest > plus(others, limit);
+  const bool agrees = others != INT64_MIN && std::llabs(utime - others) <= limit;
+  if (!outlying || !agrees) {
+    agreeing_[input] = 0;
+    return false;
+  }
+  if (++agreeing_[input] < kConfirmSamples) return false;
+  agreeing_[input] = 0;
+  ++counters_.outliers_dropped;
+  return true;
+}
+
+void CycleSynchroniser::recompute_data_time() {
+  data_time_ = std::max({newest_camera_, newest_odometry_, newest_cycle_});
 }
 
 std::string CycleSynchroniser::add_camera(CameraFrame frame) {
   if (frame.utime < newest_camera_) {
-    ++counters_.out_of_order;
-    return out_of_order("CAMERA", frame.utime, newest_camera_);
+    if (!own_time_was_corrupt(0, frame.utime, newest_camera_)) {
+      ++counters_.out_of_order;
+      return out_of_order("CAMERA", frame.utime, newest_camera_);
+    }
+    std::erase_if(frames_, [&](const CameraFrame& f) { return f.utime > frame.utime; });
+    newest_camera_ = frames_.empty() ? INT64_MIN : frames_.back().utime;
+    recompute_data_time();
   }
   if (std::string why = check_jump(0, frame.utime, "CAMERA"); !why.empty()) return why;
   newest_camera_ = frame.utime;
@@ -103,7 +145,14 @@ std::string CycleSynchroniser::add_camera(CameraFrame frame) {
 }
 
 std::string CycleSynchroniser::add_odometry(const odometry_t& odometry) {
-  const int64_t newest = std::max(newest_odometry_, consumed_until_);
+  int64_t newest = std::max(newest_odometry_, consumed_until_);
+  if (odometry.utime <= newest && odometry.utime > consumed_until_ &&
+      own_time_was_corrupt(1, odometry.utime, newest_odometry_)) {
+    std::erase_if(odometry_, [&](const odometry_t& o) { return o.utime >= odometry.utime; });
+    newest_odometry_ = odometry_.empty() ? INT64_MIN : odometry_.back().utime;
+    recompute_data_time();
+    newest = std::max(newest_odometry_, consumed_until_);
+  }
   if (odometry.utime <= newest) {
     ++counters_.out_of_order;
     return out_of_order("ODOMETRY", odometry.utime, newest);
@@ -122,13 +171,21 @@ std::string CycleSynchroniser::add_odometry(const odometry_t& odometry) {
 }
 
 std::string CycleSynchroniser::add_whisk_cycle(const whisk_cycle_t& cycle) {
-  const int64_t last_pending = pending_.empty() ? consumed_until_ : pending_.back().utime_end;
+  int64_t last_pending = pending_.empty() ? consumed_until_ : pending_.back().utime_end;
+  if (cycle.utime_end <= last_pending && cycle.utime_end > consumed_until_ &&
+      own_time_was_corrupt(2, cycle.utime_end, newest_cycle_)) {
+    std::erase_if(pending_, [&](const whisk_cycle_t& c) { return c.utime_end >= cycle.utime_end; });
+    last_pending = pending_.empty() ? consumed_until_ : pending_.back().utime_end;
+    newest_cycle_ = last_pending;
+    recompute_data_time();
+  }
   if (cycle.utime_end <= last_pending) {
     ++counters_.out_of_order;
     return out_of_order("WHISK_CYCLE", cycle.utime_end, last_pending);
   }
   if (std::string why = check_jump(2, cycle.utime_end, "WHISK_CYCLE"); !why.empty()) return why;
   advance_data_time(cycle.utime_end);
+  newest_cycle_ = cycle.utime_end;
   pending_.push_back(cycle);
   return {};
 }

@@ -11,8 +11,13 @@
 // Sample times are checked on the way in; each add_*() returns "" or why the message was dropped
 // (the node counts and logs it): older than what that input already delivered (out of order), or
 // more than max_jump_s past data time. The latter is one bad timestamp (dropping it keeps one
-// message from stalling every cycle behind it, or from ending the run early) until a second input
-// confirms the jump (a clock step forward, or a new recording), which is then followed.
+// message from stalling every cycle behind it, or from ending the run early) until the jump is
+// confirmed — by a second input, or by the same input's next samples (kConfirmSamples in a row, each
+// in line with the one before: whisking resumed after a pause, a clock step forward, a new
+// recording) — and then followed. A corrupt time that could not be checked (an input's first
+// sample) is undone the same way: when an input's newest time lies more than max_jump_s past every
+// other input's and kConfirmSamples of its samples in a row agree with the others, that time (and
+// what was buffered at it) is dropped and the input goes on from its new samples.
 #pragma once
 
 #include <whiskeye/image_t.hpp>
@@ -70,13 +75,17 @@ struct SyncCounters {
   int64_t cycles_without_camera = 0;
   int64_t out_of_order = 0;            // messages older than what was already consumed: dropped
   int64_t time_jumps = 0;              // messages too far ahead of the others, dropped
-  int64_t jumps_followed = 0;          // jumps confirmed by a second input and followed
+  int64_t jumps_followed = 0;          // jumps confirmed (second input, or the same input's next samples) and followed
+  int64_t outliers_dropped = 0;        // an input's corrupt newest time undone (and what it buffered at it)
   int64_t odometry_overflow = 0;       // oldest samples dropped from a full buffer (no whisk cycles)
   bool operator==(const SyncCounters&) const = default;
 };
 
 class CycleSynchroniser {
  public:
+  // Samples in a row, on one input, that confirm that input's own jump or undo its corrupt time.
+  static constexpr int kConfirmSamples = 3;
+
   explicit CycleSynchroniser(const SyncParams& params);
 
   // Each returns "" when the message was taken, else why it was dropped.
@@ -99,6 +108,13 @@ class CycleSynchroniser {
   void advance_data_time(int64_t utime);
   // "" if `utime` on input `input` (0 camera, 1 odometry, 2 whisk) may advance data time.
   std::string check_jump(int input, int64_t utime, const char* name);
+  // True when `utime`, older than what `input` delivered (`own_newest`), is the kConfirmSamples-th
+  // sample in a row that agrees with the other inputs while `own_newest` lies far past all of them.
+  bool own_time_was_corrupt(int input, int64_t utime, int64_t own_newest);
+  // The newest time the other inputs delivered (INT64_MIN if none).
+  int64_t others_newest(int input) const;
+  // After an input's buffered samples were dropped: data time from what every input still holds.
+  void recompute_data_time();
 
   SyncParams params_;
   std::deque<CameraFrame> frames_;
@@ -107,9 +123,12 @@ class CycleSynchroniser {
   int64_t data_time_ = INT64_MIN;
   int64_t newest_camera_ = INT64_MIN;
   int64_t newest_odometry_ = INT64_MIN;
+  int64_t newest_cycle_ = INT64_MIN;    // end of the newest whisk cycle taken
   int64_t consumed_until_ = INT64_MIN;  // end of the last cycle handed out
   int jump_input_ = -1;                 // the input whose jump awaits confirmation
   int64_t jump_time_ = 0;               // its newest sample time
+  int jump_samples_ = 0;                // its samples in a row, each in line with the one before
+  int agreeing_[3] = {0, 0, 0};         // per input: samples in a row behind its own outlying newest time
   SyncCounters counters_;
 };
 

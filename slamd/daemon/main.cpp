@@ -123,8 +123,10 @@ std::unique_ptr<slam::VitaSlam> make_slam(const Loaded& cfg, const Options& o, s
       });
     } catch (const slamd::CheckpointError& e) {
       // Intact but not loadable here: starting a new map would rotate it out. The operator decides.
-      throw std::runtime_error(std::string("cannot resume from ") + e.what() +
-                               " (start with --fresh for a new map; older checkpoints are kept until rotated out)");
+      throw std::runtime_error(std::string("cannot resume from ") + e.what() + " (to keep that map, move it out of " +
+                               store->directory() +
+                               " first; then start with --fresh for a new map, whose checkpoints rotate the "
+                               "older ones out)");
     }
     for (const auto& p : problems) log_line("skipped unusable checkpoint " + p);
     if (cp) {
@@ -241,12 +243,12 @@ int run_live(const Loaded& cfg, const Options& o) {
     }
     const int64_t now = monotonic_us();
     if (now >= next_tick) {
-      auto st = node.status(now_utime());
+      auto st = node.status(now_utime(), now);
       const auto written = writer.counters();
       st.checkpoints_written = written.written;
       st.checkpoint_errors = written.errors;
       st.checkpoints_superseded = written.superseded;
-      st.publish_errors = bus.publish_errors();
+      st.lcm_publish_errors = bus.publish_errors();
       publish(bus, "SLAM_STATUS", st);
       next_tick = now + 1'000'000;
     }

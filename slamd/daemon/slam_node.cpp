@@ -114,9 +114,11 @@ std::string check_odometry(const odometry_t& m) {
   return "";
 }
 
+// Contact in a measured sample (a lost sample's flags say nothing).
 bool has_contact(const whisk_cycle_t& m) {
-  for (const auto& row : m.contact) {
-    for (int8_t c : row) {
+  for (std::size_t s = 0; s < m.contact.size(); ++s) {
+    if (!m.sample_valid[s]) continue;
+    for (int8_t c : m.contact[s]) {
       if (c) return true;
     }
   }
@@ -138,10 +140,13 @@ std::string whisk_cycle_size_error(std::span<const uint8_t> data) {
            std::to_string(samples) + ")";
   }
   // Per sample: utime (8), valid (1), phase (1); per sample and whisker: three floats and a byte.
-  const int64_t need = static_cast<int64_t>(kFixed) + samples * 10 + samples * whiskers * 13;
-  if (need != static_cast<int64_t>(data.size())) {
+  // Compared by division: samples · whiskers · 13 overflows int64 for counts near INT32_MAX.
+  const int64_t per_sample = 10 + 13 * whiskers;
+  const int64_t rest = static_cast<int64_t>(data.size() - kFixed);
+  if (rest % per_sample != 0 || rest / per_sample != samples) {
     return what + "num_samples " + std::to_string(samples) + " and num_whiskers " + std::to_string(whiskers) +
-           " need " + std::to_string(need) + " bytes";
+           " need " + std::to_string(per_sample) + " bytes per sample, the message has " + std::to_string(rest) +
+           " after its fixed fields";
   }
   return {};
 }
@@ -185,11 +190,15 @@ SlamNode::SlamNode(Bus& in, Bus& out, std::unique_ptr<slam::VitaSlam> slam, cons
 
 void SlamNode::reject(Input input, const std::string& what) {
   ++counters_.validation_errors;
+  log_burst(input, "rejected " + what + " (" + std::to_string(counters_.validation_errors) + " rejected so far)");
+}
+
+void SlamNode::warn(Input input, const std::string& what) { log_burst(input, what); }
+
+void SlamNode::log_burst(Input input, const std::string& line) {
   // Per input, so a broken sender is logged once per burst and then every 100th even while the other
   // inputs are fine, and cannot flood the journal.
-  if (logger_ && (rejects_in_burst_[input] % 100) == 0) {
-    logger_("rejected " + what + " (" + std::to_string(counters_.validation_errors) + " rejected so far)");
-  }
+  if (logger_ && (rejects_in_burst_[input] % 100) == 0) logger_(line);
   ++rejects_in_burst_[input];
 }
 
@@ -221,11 +230,16 @@ void SlamNode::on_odometry(const odometry_t& msg) {
   const std::string err = check_odometry(msg);
   if (!err.empty()) return reject(kOdometry, err);
   // A dropped sample is not dead-reckoned either (a pose back in time, or an hour ahead).
+  const int64_t overflow_before = sync_.counters().odometry_overflow;
   if (const std::string why = sync_.add_odometry(msg); !why.empty()) return reject(kOdometry, why);
   accepted(kOdometry);
-  if (sync_.counters().odometry_overflow == 1 && logger_) {
-    logger_("no whisk cycle for " + std::to_string(params_.sync.odometry_buffer) +
-            " odometry samples: dropping the oldest (their motion is lost to the map) until whisking resumes");
+  // Logged at the first dropped sample of each stretch without whisk cycles, not at every one.
+  if (sync_.counters().odometry_overflow != overflow_before && !odometry_overflowing_) {
+    odometry_overflowing_ = true;
+    if (logger_) {
+      logger_("no whisk cycle for " + std::to_string(params_.sync.odometry_buffer) +
+              " odometry samples: dropping the oldest (their motion is lost to the map) until whisking resumes");
+    }
   }
   process(sync_.take_ready());
   if (!have_cycle_) return;
@@ -267,9 +281,21 @@ void SlamNode::process_one(const SyncedCycle& cycle) {
 
   const slam::CycleResult r = slam_->process_cycle(input);
   ++counters_.cycles;
+  odometry_overflowing_ = false;  // the cycle took its odometry out of the buffer
   // A frame the core could not use (an MJPEG frame that does not decode, a crop outside it): the
   // cycle went on without vision, and the frame counts as rejected, with the reason logged.
-  if (!r.input_warning.empty()) reject(kCycle, "cycle " + std::to_string(cycle.whisk.cycle) + ": " + r.input_warning);
+  if (!r.image_warning.empty()) {
+    reject(kFrameInCycle, "CAMERA frame for cycle " + std::to_string(cycle.whisk.cycle) + ": " + r.image_warning);
+  } else if (cycle.image) {
+    accepted(kFrameInCycle);
+  }
+  // A whisk cycle without one valid sample is not a bad message (every sensor of the head was out):
+  // it went on without touch, counted in cycles_without_contact, and logged like a rejection.
+  if (!r.whisk_warning.empty()) {
+    warn(kWhiskInCycle, r.whisk_warning + ": mapped without touch");
+  } else {
+    accepted(kWhiskInCycle);
+  }
   if (!cycle.image) ++counters_.cycles_without_camera;
   if (!contact) ++counters_.cycles_without_contact;
   if (!cycle.odometry.empty()) {
@@ -358,7 +384,7 @@ void SlamNode::flush() {
   if (have_cycle_) publish_map(sync_.data_time());
 }
 
-slam_status_t SlamNode::status(int64_t utime) const {
+slam_status_t SlamNode::status(int64_t utime, int64_t window_now_us) {
   slam_status_t s{};
   s.utime = utime;
   s.mode = mode_code(slam_->params().mode);
@@ -377,12 +403,19 @@ slam_status_t SlamNode::status(int64_t utime) const {
   }
   s.decode_errors = decode_errors_.total();
   s.validation_errors = counters_.validation_errors;
+  const SyncCounters& sync = sync_.counters();
+  s.out_of_order = sync.out_of_order;
+  s.time_jumps = sync.time_jumps;
+  s.outliers_dropped = sync.outliers_dropped;
+  s.jumps_followed = sync.jumps_followed;
+  s.odometry_overflow = sync.odometry_overflow;
   s.cycles_without_camera = counters_.cycles_without_camera;
   s.cycles_without_contact = counters_.cycles_without_contact;
   constexpr int64_t kWindow = 10 * kUtimePerSecond;
-  const bool rejecting = recent_errors_.changed_within(s.decode_errors + s.validation_errors, utime, kWindow);
+  const bool rejecting =
+      recent_errors_.changed_within(s.decode_errors + s.validation_errors, window_now_us, kWindow);
   const bool blind = slam::uses_visual(slam_->params().mode) &&
-                     recent_without_camera_.changed_within(s.cycles_without_camera, utime, kWindow);
+                     recent_without_camera_.changed_within(s.cycles_without_camera, window_now_us, kWindow);
   s.state = rejecting || blind ? driver_status_t::STATE_DEGRADED : driver_status_t::STATE_OK;
   if (rejecting) s.message = "rejected input in the last 10 s: see decode_errors / validation_errors";
   if (blind) s.message += std::string(s.message.empty() ? "" : "; ") + "cycles without a camera frame in the last 10 s";

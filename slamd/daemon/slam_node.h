@@ -65,11 +65,13 @@ class SlamNode {
 
   // Processes every cycle still pending (end of a log) and publishes the final map.
   void flush();
-  // Publishes SLAM_STATUS stamped `utime`.
+  // Publishes SLAM_STATUS stamped `utime` (a replay's log time; the 10 s window runs on it too).
   void publish_status(int64_t utime);
-  // SLAM_STATUS at `utime`: DEGRADED while input was rejected, or (when the mode uses vision) cycles
-  // ran without a frame, within the last 10 s of the times status() was asked at; OK again after.
-  slam_status_t status(int64_t utime) const;
+  // SLAM_STATUS stamped `utime`: DEGRADED while input was rejected, or (when the mode uses vision)
+  // cycles ran without a frame, within the last 10 s of `window_now_us`, OK again after. Live, that
+  // is a monotonic clock (a wall-clock step must not end or stretch the window); in a replay, log time.
+  slam_status_t status(int64_t utime, int64_t window_now_us);
+  slam_status_t status(int64_t utime) { return status(utime, utime); }
 
   const slam::VitaSlam& slam() const { return *slam_; }
   const NodeCounters& counters() const { return counters_; }
@@ -81,9 +83,14 @@ class SlamNode {
   void process(std::vector<SyncedCycle> cycles);
   void process_one(const SyncedCycle& cycle);
   void publish_map(int64_t utime);
-  enum Input { kCamera, kOdometry, kWhisk, kCycle, kInputs };
-  // Counts a rejected message; logs the first of a burst on that input and then every 100th.
+  // Where a rejection or warning came from: the three inputs, and what the core refused in a cycle.
+  enum Input { kCamera, kOdometry, kWhisk, kFrameInCycle, kWhiskInCycle, kInputs };
+  // Counts a rejected message (validation_errors) and logs it as log_burst() does.
   void reject(Input input, const std::string& what);
+  // Logs a degraded input that is not an error (not counted as one), as log_burst() does.
+  void warn(Input input, const std::string& what);
+  // Logs the first line of a burst on that input and then every 100th, until accepted(input).
+  void log_burst(Input input, const std::string& line);
   void accepted(Input input) { rejects_in_burst_[input] = 0; }
 
   Bus& out_;
@@ -101,6 +108,7 @@ class SlamNode {
   int64_t last_map_utime_ = INT64_MIN;
   bool map_dirty_ = false;
   int last_template_id_ = -1;
+  bool odometry_overflowing_ = false;  // odometry dropped since the last cycle processed (logged once)
   std::deque<double> latencies_ms_;  // last 1000 cycles
   std::array<int64_t, kInputs> rejects_in_burst_{};
   // A counter's value and the status time it last changed at.
@@ -109,7 +117,7 @@ class SlamNode {
     int64_t changed_at = INT64_MIN;
     bool changed_within(int64_t now_value, int64_t utime, int64_t window_us);
   };
-  mutable Recent recent_errors_, recent_without_camera_;
+  Recent recent_errors_, recent_without_camera_;
 };
 
 }  // namespace whiskeye::slamd

@@ -195,6 +195,70 @@ TEST(CycleSync, AJumpTwoInputsAgreeOnIsFollowed) {
   EXPECT_TRUE(ready[0].image);
 }
 
+TEST(CycleSync, OneInputAloneGoesOnAfterAPause) {
+  // Only whiskerd running (no camera, no base): whisking paused for 20 s. Its next cycles are 20 s
+  // past data time and no other input can confirm the jump; they used to be dropped forever.
+  CycleSynchroniser s(SyncParams{});
+  for (int n = 1; n <= 5; ++n) EXPECT_EQ(s.add_whisk_cycle(cycle(n, n * kS)), "");
+  EXPECT_EQ(s.take_ready().size(), 4u);  // data time 5 s: cycles 1-4 waited their max_wait
+  EXPECT_NE(s.add_whisk_cycle(cycle(6, 25 * kS)), "");
+  EXPECT_NE(s.add_whisk_cycle(cycle(7, 26 * kS)), "");
+  EXPECT_EQ(s.add_whisk_cycle(cycle(8, 27 * kS)), "") << "the third sample in a row confirms the jump";
+  EXPECT_EQ(s.add_whisk_cycle(cycle(9, 28 * kS)), "");
+  EXPECT_EQ(s.counters().time_jumps, 2);
+  EXPECT_EQ(s.counters().jumps_followed, 1);
+  const auto ready = s.take_ready();
+  ASSERT_EQ(ready.size(), 2u);
+  EXPECT_EQ(ready[0].whisk.cycle, 5);
+  EXPECT_EQ(ready[1].whisk.cycle, 8);
+}
+
+TEST(CycleSync, BadTimesBetweenGoodOnesAreNeverFollowed) {
+  // A sender stamping every other sample an hour ahead: each bad time starts over, none confirms.
+  CycleSynchroniser s(SyncParams{});
+  feed(s, 20'000, 2 * kS);
+  for (int i = 1; i <= 10; ++i) {
+    EXPECT_NE(s.add_odometry(odo(3600 * kS + i * 20'000)), "") << i;
+    EXPECT_EQ(s.add_odometry(odo(2 * kS + i * 20'000)), "") << i;
+  }
+  EXPECT_EQ(s.counters().time_jumps, 10);
+  EXPECT_EQ(s.counters().jumps_followed, 0);
+  EXPECT_EQ(s.data_time(), 2 * kS + 200'000);
+}
+
+TEST(CycleSync, ACorruptFirstSampleIsUndone) {
+  // The very first odometry sample an hour ahead: nothing could check it, it became data time, and
+  // every later odometry sample was "out of order" for an hour (cycles handed out at once, without
+  // their frame and their motion).
+  CycleSynchroniser s(SyncParams{});
+  EXPECT_EQ(s.add_odometry(odo(3600 * kS)), "");
+  EXPECT_EQ(s.add_camera(frame(200'000)), "");
+  EXPECT_NE(s.add_odometry(odo(220'000)), "");
+  EXPECT_NE(s.add_odometry(odo(240'000)), "");
+  EXPECT_EQ(s.add_odometry(odo(260'000)), "") << "three samples in a row agree with the camera";
+  EXPECT_EQ(s.counters().outliers_dropped, 1);
+  EXPECT_EQ(s.data_time(), 260'000);
+  feed(s, 280'000, 2 * kS);
+  s.add_whisk_cycle(cycle(1, kS));
+  const auto ready = s.take_ready();
+  ASSERT_EQ(ready.size(), 1u);
+  EXPECT_TRUE(ready[0].image);
+  ASSERT_FALSE(ready[0].odometry.empty());
+  EXPECT_EQ(ready[0].odometry.front().utime, 260'000) << "the corrupt sample is gone";
+  EXPECT_EQ(ready[0].odometry.back().utime, kS);
+  // A whisk cycle's corrupt first time is undone the same way.
+  CycleSynchroniser w(SyncParams{});
+  EXPECT_EQ(w.add_whisk_cycle(cycle(1, 3600 * kS)), "");
+  feed(w, 20'000, 5 * kS);
+  EXPECT_NE(w.add_whisk_cycle(cycle(2, 2 * kS)), "");
+  EXPECT_NE(w.add_whisk_cycle(cycle(3, 3 * kS)), "");
+  EXPECT_EQ(w.add_whisk_cycle(cycle(4, 4 * kS)), "");
+  const auto cycles = w.take_ready();
+  ASSERT_EQ(cycles.size(), 1u);
+  EXPECT_EQ(cycles[0].whisk.cycle, 4);
+  EXPECT_TRUE(cycles[0].image);
+}
+
 TEST(CycleSync, OdometryWithoutWhiskCyclesIsBounded) {
   // Whisking stopped while the base drives: nothing consumes odometry, and it used to pile up
   // (~15 MB an hour at 50 Hz, forever).

@@ -72,15 +72,16 @@ class SlamNodeTest : public ::testing::Test {
   }
 
   // Streams 50 Hz odometry (still robot), 5 Hz frames of `periods[i]` during second i (0: no frame),
-  // and a whisk cycle at the end of every second, in time order.
-  void stream(const std::vector<int>& periods) {
-    for (std::size_t sec = 0; sec < periods.size(); ++sec) {
+  // and a whisk cycle at the end of every second, in time order, from second `first_second` on.
+  void stream(const std::vector<int>& periods, int first_second = 0) {
+    for (std::size_t i = 0; i < periods.size(); ++i) {
+      const auto sec = static_cast<std::size_t>(first_second) + i;
       for (int k = 1; k <= 50; ++k) {
         const int64_t t = kT0 + static_cast<int64_t>(sec) * kS + k * 20'000;
         odometry_t o{};
         o.utime = t;
         publish(in_, "ODOMETRY", o);
-        if (periods[sec] > 0 && k % 10 == 0) publish_camera(stripes(t, periods[sec]));
+        if (periods[i] > 0 && k % 10 == 0) publish_camera(stripes(t, periods[i]));
         if (k == 50) publish(in_, "WHISK_CYCLE", free_cycle(static_cast<int64_t>(sec), t));
       }
     }
@@ -166,6 +167,19 @@ TEST_F(SlamNodeTest, AWhiskCycleWhoseCountsDoNotFitItsLengthIsADecodeErrorNotACr
   EXPECT_EQ(errors_.count("WHISK_CYCLE"), 4);
   EXPECT_NE(whisk_cycle_size_error(with_samples(0xffffffffu)).find("negative"), std::string::npos);
   EXPECT_NE(whisk_cycle_size_error(with_samples(0x7fffffffu)).find("num_samples 2147483647"), std::string::npos);
+  // Counts whose product wraps: 52 + 10·s + 13·s·w is exactly 1024 modulo 2^64 for these, so a
+  // size check by multiplication let a 1024-byte message through to the decoder's allocation.
+  std::vector<uint8_t> wraps(1024, 0);
+  std::copy(good.begin(), good.begin() + 40, wraps.begin());
+  auto put_be32 = [&](std::size_t at, uint32_t v) {
+    for (int i = 0; i < 4; ++i) wraps[at + static_cast<std::size_t>(i)] = static_cast<uint8_t>(v >> (24 - 8 * i));
+  };
+  put_be32(40, 1982474090u);  // num_whiskers
+  put_be32(44, 2147287049u);  // num_samples
+  const std::string wrap_error = whisk_cycle_size_error(wraps);
+  EXPECT_NE(wrap_error.find("num_samples 2147287049"), std::string::npos) << wrap_error;
+  in_.publish_raw("WHISK_CYCLE", wraps);
+  EXPECT_EQ(errors_.count("WHISK_CYCLE"), 5);
   // Still running: the same cycle, intact, is processed.
   const int64_t before = node_->counters().cycles;
   in_.publish_raw("WHISK_CYCLE", good);
@@ -202,6 +216,69 @@ TEST_F(SlamNodeTest, ImplausibleSampleTimesAreRejectedAndNeitherStallNorMovePose
   publish(in_, "ODOMETRY", behind);
   EXPECT_EQ(node_->counters().validation_errors, errors + 3);
   EXPECT_EQ(poses_.size(), poses) << "no pose published for a dropped sample";
+  const slam_status_t st = node_->status(kT0 + 2 * kS);
+  EXPECT_EQ(st.time_jumps, 1);
+  EXPECT_EQ(st.out_of_order, 1);
+  EXPECT_EQ(st.jumps_followed, 0);
+  // Nothing of the corrupt times stuck: the inputs that follow, in line, are mapped as before.
+  const int64_t cycles = node_->counters().cycles;
+  stream({8, 8}, 2);
+  node_->flush();
+  EXPECT_EQ(node_->counters().validation_errors, errors + 3);
+  EXPECT_EQ(node_->counters().cycles, cycles + 2);
+  EXPECT_EQ(node_->counters().cycles_without_camera, 0);
+  EXPECT_GT(poses_.size(), poses + 90);
+}
+
+TEST_F(SlamNodeTest, AFullOdometryBufferIsLoggedOncePerStretchWithoutWhiskCycles) {
+  MemoryBus in;  // a node with a small buffer of its own: the fixture's node stays subscribed to in_
+  NodeParams params;
+  params.sync.odometry_buffer = 100;
+  SlamNode node(in, out_, std::make_unique<slam::VitaSlam>(slam::SlamParams{}, default_robot_geometry()), params,
+                errors_);
+  std::vector<std::string> lines;
+  node.set_logger([&](const std::string& l) { lines.push_back(l); });
+  int64_t t = kT0;
+  auto odometry = [&](int n) {
+    for (int k = 0; k < n; ++k) {
+      odometry_t o{};
+      o.utime = t += 20'000;
+      publish(in, "ODOMETRY", o);
+    }
+  };
+  odometry(101);  // one sample too many: the oldest goes
+  EXPECT_EQ(lines.size(), 1u);
+  publish(in, "WHISK_CYCLE", free_cycle(0, t));
+  odometry(60);  // the cycle is processed (without a frame) and takes its odometry: nothing more to say
+  EXPECT_EQ(node.counters().cycles, 1);
+  EXPECT_EQ(lines.size(), 1u);
+  const int64_t dropped = node.status(t).odometry_overflow;
+  odometry(60);  // a second stretch without whisk cycles overflows again
+  EXPECT_GT(node.status(t).odometry_overflow, dropped);
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_NE(lines[1].find("no whisk cycle for 100 odometry samples"), std::string::npos) << lines[1];
+}
+
+TEST_F(SlamNodeTest, AWhiskCycleWithoutAValidSampleIsMappedWithoutTouchAndIsNotAnError) {
+  MemoryBus in;  // a tactile-mode node of its own: the fixture's node stays subscribed to in_
+  slam::SlamParams p;
+  p.mode = slam::Mode::Tactile;
+  SlamNode node(in, out_, std::make_unique<slam::VitaSlam>(p, default_robot_geometry()), NodeParams{}, errors_);
+  std::vector<std::string> lines;
+  node.set_logger([&](const std::string& l) { lines.push_back(l); });
+  whisk_cycle_t lost = free_cycle(0, kT0 + kS);
+  for (auto& v : lost.sample_valid) v = 0;
+  for (auto& row : lost.contact) row.assign(row.size(), 1);  // a lost sample's flags say nothing
+  lost.num_missing = lost.num_samples;
+  publish(in, "WHISK_CYCLE", lost);
+  publish(in, "WHISK_CYCLE", free_cycle(1, kT0 + 2 * kS));
+  node.flush();
+  EXPECT_EQ(node.counters().cycles, 2);
+  EXPECT_EQ(node.counters().validation_errors, 0);
+  EXPECT_EQ(node.counters().cycles_without_contact, 2);
+  EXPECT_EQ(node.slam().stats().empty_whisk_cycles, 1);
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_NE(lines[0].find("whisk cycle 0 has no valid sample: mapped without touch"), std::string::npos) << lines[0];
 }
 
 TEST_F(SlamNodeTest, AFrameTheCoreCannotUseIsCountedAndLoggedAndTheCycleRunsWithoutVision) {
@@ -278,6 +355,17 @@ TEST_F(SlamNodeTest, MissingCameraDegradesToTouchAndIsCounted) {
   EXPECT_EQ(st.cycles_without_camera, 3);
   EXPECT_EQ(st.state, driver_status_t::STATE_DEGRADED) << "a camera that is gone is worth a look";
   EXPECT_NE(st.message.find("without a camera frame"), std::string::npos) << st.message;
+}
+
+TEST_F(SlamNodeTest, TheDegradedWindowRunsOnItsOwnClockNotOnTheStamp) {
+  stream({0});
+  node_->flush();
+  // Live the window clock is monotonic: a wall clock stepped an hour ahead does not end it early,
+  // nor does one stepped back stretch it.
+  constexpr int64_t kMono = 5'000'000;
+  EXPECT_EQ(node_->status(kT0, kMono).state, driver_status_t::STATE_DEGRADED);
+  EXPECT_EQ(node_->status(kT0 + 3600 * kS, kMono + kS).state, driver_status_t::STATE_DEGRADED);
+  EXPECT_EQ(node_->status(kT0 - 3600 * kS, kMono + 11 * kS).state, driver_status_t::STATE_OK);
 }
 
 TEST_F(SlamNodeTest, StatusReportsMapSizeAndOkState) {

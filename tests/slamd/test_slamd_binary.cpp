@@ -203,7 +203,7 @@ TEST_F(SlamdBinary, AMapOfAnotherModeIsNeitherLoadedNorRotatedOut) {
   ASSERT_FALSE(before.empty());
   ASSERT_EQ(replay((dir_ / "tactile.lcmlog").string(), {"--state-dir", state.string(), "--mode", "tactile"}, &log), 1);
   EXPECT_THAT(log, HasSubstr("cannot resume from " + before.back().string() + ": "));
-  EXPECT_THAT(log, HasSubstr("--fresh"));
+  EXPECT_THAT(log, HasSubstr("to keep that map, move it out of " + state.string() + " first; then start with --fresh"));
   EXPECT_EQ(checkpoints(state), before) << "nothing renamed, nothing rotated out";
 }
 

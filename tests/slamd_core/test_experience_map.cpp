@@ -243,7 +243,9 @@ TEST(ExperienceMap, SerialisationRoundTripsExactly) {
   };
   constexpr std::size_t kFirst = 8, kTemplateId = kFirst + 7 * 8 + 8;
   for (const auto& [what, blob] : {std::pair{"template", patched(kTemplateId, int32_t{1 << 27})},
-                                   std::pair{"template", patched(kTemplateId, int32_t{2})},
+                                   std::pair{"template 2 of 2", patched(kTemplateId, int32_t{2})},
+                                   std::pair{"visual template 5 of 2", patched(kTemplateId + 4, int32_t{5})},
+                                   std::pair{"tactile template -7 of 2", patched(kTemplateId + 8, int32_t{-7})},
                                    std::pair{"heading", patched(kFirst + 2 * 8, 0.0)},
                                    std::pair{"pose", patched(kFirst, std::nan(""))}}) {
     ExperienceMap x;

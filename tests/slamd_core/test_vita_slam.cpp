@@ -167,7 +167,7 @@ TEST(VitaSlam, ABadFrameIsCountedAndTheCycleGoesOn) {
   CycleInput in = input(w.place(0), 1);
   in.image = &bad;
   const CycleResult r = slam.process_cycle(in);
-  EXPECT_NE(r.input_warning.find("MJPEG"), std::string::npos) << r.input_warning;
+  EXPECT_NE(r.image_warning.find("MJPEG"), std::string::npos) << r.image_warning;
   EXPECT_EQ(slam.stats().bad_images, 1);
   EXPECT_TRUE(r.match.tactile_used);
   EXPECT_EQ(r.match.template_id, 0);

@@ -294,9 +294,12 @@ void ExperienceMap::deserialise(const std::vector<uint8_t>& in, size_t& pos, uin
     e.tactile_template_id = bin::get<int32_t>(in, pos);
     e.dense = bin::get<uint8_t>(in, pos) != 0;
     if (format_version >= 2) e.view_shift = bin::get<int32_t>(in, pos);
-    if (!template_ok(e.template_id) || !template_ok(e.visual_template_id) || !template_ok(e.tactile_template_id)) {
-      throw std::runtime_error("checkpoint: experience " + std::to_string(i) + " refers to template " +
-                               std::to_string(e.template_id) + " of " + std::to_string(num_templates));
+    for (const auto& [what, id] : {std::pair{"template", e.template_id}, std::pair{"visual template", e.visual_template_id},
+                                   std::pair{"tactile template", e.tactile_template_id}}) {
+      if (!template_ok(id)) {
+        throw std::runtime_error("checkpoint: experience " + std::to_string(i) + " refers to " + what + " " +
+                                 std::to_string(id) + " of " + std::to_string(num_templates));
+      }
     }
     if (!finite({x, y, c, s, e.pc_x, e.pc_y, e.pc_theta}) || std::abs(c * c + s * s - 1.0) > 1e-6) {
       throw std::runtime_error("checkpoint: experience " + std::to_string(i) + " has a non-finite pose or heading");

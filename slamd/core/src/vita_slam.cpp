@@ -84,7 +84,7 @@ CycleResult VitaSlam::process_cycle(const CycleInput& in) {
       vt = make_visual_template(*in.image, params_.visual);
     } catch (const InputError& e) {
       ++stats_.bad_images;
-      out.input_warning = e.what();
+      out.image_warning = e.what();
     }
   }
   if (uses_tactile(params_.mode) && in.whisk != nullptr) {
@@ -94,8 +94,7 @@ CycleResult VitaSlam::process_cycle(const CycleInput& in) {
       tt = make_tactile_template(*in.whisk, geometry_, params_.tactile);
     } else {
       ++stats_.empty_whisk_cycles;
-      if (!out.input_warning.empty()) out.input_warning += "; ";
-      out.input_warning += "whisk cycle " + std::to_string(in.whisk->cycle) + " has no valid sample";
+      out.whisk_warning = "whisk cycle " + std::to_string(in.whisk->cycle) + " has no valid sample";
     }
   }
   Terms terms{vt.has_value(), tt.has_value()};

@@ -117,7 +117,8 @@ struct CycleResult {
   double pc_theta = 0.0;
   int num_templates = 0;
   bool dense = false;       // this cycle's tactile template has contact data
-  std::string input_warning;  // non-empty: a sense was dropped this cycle, and why
+  std::string image_warning;  // non-empty: the frame was refused (the cycle went on without vision), and why
+  std::string whisk_warning;  // non-empty: the whisk cycle had no valid sample (went on without touch)
 };
 
 }  // namespace whiskeye::slam
