@@ -374,13 +374,29 @@ TEST(MotionGate, RampsToTheClampedTargetAtTheAccelLimit) {
   EXPECT_FALSE(g.deadman_active());
 }
 
-TEST(MotionGate, DeadmanStopsAtOnceWhenCommandsStop) {
-  MotionGate g(limits());
-  int64_t t = 0;
-  for (int i = 0; i < 50; ++i, t += 20'000) {
-    g.command(Velocity{0.3, 0.0, 0.5}, t);
+// Commands `v` and steps the gate every 20 ms, `n` times from `t` on; returns the time after.
+int64_t drive(MotionGate& g, const Velocity& v, int n, int64_t t = 0) {
+  for (int i = 0; i < n; ++i, t += 20'000) {
+    g.command(v, t);
     g.step(t);
   }
+  return t;
+}
+
+TEST(MotionGate, AfterTheBaseStoppedByItselfTheOutputRampsUpFromRest) {
+  MotionGate g(limits());
+  int64_t t = drive(g, Velocity{2.0, 0.0, 0.0}, 40);
+  g.command(Velocity{2.0, 0.0, 0.0}, t);
+  ASSERT_NEAR(g.step(t).vx, 0.5, 1e-12);
+  g.base_stopped();  // none of that reached the base (link down): it stands
+  t += 20'000;
+  g.command(Velocity{2.0, 0.0, 0.0}, t);
+  EXPECT_NEAR(g.step(t).vx, 1.0 * 0.02, 1e-12) << "one step of the accel limit, not 0.5 m/s at once";
+}
+
+TEST(MotionGate, DeadmanStopsAtOnceWhenCommandsStop) {
+  MotionGate g(limits());
+  const int64_t t = drive(g, Velocity{0.3, 0.0, 0.5}, 50);
   const int64_t last_command = t - 20'000;
   Velocity v = g.step(last_command + 200'000);  // exactly deadman_s: still moving
   EXPECT_GT(v.vx, 0.0);

@@ -302,6 +302,33 @@ TEST_F(BasedNodeTest, UnreachableBaseIsAFaultWithAMessageAndRecovers) {
   node.stop();
 }
 
+TEST_F(BasedNodeTest, ABaseReachedAfterAnOutageIsRampedUpFromRestNotSentTheGatesSpeed) {
+  int port = 0;
+  {
+    FakeRobotino probe;  // a free port, closed: the base is unreachable while BASE_CMD streams
+    port = probe.port();
+  }
+  BasedParams p = test_params("http://127.0.0.1:" + std::to_string(port));
+  p.command.max_linear_accel = 1.0;
+  BasedNode& node = start(p);
+  auto stream_for = [&](std::chrono::milliseconds how_long, const std::function<bool()>& until) {
+    const auto end = std::chrono::steady_clock::now() + how_long;
+    while (std::chrono::steady_clock::now() < end && !until()) {
+      send_cmd(bus, 3.0, 4.0, 0.0);  // 0.5 m/s after clamping: 0.5 s of ramp at 1 m/s²
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+  };
+  stream_for(std::chrono::milliseconds(800), [] { return false; });
+  FakeRobotino revived(port);
+  stream_for(std::chrono::milliseconds(5000), [&] { return revived.commands().size() >= 5; });
+  node.stop();
+  const std::vector<testing::ReceivedCommand> cmds = revived.commands();
+  ASSERT_GE(cmds.size(), 5u);
+  // The gate bounds its own dt by two periods: the first command the base gets is one such step.
+  EXPECT_LE(std::hypot(cmds[0].vx, cmds[0].vy), 1.0 * 2.0 / 50.0 + 1e-9);
+  EXPECT_GT(std::hypot(cmds[3].vx, cmds[3].vy), 0.0);
+}
+
 TEST_F(BasedNodeTest, AnUnreachableBaseIsNotAStalledThread) {
   // Connect failures and the retry backoff are a thread doing its job: the watchdog must not fire.
   int port = 0;

@@ -275,6 +275,7 @@ void BasedNode::command_loop() {
   auto retry_after = next;
   double backoff = params_.connection.backoff_initial_s;
   int64_t trips_seen = 0;
+  int64_t last_post_ok_us = INT64_MIN;
   while (!stopping_) {
     const int64_t now = monotonic_us();
     beats_.beat(command_beat_, now);
@@ -287,6 +288,9 @@ void BasedNode::command_loop() {
         gate_.command(circle_->command(t), now);
         circle_done = circle_->finished(t);
       }
+      // Commands that did not reach the base (connecting, timeouts) did not move it either, and after
+      // kBaseStopsAfterUs without one it stands: ramp from rest, never jump to the gate's last output.
+      if (last_post_ok_us == INT64_MIN || now - last_post_ok_us >= kBaseStopsAfterUs) gate_.base_stopped();
       out = gate_.step(now);
       if (gate_.deadman_trips() != trips_seen) {
         counters_["deadman_stops"] += gate_.deadman_trips() - trips_seen;
@@ -300,6 +304,7 @@ void BasedNode::command_loop() {
       const Reply r = client.post(kOmnidrivePath, format_omnidrive_command(out.vx, out.vy, out.omega));
       if (r.status == ReplyStatus::kOk) {
         backoff = params_.connection.backoff_initial_s;
+        last_post_ok_us = now;
         std::lock_guard<std::mutex> lock(mutex_);
         ++counters_["commands_sent"];
         last_sent_ = out;

@@ -32,6 +32,10 @@ class MotionGate {
   // one) the output is zero at once, not ramped down: the deadman is a stop, like the base's own.
   Velocity step(int64_t now_us);
 
+  // The base has stopped by itself (no command reached it for kBaseStopsAfterUs): the next output
+  // ramps up from rest, not from what was last computed but never arrived.
+  void base_stopped() { output_ = Velocity{}; }
+
   bool deadman_active() const { return deadman_; }
   // Number of times the deadman has stopped a moving command.
   int64_t deadman_trips() const { return trips_; }

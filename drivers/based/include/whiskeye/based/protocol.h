@@ -11,6 +11,9 @@
 
 namespace whiskeye::based {
 
+// The base stops by itself when no omnidrive command has reached it for this long.
+inline constexpr int64_t kBaseStopsAfterUs = 200'000;
+
 inline constexpr const char* kOdometryPath = "/data/odometry";
 inline constexpr const char* kOmnidrivePath = "/data/omnidrive";
 
