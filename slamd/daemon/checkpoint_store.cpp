@@ -176,7 +176,11 @@ std::vector<std::string> CheckpointStore::list() const {
       files.push_back(entry.path().string());
     }
   }
-  std::sort(files.begin(), files.end());  // zero-padded numbers sort by name
+  // By number, not by name: a file renamed by hand ("checkpoint-5.vslam") or a number of more than
+  // twelve digits would sort out of order, and rotation would delete the newest.
+  std::sort(files.begin(), files.end(), [](const std::string& a, const std::string& b) {
+    return file_number(fs::path(a).filename().string()) < file_number(fs::path(b).filename().string());
+  });
   return files;
 }
 

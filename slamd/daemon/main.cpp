@@ -98,6 +98,17 @@ class Progress {
 
 std::unique_ptr<slam::VitaSlam> make_slam(const Loaded& cfg, const Options& o, slamd::CheckpointStore* store) {
   if (!o.map_file.empty()) {
+    // Growing the loaded map writes its checkpoints into the state directory: whatever map is there
+    // would be rotated out within --checkpoint-keep cycles. The operator says so with --fresh.
+    if (!o.localise && !o.fresh && store != nullptr) {
+      if (const auto held = store->list(); !held.empty()) {
+        throw std::runtime_error("the state directory " + store->directory() + " holds " +
+                                 std::to_string(held.size()) + " checkpoint(s) of a map (newest " + held.back() +
+                                 ") that growing --map " + o.map_file +
+                                 " would rotate out: move them out of it first, or add --fresh to let them go "
+                                 "(or --localise, which writes no checkpoints)");
+      }
+    }
     const slamd::Checkpoint cp = slamd::read_checkpoint(o.map_file);
     std::unique_ptr<slam::VitaSlam> s;
     try {
@@ -276,7 +287,7 @@ int main(int argc, char** argv) {
   app.add_option("--state-dir", o.state_dir, "checkpoint directory (live default: $STATE_DIRECTORY or /var/lib/slamd)");
   app.add_option("--checkpoint-every", o.checkpoint_every, "checkpoint every N cycles (0: only on exit)")->check(CLI::NonNegativeNumber);
   app.add_option("--checkpoint-keep", o.checkpoint_keep, "checkpoints kept")->check(CLI::PositiveNumber);
-  app.add_flag("--fresh", o.fresh, "ignore existing checkpoints and start a new map");
+  app.add_flag("--fresh", o.fresh, "ignore existing checkpoints (rotated out as new ones are written): a new map, or --map's");
   app.add_option("--map", o.map_file, "start from this saved map (a checkpoint file)")->check(CLI::ExistingFile);
   app.add_flag("--localise", o.localise, "with --map: localise in the map without growing it");
   auto* replay = app.add_option("--replay", o.replay_in, "process this LCM log offline")->check(CLI::ExistingFile);

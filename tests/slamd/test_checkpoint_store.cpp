@@ -134,6 +134,23 @@ TEST_F(CheckpointStoreTest, TheLastWrittenIsTheNewestAcrossRestartsWhateverItsSe
   EXPECT_EQ(cp->payload, payload(50, 99));
 }
 
+TEST_F(CheckpointStoreTest, FilesAreOrderedByTheirNumberNotTheirName) {
+  {
+    CheckpointStore store(dir_.string(), 3);
+    store.write(5, payload(50, 5));
+  }
+  // The operator puts an older map back by the name the docs give (checkpoint-<n>.vslam).
+  fs::rename(dir_ / "checkpoint-000000000001.vslam", dir_ / "checkpoint-7.vslam");
+  CheckpointStore store(dir_.string(), 1);
+  const std::string path = store.write(8, payload(50, 8));
+  EXPECT_EQ(fs::path(path).filename(), "checkpoint-000000000008.vslam");
+  ASSERT_EQ(store.list(), std::vector<std::string>{path}) << "the file just written is kept, the older rotated out";
+  std::vector<std::string> problems;
+  const auto cp = store.load_newest(&problems);
+  ASSERT_TRUE(cp);
+  EXPECT_EQ(cp->sequence, 8u);
+}
+
 TEST_F(CheckpointStoreTest, AnIntactButUnusableNewestIsNamedAndKeptNotSkipped) {
   CheckpointStore store(dir_.string(), 3);
   store.write(1, payload(64, 1));

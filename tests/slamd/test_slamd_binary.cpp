@@ -231,6 +231,19 @@ TEST_F(SlamdBinary, LocalisesInASavedMapWithoutGrowingIt) {
   ASSERT_FALSE(o.maps.empty());
   EXPECT_EQ(o.maps.back().num_experiences, built.maps.back().num_experiences);
   EXPECT_EQ(o.maps.back().num_links, built.maps.back().num_links);
+
+  // Growing a saved map into a state directory that holds another map's checkpoints would rotate
+  // them out: refused, naming both, unless --fresh says to let them go.
+  const fs::path other = dir_ / "state_other";
+  fs::remove_all(other);
+  ASSERT_EQ(replay((dir_ / "map.lcmlog").string(), {"--state-dir", other.string()}), 0);
+  const auto held = checkpoints(other);
+  ASSERT_FALSE(held.empty());
+  EXPECT_EQ(replay(out, {"--map", map_file.string(), "--state-dir", other.string()}, &log), 1);
+  EXPECT_THAT(log, HasSubstr("the state directory " + other.string() + " holds "));
+  EXPECT_THAT(log, HasSubstr("growing --map " + map_file.string() + " would rotate out"));
+  EXPECT_EQ(checkpoints(other), held) << "nothing written, nothing rotated out";
+  EXPECT_EQ(replay(out, {"--map", map_file.string(), "--state-dir", other.string(), "--fresh"}, &log), 0) << log;
 }
 
 TEST_F(SlamdBinary, BadInvocationsFailWithAOneLineReason) {
