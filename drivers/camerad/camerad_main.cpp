@@ -128,6 +128,7 @@ int main(int argc, char** argv) {
   double interval_latency_max_us = 0, interval_latency_sum_us = 0;
   int64_t last_frame_us = 0;
   int64_t last_sequence = -1;
+  int64_t frame_timeout_us = static_cast<int64_t>(p.frame_timeout_s * 1e6);
   const int64_t status_period_us = static_cast<int64_t>(p.status_period_s * 1e6);
   int64_t next_status_us = monotonic_us() + status_period_us;
   bool ready_sent = false;
@@ -142,11 +143,16 @@ int main(int argc, char** argv) {
                   << v4l2::fourcc_name(cap->pixelformat()) << " at " << cap->fps() << " fps, " << cap->num_buffers()
                   << " buffers\n";
         if (frames > 0 || device_lost > 0) ++reopens;
-        backoff.reset();
+        // The backoff is reset by the session's first frame, not by the open: a camera that opens
+        // but sends nothing (USB bandwidth) is reopened ever more slowly, not every few seconds.
         last_open_error.clear();
         last_frame_us = now;
         last_sequence = -1;
         corrupt_logged = false;
+        // At least three frame periods of the negotiated rate (the driver may pick a slower one
+        // than asked, or the configuration ask for less than a frame per frame_timeout_s).
+        frame_timeout_us = static_cast<int64_t>(
+            std::max(p.frame_timeout_s, cap->fps() > 0.0 ? 3.0 / cap->fps() : 0.0) * 1e6);
       } catch (const v4l2::CaptureError& e) {
         ++open_failures;
         if (e.what() != last_open_error) std::cerr << "camerad: " << e.what() << "; retrying\n";
@@ -177,6 +183,7 @@ int main(int argc, char** argv) {
         interval_latency_sum_us += latency;
         interval_latency_max_us = std::max(interval_latency_max_us, latency);
         if (last_sequence >= 0 && f.sequence > last_sequence + 1) sequence_gaps += f.sequence - last_sequence - 1;
+        if (last_sequence < 0) backoff.reset();  // the session works
         last_sequence = f.sequence;
         last_frame_us = monotonic_us();
       } else if (r == v4l2::Capture::Result::kSkipped && !corrupt_logged) {
@@ -187,7 +194,7 @@ int main(int argc, char** argv) {
       }
       if (r != v4l2::Capture::Result::kFrame &&
           (r == v4l2::Capture::Result::kGone ||
-           monotonic_us() - last_frame_us > static_cast<int64_t>(p.frame_timeout_s * 1e6))) {
+           monotonic_us() - last_frame_us > frame_timeout_us)) {
         ++device_lost;
         std::cerr << "camerad: " << (r == v4l2::Capture::Result::kGone ? cap->last_error() : cap->device() + ": no frames")
                   << "; closing and reopening\n";
