@@ -533,6 +533,14 @@ TEST(BasedParams, UnknownOrOutOfRangeKeysAreErrorsNamingTheKey) {
   } catch (const ParamError& e) {
     EXPECT_NE(std::string(e.what()).find("command.rate_hz"), std::string::npos) << e.what();
   }
+  try {
+    load(ParamNode::from_string("url: https://192.168.0.1\n"), p);
+    FAIL();
+  } catch (const ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("url: "), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(check_url("192.168.0.1:80", "--url"), ParamError);
+  EXPECT_NO_THROW(check_url("http://192.168.0.1:80", "--url"));
   BasedParams fresh;
   load(ParamNode::from_string("odometry:\n  poll_rate_hz: 100\n"), fresh);
   EXPECT_DOUBLE_EQ(fresh.odometry.poll_rate_hz, 100.0);

@@ -460,8 +460,12 @@ TEST_F(BasedNodeTest, LimitsSpeedAndAcceleration) {
 
 TEST_F(BasedNodeTest, NonFiniteCommandIsRejectedAndNeverSent) {
   BasedNode& node = start();
+  ASSERT_TRUE(samples(1));  // past STARTING
   send_cmd(bus, 0.1, 0.0, 0.0);
   send_cmd(bus, std::numeric_limits<double>::quiet_NaN(), 0.0, 0.0);
+  const Health::Report report = node.health();  // the bus hands BASE_CMD over synchronously
+  EXPECT_EQ(report.state, HealthState::kDegraded) << "bad input is worth a look";
+  EXPECT_NE(report.message.find("commands_rejected"), std::string::npos) << report.message;
   ASSERT_TRUE(wait_for([&] { return base.commands().size() >= 5; }));
   node.stop();
   EXPECT_EQ(node.counter("commands_received"), 2);

@@ -46,7 +46,10 @@ int main(int argc, char** argv) {
   try {
     const ParamNode node = config.empty() ? ParamNode::empty() : ParamNode::from_file(config);
     based::load(node, params);
-    if (!url.empty()) params.url = url;
+    if (!url.empty()) {
+      based::check_url(url, "--url");
+      params.url = url;
+    }
     if (print_params) {
       std::cout << node.dump();
       return 0;

@@ -145,13 +145,14 @@ Health::Report BasedNode::health() const {
 }
 
 void BasedNode::handle_command(const Velocity& v) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  ++counters_["commands_received"];
-  if (!gate_.command(v, monotonic_us())) {
-    ++counters_["commands_rejected"];
-    const std::string line = burst_.fault("commands_rejected", "BASE_CMD with a non-finite velocity ignored", monotonic_us());
-    if (!line.empty()) log_line(line);
+  bool taken = false;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++counters_["commands_received"];
+    taken = gate_.command(v, monotonic_us());
   }
+  // Bad input: counted, logged per burst, and DEGRADED for degraded_hold_s like any other fault.
+  if (!taken) count_fault("commands_rejected", "BASE_CMD with a non-finite velocity ignored");
 }
 
 // ---- odometry ----

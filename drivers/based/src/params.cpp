@@ -1,10 +1,19 @@
 // Loads BasedParams from YAML, strictly (see config/based.yaml for every key).
 #include "whiskeye/based/params.h"
 
+#include "whiskeye/based/protocol.h"
+
 namespace whiskeye::based {
+
+void check_url(const std::string& url, const std::string& where) {
+  BaseUrl parsed;
+  std::string error;
+  if (!parse_base_url(url, parsed, error)) throw ParamError(where + ": " + error);
+}
 
 void load(const ParamNode& node, BasedParams& p) {
   node.get("url", p.url);
+  check_url(p.url, node.path_of("url"));
 
   const ParamNode o = node.section("odometry");
   o.get("poll_rate_hz", p.odometry.poll_rate_hz, 0.5, 1000.0);

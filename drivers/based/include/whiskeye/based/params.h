@@ -48,6 +48,8 @@ struct BasedParams {
   ConnectionParams connection;
 };
 
+// Throws ParamError naming `where` (a key, or an option) when `url` is not http://host[:port].
+void check_url(const std::string& url, const std::string& where);
 // Loads every key (absent keys keep their defaults); throws ParamError naming a bad or unknown key.
 void load(const ParamNode& node, BasedParams& p);
 
