@@ -320,7 +320,9 @@ void WhiskerCore::step(int64_t utime, int64_t mono_us, PeriodOutput& out) {
       }
       break;
     case Safety::kRetracting:
-      if (!controller_.running() ||
+      // The enable line drops once the whiskers are at rest (the amplitude ramp has ended and the
+      // slew-limited command has reached theta_rest), or after retract_time_s at the latest.
+      if (controller_.at_rest() ||
           static_cast<double>(mono_us - retract_start_mono_) >= params_.retract_time_s * 1e6) {
         motors_enabled_ = false;
         safety_ = stop_requested_ ? Safety::kStopped : Safety::kDisabled;

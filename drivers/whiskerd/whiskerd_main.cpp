@@ -109,6 +109,23 @@ void send_command(can::Socket& sock, const Params& p, const wp::MotorCommand& cm
   }
 }
 
+// Drops the enable line and sends the boards a disabled command. Never throws: a second failure
+// while shutting down must not end in std::terminate with the line high. Returns "" or why the
+// line could not be dropped (the boards' disabled command went out regardless).
+std::string disable_motors(gpio::MotorLines& lines, can::Socket& sock, const Params& p, WhiskerCore& core) {
+  std::string error;
+  try {
+    lines.set_enable(false);
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  if (sock.is_open()) {
+    wp::MotorCommand off;
+    send_command(sock, p, off, core);
+  }
+  return error;
+}
+
 struct Shared {
   Ring ring;
   // Published whisk cycles travel back to the control thread, which recycles their storage: the
@@ -253,14 +270,17 @@ void control_thread(const Params& p, can::Socket& sock, gpio::MotorLines& lines,
       }
     }
   } catch (const std::exception& e) {
-    std::cerr << "whiskerd: fatal: " << e.what() << "; disabling motors\n";
+    // Motors off before anything that may block (stderr into a full journal pipe), then say why.
+    const std::string not_dropped = disable_motors(lines, sock, p, core);
+    std::cerr << "whiskerd: fatal: " << e.what() << "; boards sent a disabled command"
+              << (not_dropped.empty() ? ", enable line low" : "; the enable line could not be dropped: " + not_dropped)
+              << "\n";
     shared.exit_code.store(1);
   }
   // Whatever happened: the enable line ends low and the boards get a last disabled command.
-  lines.set_enable(false);
-  if (sock.is_open()) {
-    wp::MotorCommand off;
-    send_command(sock, p, off, core);
+  if (const std::string not_dropped = disable_motors(lines, sock, p, core); !not_dropped.empty()) {
+    std::cerr << "whiskerd: the enable line could not be dropped: " << not_dropped << "\n";
+    shared.exit_code.store(1);
   }
   shared.rt_done.store(true);
 }

@@ -36,6 +36,7 @@ int64_t sample_period_us(double sample_rate_hz) {
 
 Controller::Controller(const ControllerParams& params, double sample_rate_hz)
     : params_(params),
+      nominal_period_s_(1.0 / valid_rate(sample_rate_hz)),
       pattern_(params.pattern),
       detector_(params.detector),
       assembler_(sample_period_us(sample_rate_hz),
@@ -57,6 +58,12 @@ void Controller::reset_cycle_state(int w) {
 }
 
 void Controller::enable() { enabled_ = true; }
+
+bool Controller::at_rest() const {
+  if (running_) return false;
+  return std::all_of(command_.begin(), command_.end(),
+                     [&](double c) { return std::abs(c - params_.pattern.theta_rest) <= 1e-9; });
+}
 void Controller::disable() { enabled_ = false; }
 
 ControlOutput Controller::step(const WhiskerSample& sample) {
@@ -119,7 +126,9 @@ ControlOutput Controller::step(const WhiskerSample& sample) {
   const PerWhisker<double>& level = detector_.level();
 
   const double amplitude = smooth(envelope_);
-  const double max_step = pp.max_rate * dt;
+  // A late sample (a stall, a loop that runs without real-time priority) must not license a step:
+  // the slew step is bounded by two nominal periods, however long the gap was.
+  const double max_step = pp.max_rate * std::min(dt, 2.0 * nominal_period_s_);
   for (int r = 0; r < kNumRows; ++r) {
     double nominal = pp.theta_rest;
     bool protracting = false;

@@ -297,6 +297,30 @@ TEST(WhiskerdCore, StopRequestRetractsToRestThenFinishes) {
   EXPECT_NEAR(rig.out.theta_command[0], test_params().controller.pattern.theta_rest, 0.05);
 }
 
+TEST(WhiskerdCore, EnableDropsOnlyOnceTheWhiskersAreBackAtRest) {
+  Params p = test_params();
+  p.retract_time_s = 2.0;
+  p.controller.pattern.ramp_time = 0.0;  // the pattern stops at once; the slew-limited command not
+  Rig rig(p);
+  const double rest = p.controller.pattern.theta_rest;
+  rig.run(300);
+  while (std::abs(rig.out.theta_command[0] - rest) < 0.5) rig.run(1);  // well protracted
+  rig.core.request_stop();
+  int powered_periods = 0;
+  for (int i = 0; i < 1000 && !rig.core.finished(); ++i) {
+    rig.run(1);
+    if (rig.out.command.enable_mask != 0) {
+      ++powered_periods;
+    } else {
+      for (int w = 0; w < rcp::kNumWhiskers; ++w) {
+        ASSERT_NEAR(rig.out.theta_command[w], rest, 1e-6) << "enable dropped with whisker " << w << " out";
+      }
+    }
+  }
+  EXPECT_TRUE(rig.core.finished());
+  EXPECT_GT(powered_periods, 10) << "the motors drove the whiskers back";
+}
+
 TEST(WhiskerdCore, ContactLowersTheCeilingAndTheMotorTarget) {
   Rig rig;
   // Whisk until protraction, then touch whisker 5.

@@ -224,6 +224,39 @@ TEST(Controller, DisableMidCycleRetractsSmoothlyToRest) {
   EXPECT_EQ(c.stats().cycles_discarded, 1);
 }
 
+TEST(Controller, IsAtRestOnlyOnceTheSlewLimitedCommandIsBackAtRest) {
+  ControllerParams p;
+  p.pattern.ramp_time = 0.0;  // the amplitude drops at once; the command may not
+  Controller c{p};
+  EXPECT_TRUE(c.at_rest());
+  c.enable();
+  run_free(c, 0, 1240);  // near peak protraction
+  EXPECT_FALSE(c.at_rest());
+  c.disable();
+  int64_t seq = 1240;
+  c.step(make_sample(seq++, 0.002, 0.0));
+  EXPECT_FALSE(c.running()) << "ramp_time 0: the pattern stops in one step";
+  EXPECT_FALSE(c.at_rest()) << "but the command is still tens of degrees out";
+  int periods = 1;
+  while (!c.at_rest() && periods < 1000) {
+    c.step(make_sample(seq++, 0.002, 0.0));
+    ++periods;
+  }
+  EXPECT_TRUE(c.at_rest());
+  EXPECT_GT(periods, 10) << "slewed back at max_rate, not in one step";
+  for (double t : c.last_output().theta_command) EXPECT_NEAR(t, p.pattern.theta_rest, 1e-9);
+}
+
+TEST(Controller, ALateSampleDoesNotLicenseAStep) {
+  ControllerParams p;
+  Controller c{p};
+  c.enable();
+  const ControlOutput before = run_free(c, 0, 1200);
+  // 200 ms without a sample (the loop stalled): the next command moves by at most two periods' slew.
+  const ControlOutput after = c.step(make_sample(1300, 0.002, 0.0));
+  EXPECT_LE(max_step(after.theta_command, before.theta_command), p.pattern.max_rate * 2 * 0.002 + 1e-12);
+}
+
 TEST(Controller, ReenableStartsANewCycleAtThetaMin) {
   ControllerParams p;
   Controller c{p};

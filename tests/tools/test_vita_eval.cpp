@@ -68,6 +68,7 @@ link_t link(int32_t from, int32_t to) {
 struct Script {
   int8_t mode = vita_pose_t::MODE_VITA;
   bool relocalise = true;  // false: new experiences all through the second revolution instead
+  int64_t pose_delay_us = 0;  // VITA_POSE stamped this much later (past the ground truth: no LEM)
 };
 
 // Two revolutions. Experiences 0..19 are created once a second in the first; in the second the
@@ -105,7 +106,7 @@ void write_log(const std::string& path, const Script& script) {
     publish(bus, "GROUND_TRUTH", gt);
     if (u % 100'000 == 0) {  // 10 Hz pose estimate, exact in the map frame
       vita_pose_t vp{};
-      set_pose(vp, t, map_pose(t));
+      set_pose(vp, t + script.pose_delay_us, map_pose(t));
       vp.experience_id = current;
       vp.mode = script.mode;
       publish(bus, "VITA_POSE", vp);
@@ -266,6 +267,19 @@ TEST_F(VitaEvalBinary, PrintsOneRowPerInputAndNullArcrWithoutReLocalisations) {
   const std::string table = read_text(file("stdout.txt"));
   EXPECT_NE(table.find("\ntactile "), std::string::npos);
   EXPECT_NE(table.find("n/a"), std::string::npos);
+}
+
+TEST_F(VitaEvalBinary, NoPoseWithinTheGroundTruthIsNoLemNotAPerfectOne) {
+  Script late;
+  late.pose_delay_us = 1000 * kSecond;
+  write_log(file("late.lcmlog"), late);
+  ASSERT_EQ(run_vita_eval("--input " + file("late.lcmlog") + " --json " + file("out.json"), file("stdout.txt")), 0)
+      << read_text(file("stdout.txt"));
+  const nlohmann::json run = nlohmann::json::parse(read_text(file("out.json")))["runs"][0];
+  EXPECT_EQ(run["lem"]["samples_used"], 0);
+  EXPECT_GT(run["lem"]["samples_outside_gt"].get<int>(), 0);
+  EXPECT_TRUE(run["lem"]["position_m"].is_null()) << run["lem"];
+  EXPECT_TRUE(run["lem"]["orientation_rad"].is_null()) << run["lem"];
 }
 
 TEST_F(VitaEvalBinary, FailsWithAOneLineReasonOnALogWithoutGroundTruth) {

@@ -67,10 +67,12 @@ nlohmann::json stats_json(const ErrorStats& s) {
 
 nlohmann::json lem_json(const std::optional<LemResult>& lem) {
   if (!lem) return nullptr;
+  // No sample inside the ground truth's time range: no error was measured, which is not zero error.
+  const bool measured = lem->samples_used > 0;
   return {{"samples_used", lem->samples_used},
           {"samples_outside_gt", lem->samples_outside_gt},
-          {"position_m", stats_json(lem->position_m)},
-          {"orientation_rad", stats_json(lem->orientation_rad)}};
+          {"position_m", measured ? stats_json(lem->position_m) : nlohmann::json(nullptr)},
+          {"orientation_rad", measured ? stats_json(lem->orientation_rad) : nlohmann::json(nullptr)}};
 }
 
 nlohmann::json exm_json(const ExmResult& x) {

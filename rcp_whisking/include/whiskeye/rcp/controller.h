@@ -60,6 +60,9 @@ class Controller {
   void recycle(WhiskCycle&& used) { assembler_.recycle(std::move(used)); }
   // The pattern clock is running (whisking, or ramping down after disable()).
   bool running() const { return running_; }
+  // Stopped and every command back at theta_rest: the slew limit may hold the command away from
+  // rest for a while after the amplitude ramp has ended (ramp_time 0, a low max_rate).
+  bool at_rest() const;
 
   const ControllerParams& params() const { return params_; }
   const ContactDetector& detector() const { return detector_; }
@@ -70,6 +73,7 @@ class Controller {
   void reset_cycle_state(int w);
 
   ControllerParams params_;
+  double nominal_period_s_;  // 1 / sample rate: bounds the slew step after a stall
   PatternGenerator pattern_;
   ContactDetector detector_;
   CycleAssembler assembler_;
