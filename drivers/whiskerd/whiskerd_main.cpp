@@ -191,7 +191,9 @@ void control_thread(const Params& p, can::Socket& sock, gpio::MotorLines& lines,
       if (sock.is_open()) {
         for (int guard = 0; guard < 1024; ++guard) {
           const can::Socket::Rx rx = sock.receive(frame, 0);
-          if (rx == can::Socket::Rx::kFrame) {
+          if (rx == can::Socket::Rx::kFrame && (frame.extended || frame.rtr)) {
+            ++core.counters()[Counters::kRejectedWrongFrameType];  // the filters keep these out
+          } else if (rx == can::Socket::Rx::kFrame) {
             core.on_frame(frame.id, frame.fd, frame.payload(), mono_now_us());
           } else if (rx == can::Socket::Rx::kDown) {
             rt_log(shared, "whiskerd: %s; reopening", sock.last_error().c_str());

@@ -267,6 +267,29 @@ int main(int argc, char** argv) {
     }
     if (seq == script.bus_off_at && !inject_error_frame(interface, CAN_ERR_BUSOFF)) std::cout << "cannot inject bus-off" << std::endl;
     if (seq == script.restart_at && !inject_error_frame(interface, CAN_ERR_RESTARTED)) std::cout << "cannot inject restart" << std::endl;
+    if (seq == script.bad_at) {
+      // Frames whose 11 low id bits name board 0's sample but that are no sample: a CANopen tool's
+      // remote request (a DLC of 8, no data) and an extended-id frame with a sample's payload
+      // (out of range, so a decoder taking it would count it). The kernel filters keep both out.
+      can::Frame rtr;
+      rtr.id = wp::sample_id({}, 0);
+      rtr.rtr = true;
+      rtr.len = 8;
+      send_reliably(tx, rtr);
+      wp::WhiskerRaw bad;
+      bad.x = 3000;
+      can::Frame ext = script.classic ? can::Frame{} : fd_frame(wp::sample_id({}, 0), 32);
+      ext.id = wp::sample_id({}, 0);
+      ext.extended = true;
+      if (script.classic) {
+        ext.len = static_cast<uint8_t>(wp::encode_fragment({0, 0x55, 0, 0, bad}, ext.data));
+      } else {
+        wp::BoardSample s;
+        s.whiskers[0] = bad;
+        wp::encode_sample_fd(s, ext.data);
+      }
+      send_reliably(tx, ext);
+    }
     if (seq == script.bad_at && script.classic) {
       can::Frame f;
       f.id = 0x181;
@@ -384,6 +407,7 @@ int main(int argc, char** argv) {
   counter_is("rejected_wrong_length", 1);
   counter_is("rejected_unknown_id", 1);
   counter_is("rejected_out_of_range", 1);
+  counter_is("rejected_wrong_frame_type", 0);
 
   // Bus-off reported (DEGRADED, "bus-off") and recovered from (later: running, error-active) while
   // whiskerd keeps running.

@@ -103,7 +103,7 @@ void Socket::open_socket() {
 void Socket::apply_filters() {
   if (fd_ < 0) return;
   std::vector<can_filter> f;
-  for (const Filter& x : filters_) f.push_back({x.id, x.mask});
+  for (const Filter& x : filters_) f.push_back({x.id & CAN_SFF_MASK, (x.mask & CAN_SFF_MASK) | CAN_EFF_FLAG | CAN_RTR_FLAG});
   if (filters_.empty()) f.push_back({0, 0});  // everything
   if (::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_FILTER, f.data(),
                    static_cast<socklen_t>(f.size() * sizeof(can_filter))) < 0) {
@@ -178,6 +178,7 @@ Socket::Rx Socket::receive(Frame& frame, int64_t timeout_us) {
   if (!frame.fd && frame.len > 8) frame.len = 8;
   std::memcpy(frame.data.data(), raw.data, frame.len);
   frame.extended = raw.can_id & CAN_EFF_FLAG;
+  frame.rtr = !frame.fd && (raw.can_id & CAN_RTR_FLAG);
   frame.id = raw.can_id & (frame.extended ? CAN_EFF_MASK : CAN_SFF_MASK);
   frame.brs = frame.fd && (raw.flags & CANFD_BRS);
   for (cmsghdr* c = CMSG_FIRSTHDR(&msg); c != nullptr; c = CMSG_NXTHDR(&msg, c)) {
@@ -212,7 +213,7 @@ bool Socket::send(const Frame& frame) {
     return false;
   }
   canfd_frame raw{};
-  raw.can_id = frame.id | (frame.extended ? CAN_EFF_FLAG : 0);
+  raw.can_id = frame.id | (frame.extended ? CAN_EFF_FLAG : 0) | (frame.rtr && !frame.fd ? CAN_RTR_FLAG : 0);
   const std::size_t max = frame.fd ? 64 : 8;
   raw.len = frame.len > max ? static_cast<uint8_t>(max) : frame.len;
   std::memcpy(raw.data, frame.data.data(), raw.len);

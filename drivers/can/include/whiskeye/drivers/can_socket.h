@@ -19,6 +19,7 @@ namespace whiskeye::can {
 struct Frame {
   uint32_t id = 0;
   bool extended = false;  // 29-bit id
+  bool rtr = false;       // remote transmission request (classic only: a DLC, no data)
   bool fd = false;        // CAN FD frame (up to 64 bytes)
   bool brs = false;       // FD bit-rate switch
   uint8_t len = 0;
@@ -28,9 +29,11 @@ struct Frame {
   std::span<const uint8_t> payload() const { return {data.data(), len}; }
 };
 
+// Matches data frames with an 11-bit id: extended and remote (RTR) frames never pass a filter, so
+// a CANopen tool's RTR or a 29-bit id whose low bits look like a sample cannot be taken for one.
 struct Filter {
   uint32_t id = 0;
-  uint32_t mask = 0x7ff;  // bits that must match
+  uint32_t mask = 0x7ff;  // bits of the 11-bit id that must match
 };
 
 enum class BusState { kErrorActive, kErrorWarning, kErrorPassive, kBusOff };
