@@ -196,7 +196,7 @@ void control_thread(const Params& p, can::Socket& sock, gpio::MotorLines& lines,
           } else if (rx == can::Socket::Rx::kFrame) {
             core.on_frame(frame.id, frame.fd, frame.payload(), mono_now_us());
           } else if (rx == can::Socket::Rx::kDown) {
-            rt_log(shared, "whiskerd: %s; reopening", sock.last_error().c_str());
+            rt_log(shared, "whiskerd: %s; reopening", sock.last_error());
             sock.reopen();
             break;
           } else if (rx == can::Socket::Rx::kTimeout) {

@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <stdexcept>
 
@@ -128,12 +129,16 @@ void Socket::set_filters(const std::vector<Filter>& filters) {
   apply_filters();
 }
 
+void Socket::set_error(const char* what, int err) {
+  std::snprintf(last_error_.data(), last_error_.size(), "CAN %s: %s: %s", interface_.c_str(), what, std::strerror(err));
+}
+
 bool Socket::reopen() {
   close_socket();
   try {
     open_socket();
   } catch (const std::exception& e) {
-    last_error_ = e.what();
+    std::snprintf(last_error_.data(), last_error_.size(), "%s", e.what());
     return false;
   }
   ++counters_.reopens;
@@ -152,9 +157,12 @@ Socket::Rx Socket::receive(Frame& frame, int64_t timeout_us) {
     int err = n < 0 ? errno : 0;
     socklen_t len = sizeof(err);
     if (n >= 0) ::getsockopt(fd_, SOL_SOCKET, SO_ERROR, &err, &len);
-    last_error_ = "CAN " + interface_ + ": " +
-                  (err != 0 ? std::string(std::strerror(err)) : std::string("socket error (poll events ") +
-                                                                    std::to_string(p.revents) + ")");
+    if (err != 0) {
+      set_error("socket error", err);
+    } else {
+      std::snprintf(last_error_.data(), last_error_.size(), "CAN %s: socket error (poll events %d)", interface_.c_str(),
+                    static_cast<int>(p.revents));
+    }
     if (err == ENETDOWN || err == ENODEV || (p.revents & (POLLHUP | POLLNVAL))) return Rx::kDown;
     return Rx::kTimeout;
   }
@@ -169,7 +177,7 @@ Socket::Rx Socket::receive(Frame& frame, int64_t timeout_us) {
   const ssize_t got = ::recvmsg(fd_, &msg, 0);
   if (got < 0) {
     if (errno == EAGAIN || errno == EINTR) return Rx::kTimeout;
-    last_error_ = "CAN " + interface_ + ": receive: " + std::strerror(errno);
+    set_error("receive", errno);
     return (errno == ENETDOWN || errno == ENODEV) ? Rx::kDown : Rx::kTimeout;
   }
   frame = Frame{};
@@ -222,7 +230,7 @@ bool Socket::send(const Frame& frame) {
   const ssize_t n = ::write(fd_, &raw, size);
   if (n != static_cast<ssize_t>(size)) {
     ++counters_.tx_errors;
-    last_error_ = "CAN " + interface_ + ": send: " + std::strerror(errno);
+    set_error("send", errno);
     return false;
   }
   ++counters_.tx_frames;

@@ -91,13 +91,16 @@ class Socket {
   const Counters& counters() const { return counters_; }
   const std::string& interface() const { return interface_; }
   bool is_open() const { return fd_ >= 0; }
-  // A reason string for the last failure (for logs).
-  const std::string& last_error() const { return last_error_; }
+  // A reason string for the last failure (for logs). Kept in a fixed buffer: a failing send or
+  // receive (every period during bus-off) records it without allocating on a real-time thread.
+  const char* last_error() const { return last_error_.data(); }
 
  private:
   void open_socket();
   void close_socket();
   void apply_filters();
+  // Formats the reason into last_error_: "CAN <interface>: <what>[: <strerror(err)>]".
+  void set_error(const char* what, int err);
 
   std::string interface_;
   bool fd_frames_;
@@ -107,7 +110,7 @@ class Socket {
   uint32_t last_drop_count_ = 0;
   BusState state_ = BusState::kErrorActive;
   Counters counters_;
-  std::string last_error_;
+  std::array<char, 160> last_error_{};
 };
 
 }  // namespace whiskeye::can
