@@ -171,6 +171,7 @@ void control_thread(const Params& p, can::Socket& sock, gpio::MotorLines& lines,
   timespec next;
   clock_gettime(CLOCK_MONOTONIC, &next);
   add_ns(next, period_ns);
+  std::string fatal;  // why the loop ended early, if it did
   try {
     while (!core.finished()) {
       while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, nullptr) == EINTR) {
@@ -191,9 +192,7 @@ void control_thread(const Params& p, can::Socket& sock, gpio::MotorLines& lines,
       if (sock.is_open()) {
         for (int guard = 0; guard < 1024; ++guard) {
           const can::Socket::Rx rx = sock.receive(frame, 0);
-          if (rx == can::Socket::Rx::kFrame && (frame.extended || frame.rtr)) {
-            ++core.counters()[Counters::kRejectedWrongFrameType];  // the filters keep these out
-          } else if (rx == can::Socket::Rx::kFrame) {
+          if (rx == can::Socket::Rx::kFrame) {
             core.on_frame(frame.id, frame.fd, frame.payload(), mono_now_us());
           } else if (rx == can::Socket::Rx::kDown) {
             rt_log(shared, "whiskerd: %s; reopening", sock.last_error());
@@ -272,18 +271,14 @@ void control_thread(const Params& p, can::Socket& sock, gpio::MotorLines& lines,
       }
     }
   } catch (const std::exception& e) {
-    // Motors off before anything that may block (stderr into a full journal pipe), then say why.
-    const std::string not_dropped = disable_motors(lines, sock, p, core);
-    std::cerr << "whiskerd: fatal: " << e.what() << "; boards sent a disabled command"
-              << (not_dropped.empty() ? ", enable line low" : "; the enable line could not be dropped: " + not_dropped)
-              << "\n";
-    shared.exit_code.store(1);
+    fatal = e.what();
   }
-  // Whatever happened: the enable line ends low and the boards get a last disabled command.
-  if (const std::string not_dropped = disable_motors(lines, sock, p, core); !not_dropped.empty()) {
-    std::cerr << "whiskerd: the enable line could not be dropped: " << not_dropped << "\n";
-    shared.exit_code.store(1);
-  }
+  // Whatever happened: the enable line ends low and the boards get a last disabled command, before
+  // anything that may block (stderr into a full journal pipe); then say why.
+  const std::string not_dropped = disable_motors(lines, sock, p, core);
+  if (!fatal.empty()) std::cerr << "whiskerd: fatal: " << fatal << "; motors disabled\n";
+  if (!not_dropped.empty()) std::cerr << "whiskerd: the enable line could not be dropped: " << not_dropped << "\n";
+  if (!fatal.empty() || !not_dropped.empty()) shared.exit_code.store(1);
   shared.rt_done.store(true);
 }
 

@@ -103,7 +103,7 @@ int64_t CycleSynchroniser::others_newest(int input) const {
   int64_t newest = INT64_MIN;
   if (input != 0) newest = std::max(newest, newest_camera_);
   if (input != 1) newest = std::max(newest, newest_odometry_);
-  if (input != 2) newest = std::max(newest, newest_cycle_);
+  if (input != 2) newest = std::max(newest, last_cycle_end());
   return newest;
 }
 
@@ -123,7 +123,7 @@ bool CycleSynchroniser::own_time_was_corrupt(int input, int64_t utime, int64_t o
 }
 
 void CycleSynchroniser::recompute_data_time() {
-  data_time_ = std::max({newest_camera_, newest_odometry_, newest_cycle_});
+  data_time_ = std::max({newest_camera_, newest_odometry_, last_cycle_end()});
 }
 
 std::string CycleSynchroniser::add_camera(CameraFrame frame) {
@@ -171,21 +171,17 @@ std::string CycleSynchroniser::add_odometry(const odometry_t& odometry) {
 }
 
 std::string CycleSynchroniser::add_whisk_cycle(const whisk_cycle_t& cycle) {
-  int64_t last_pending = pending_.empty() ? consumed_until_ : pending_.back().utime_end;
-  if (cycle.utime_end <= last_pending && cycle.utime_end > consumed_until_ &&
-      own_time_was_corrupt(2, cycle.utime_end, newest_cycle_)) {
+  if (cycle.utime_end <= last_cycle_end() && cycle.utime_end > consumed_until_ &&
+      own_time_was_corrupt(2, cycle.utime_end, last_cycle_end())) {
     std::erase_if(pending_, [&](const whisk_cycle_t& c) { return c.utime_end >= cycle.utime_end; });
-    last_pending = pending_.empty() ? consumed_until_ : pending_.back().utime_end;
-    newest_cycle_ = last_pending;
     recompute_data_time();
   }
-  if (cycle.utime_end <= last_pending) {
+  if (cycle.utime_end <= last_cycle_end()) {
     ++counters_.out_of_order;
-    return out_of_order("WHISK_CYCLE", cycle.utime_end, last_pending);
+    return out_of_order("WHISK_CYCLE", cycle.utime_end, last_cycle_end());
   }
   if (std::string why = check_jump(2, cycle.utime_end, "WHISK_CYCLE"); !why.empty()) return why;
   advance_data_time(cycle.utime_end);
-  newest_cycle_ = cycle.utime_end;
   pending_.push_back(cycle);
   return {};
 }

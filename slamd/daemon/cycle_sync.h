@@ -113,6 +113,8 @@ class CycleSynchroniser {
   bool own_time_was_corrupt(int input, int64_t utime, int64_t own_newest);
   // The newest time the other inputs delivered (INT64_MIN if none).
   int64_t others_newest(int input) const;
+  // End of the newest whisk cycle taken: the last pending one, else the last handed out.
+  int64_t last_cycle_end() const { return pending_.empty() ? consumed_until_ : pending_.back().utime_end; }
   // After an input's buffered samples were dropped: data time from what every input still holds.
   void recompute_data_time();
 
@@ -123,7 +125,6 @@ class CycleSynchroniser {
   int64_t data_time_ = INT64_MIN;
   int64_t newest_camera_ = INT64_MIN;
   int64_t newest_odometry_ = INT64_MIN;
-  int64_t newest_cycle_ = INT64_MIN;    // end of the newest whisk cycle taken
   int64_t consumed_until_ = INT64_MIN;  // end of the last cycle handed out
   int jump_input_ = -1;                 // the input whose jump awaits confirmation
   int64_t jump_time_ = 0;               // its newest sample time

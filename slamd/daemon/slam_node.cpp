@@ -193,8 +193,6 @@ void SlamNode::reject(Input input, const std::string& what) {
   log_burst(input, "rejected " + what + " (" + std::to_string(counters_.validation_errors) + " rejected so far)");
 }
 
-void SlamNode::warn(Input input, const std::string& what) { log_burst(input, what); }
-
 void SlamNode::log_burst(Input input, const std::string& line) {
   // Per input, so a broken sender is logged once per burst and then every 100th even while the other
   // inputs are fine, and cannot flood the journal.
@@ -292,7 +290,7 @@ void SlamNode::process_one(const SyncedCycle& cycle) {
   // A whisk cycle without one valid sample is not a bad message (every sensor of the head was out):
   // it went on without touch, counted in cycles_without_contact, and logged like a rejection.
   if (!r.whisk_warning.empty()) {
-    warn(kWhiskInCycle, r.whisk_warning + ": mapped without touch");
+    log_burst(kWhiskInCycle, r.whisk_warning + ": mapped without touch");
   } else {
     accepted(kWhiskInCycle);
   }

@@ -87,8 +87,6 @@ class SlamNode {
   enum Input { kCamera, kOdometry, kWhisk, kFrameInCycle, kWhiskInCycle, kInputs };
   // Counts a rejected message (validation_errors) and logs it as log_burst() does.
   void reject(Input input, const std::string& what);
-  // Logs a degraded input that is not an error (not counted as one), as log_burst() does.
-  void warn(Input input, const std::string& what);
   // Logs the first line of a burst on that input and then every 100th, until accepted(input).
   void log_burst(Input input, const std::string& line);
   void accepted(Input input) { rejects_in_burst_[input] = 0; }
