@@ -343,5 +343,48 @@ TEST_F(ScriptedExm, ExcludesEventsOutsideTheGroundTruthAndCountsThem) {
   EXPECT_EQ(r.experience_events_after_base, 1u);
 }
 
+TEST_F(ScriptedExm, TheTraceGivesEveryCycleInTimeOrderWithItsReLocalisationAndItsMatch) {
+  using E = EventType;
+  for (int t = 0; t <= 4; ++t) at(t, {static_cast<double>(t), 0.0, 0.0});
+  gt_samples_[3].pose = {0.05, 0.0, 0.0};  // 5 cm from experience 0: correct
+  gt_samples_[4].pose = {0.0, 0.0, 0.0};
+  ev(0, E::kNewExperience, -1, 0);
+  ev(1, E::kNewExperience, 0, 1);
+  ev(4, E::kRelocalise, 0, 1);  // 1 m from where experience 1 was made: incorrect
+  ev(3, E::kRelocalise, 1, 0);  // listed out of order
+  ev(5, E::kSameExperience, 1, 1);  // after the ground truth
+  EvalInput input;
+  input.ground_truth = gt_samples_;
+  input.events = events_;
+  input.map = map_;
+  TemplateMatch m;
+  m.cycle = 3;
+  m.template_id = 7;
+  m.error = 0.04;
+  m.visual_shift = -2;
+  m.visual_used = true;
+  input.matches.push_back(m);
+  const ExmResult exm = run(1.5);
+  const std::vector<CycleTrace> trace = trace_cycles(input, exm);
+
+  ASSERT_EQ(trace.size(), 5u);
+  for (std::size_t i = 0; i + 1 < trace.size(); ++i) EXPECT_LT(trace[i].event.utime, trace[i + 1].event.utime);
+  EXPECT_DOUBLE_EQ(trace[2].t_s, 3.0);
+  EXPECT_EQ(trace[2].event.to_id, 0);
+  ASSERT_TRUE(trace[2].relocalisation.has_value());
+  EXPECT_TRUE(trace[2].relocalisation->correct);
+  EXPECT_NEAR(trace[2].relocalisation->position_error_m, 0.05, 1e-12);
+  ASSERT_TRUE(trace[2].match.has_value());
+  EXPECT_EQ(trace[2].match->template_id, 7);
+  EXPECT_EQ(trace[2].match->visual_shift, -2);
+  ASSERT_TRUE(trace[3].relocalisation.has_value());
+  EXPECT_FALSE(trace[3].relocalisation->correct);
+  EXPECT_NEAR(trace[3].relocalisation->position_error_m, 1.0, 1e-12);
+  EXPECT_FALSE(trace[3].match.has_value());  // no VITA_MATCH for that cycle
+  EXPECT_FALSE(trace[0].relocalisation.has_value());
+  ASSERT_TRUE(trace[0].gt.has_value());
+  EXPECT_FALSE(trace[4].gt.has_value());  // no ground truth at 5 s
+}
+
 }  // namespace
 }  // namespace whiskeye::eval

@@ -6,6 +6,7 @@
 #include "whiskeye/common/se2.h"
 
 #include <whiskeye/pose2d_t.hpp>
+#include <whiskeye/template_match_t.hpp>
 #include <whiskeye/vita_event_t.hpp>
 #include <whiskeye/vita_map_t.hpp>
 #include <whiskeye/vita_pose_t.hpp>
@@ -91,6 +92,16 @@ void write_log(const std::string& path, const Script& script) {
     e.mode = script.mode;
     bus.set_time(t);
     publish(bus, "VITA_EVENT", e);
+    template_match_t m{};  // the cycle's match: the target's template, new with a new experience
+    m.utime = t;
+    m.cycle = e.cycle;
+    m.template_id = to;
+    m.is_new = type == vita_event_t::NEW_EXPERIENCE;
+    m.error = m.visual_error = 0.01 * to;
+    m.visual_shift = to % 5 - 2;
+    m.mode = script.mode;
+    m.visual_used = true;
+    publish(bus, "VITA_MATCH", m);
     current = to;
   };
   auto add_experience = [&](int64_t t, int32_t id, double heading_error = 0.0) {
@@ -221,6 +232,49 @@ TEST_F(VitaEvalBinary, ComputesTheExpectedMetricsAndWritesJsonAndPlots) {
   ASSERT_FALSE(reloc_png.empty());
   EXPECT_GT(count_colour(reloc_png, 40, 40, 220), 100);  // the incorrect one (red)
   EXPECT_GT(count_colour(reloc_png, 40, 160, 40), 100);  // correct ones (green)
+}
+
+TEST_F(VitaEvalBinary, WritesAPerCycleTraceThatAgreesWithTheMetrics) {
+  write_log(file("vita.lcmlog"), Script{});
+  ASSERT_EQ(run_vita_eval("--input " + file("vita.lcmlog") + " --trace " + file("trace"), file("stdout.txt")), 0)
+      << read_text(file("stdout.txt"));
+  std::istringstream csv(read_text(file("trace/vita_trace.csv")));
+  std::string line;
+  ASSERT_TRUE(std::getline(csv, line));
+  EXPECT_EQ(line.rfind("cycle,t_s,event,from_id,to_id,", 0), 0u) << line;
+  const auto split = [](const std::string& l) {
+    std::vector<std::string> f;
+    std::stringstream ss(l);
+    for (std::string x; std::getline(ss, x, ',');) f.push_back(x);
+    if (!l.empty() && l.back() == ',') f.emplace_back();
+    return f;
+  };
+  const std::size_t columns = split(line).size();
+  int rows = 0, relocs_after_base = 0, correct_after_base = 0, wrong_at_30s = 0;
+  while (std::getline(csv, line)) {
+    const std::vector<std::string> f = split(line);
+    ASSERT_EQ(f.size(), columns) << line;
+    ++rows;
+    EXPECT_EQ(f[12], f[4]) << "the match of the cycle is joined: " << line;  // template = target here
+    if (f[2] != "relocalise") {
+      EXPECT_EQ(f[10], "") << line;
+      continue;
+    }
+    if (f[11] == "1") {
+      ++relocs_after_base;
+      correct_after_base += f[10] == "1";
+    }
+    if (f[10] == "0") {
+      ++wrong_at_30s;
+      EXPECT_NEAR(std::stod(f[1]), 30.0, 1e-6);
+      EXPECT_EQ(f[4], "3");
+      EXPECT_GT(std::stod(f[8]), 1.0);  // 27 s = 1.35 revolutions from where experience 3 was made
+    }
+  }
+  EXPECT_EQ(rows, 20 + 19 + 1 + 1);  // new in the first revolution, re-localisations, experience 20, same
+  EXPECT_EQ(relocs_after_base, 19);  // ARCR 18/19 in the JSON
+  EXPECT_EQ(correct_after_base, 18);
+  EXPECT_EQ(wrong_at_30s, 1);
 }
 
 TEST_F(VitaEvalBinary, ADamagedLogIsEvaluatedFromWhatCanBeReadAndTheDamageReported) {

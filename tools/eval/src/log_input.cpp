@@ -4,6 +4,7 @@
 #include "whiskeye/common/bus.h"
 
 #include <whiskeye/pose2d_t.hpp>
+#include <whiskeye/template_match_t.hpp>
 #include <whiskeye/vita_event_t.hpp>
 #include <whiskeye/vita_map_t.hpp>
 #include <whiskeye/vita_pose_t.hpp>
@@ -63,6 +64,11 @@ LoadedRun load_run(const std::string& path) {
       if (!decode_counted(ev, m, run)) continue;
       last_map = std::move(m);
       ++run.map_messages;
+    } else if (ev.channel == "VITA_MATCH") {
+      template_match_t m{};
+      if (!decode_counted(ev, m, run)) continue;
+      run.input.matches.push_back({m.utime, m.cycle, m.template_id, m.is_new != 0, m.error, m.visual_error,
+                                   m.pfh_error, m.sda_error, m.visual_shift, m.visual_used != 0, m.tactile_used != 0});
     } else if (ev.channel == "GROUND_TRUTH") {
       pose2d_t m{};
       if (!decode_counted(ev, m, run)) continue;

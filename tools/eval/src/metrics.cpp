@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <utility>
 
 namespace whiskeye::eval {
 
@@ -115,6 +116,14 @@ Alignment align_best_fit(const std::vector<PoseSample>& estimate, const GroundTr
 
 namespace {
 
+// Events by time, then cycle number (the order slamd produced them in; a log may interleave them).
+std::vector<ExperienceEvent> in_time_order(std::vector<ExperienceEvent> events) {
+  std::stable_sort(events.begin(), events.end(), [](const ExperienceEvent& a, const ExperienceEvent& b) {
+    return a.utime != b.utime ? a.utime < b.utime : a.cycle < b.cycle;
+  });
+  return events;
+}
+
 class StatsAccumulator {
  public:
   void add(double abs_error) {
@@ -196,10 +205,7 @@ std::optional<int64_t> base_set_end(const GroundTruth& gt, const EvalParams& par
 ExmResult compute_exm(const std::vector<ExperienceEvent>& events_in, const ExperienceMap& map,
                       const GroundTruth& gt, const EvalParams& params) {
   ExmResult r;
-  std::vector<ExperienceEvent> events = events_in;
-  std::stable_sort(events.begin(), events.end(), [](const ExperienceEvent& a, const ExperienceEvent& b) {
-    return a.utime != b.utime ? a.utime < b.utime : a.cycle < b.cycle;
-  });
+  const std::vector<ExperienceEvent> events = in_time_order(events_in);
 
   std::map<int32_t, int64_t> created;
   for (const MapExperience& e : map.experiences) created[e.id] = e.utime_created;
@@ -326,6 +332,34 @@ EvalResult evaluate(const EvalInput& input, const EvalParams& params) {
   r.exm = compute_exm(input.events, input.map, gt, params);
   r.enm = compute_enm(input.map, gt);
   return r;
+}
+
+// ---- Per-cycle trace ----
+
+std::vector<CycleTrace> trace_cycles(const EvalInput& input, const ExmResult& exm) {
+  const GroundTruth gt(input.ground_truth);
+  const std::vector<ExperienceEvent> events = in_time_order(input.events);
+  std::map<std::pair<int64_t, int32_t>, const Relocalisation*> relocs;
+  for (const Relocalisation& r : exm.relocalisations) relocs[{r.utime, r.to_id}] = &r;
+  std::map<int64_t, const TemplateMatch*> matches;
+  for (const TemplateMatch& m : input.matches) matches[m.cycle] = &m;
+
+  std::vector<CycleTrace> out;
+  out.reserve(events.size());
+  for (const ExperienceEvent& e : events) {
+    CycleTrace row;
+    row.event = e;
+    row.t_s = utime_delta_seconds(gt.begin_utime(), e.utime);
+    row.gt = gt.at(e.utime);
+    if (e.type == EventType::kRelocalise) {
+      const auto r = relocs.find({e.utime, e.to_id});
+      if (r != relocs.end()) row.relocalisation = *r->second;
+    }
+    const auto m = matches.find(e.cycle);
+    if (m != matches.end()) row.match = *m->second;
+    out.push_back(std::move(row));
+  }
+  return out;
 }
 
 }  // namespace whiskeye::eval

@@ -218,4 +218,38 @@ nlohmann::json to_json(const std::vector<RunReport>& runs, const EvalParams& par
   return j;
 }
 
+std::string format_trace_csv(const std::vector<CycleTrace>& rows) {
+  std::ostringstream out;
+  out << "cycle,t_s,event,from_id,to_id,gt_x,gt_y,gt_theta,target_error_m,target_error_deg,correct,after_base_set,"
+         "template_id,template_new,error,visual_error,pfh_error,sda_error,visual_shift,visual_used,tactile_used\n";
+  const auto g = [](double v) { return fmt("%.6g", v); };
+  for (const CycleTrace& r : rows) {
+    const ExperienceEvent& e = r.event;
+    const char* type = e.type == EventType::kNewExperience ? "new" : e.type == EventType::kRelocalise ? "relocalise" : "same";
+    out << e.cycle << ',' << fmt("%.3f", r.t_s) << ',' << type << ',' << e.from_id << ',' << e.to_id << ',';
+    if (r.gt) {
+      out << g(r.gt->x) << ',' << g(r.gt->y) << ',' << g(r.gt->theta) << ',';
+    } else {
+      out << ",,,";
+    }
+    if (r.relocalisation) {
+      const Relocalisation& rl = *r.relocalisation;
+      out << g(rl.position_error_m) << ',' << g(rad_to_deg(rl.angle_error_rad)) << ',' << (rl.correct ? 1 : 0) << ','
+          << (rl.after_base_set ? 1 : 0) << ',';
+    } else {
+      out << ",,,,";
+    }
+    if (r.match) {
+      const TemplateMatch& m = *r.match;
+      out << m.template_id << ',' << (m.is_new ? 1 : 0) << ',' << g(m.error) << ',' << g(m.visual_error) << ','
+          << g(m.pfh_error) << ',' << g(m.sda_error) << ',' << m.visual_shift << ',' << (m.visual_used ? 1 : 0) << ','
+          << (m.tactile_used ? 1 : 0);
+    } else {
+      out << ",,,,,,,,";
+    }
+    out << '\n';
+  }
+  return out.str();
+}
+
 }  // namespace whiskeye::eval

@@ -46,4 +46,7 @@ std::string format_table(const std::vector<RunReport>& runs, const std::vector<P
 nlohmann::json to_json(const std::vector<RunReport>& runs, const EvalParams& params,
                        const std::vector<PaperRow>& paper);
 
+// The per-cycle trace as CSV with a header row; a field that does not apply is empty (docs/evaluation.md).
+std::string format_trace_csv(const std::vector<CycleTrace>& rows);
+
 }  // namespace whiskeye::eval

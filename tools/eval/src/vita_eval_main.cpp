@@ -33,6 +33,7 @@ int run(int argc, char** argv) {
   std::vector<std::string> inputs;
   std::string json_path;
   std::string plots_dir;
+  std::string trace_dir;
   std::vector<std::string> paper_names;
   std::string centre = "0,0";
   double position_threshold_m = 0.08;
@@ -41,6 +42,9 @@ int run(int argc, char** argv) {
   app.add_option("--input", inputs, "slamd output log (repeat for a multi-row table)")->required();
   app.add_option("--json", json_path, "write all results as JSON to this file");
   app.add_option("--plots", plots_dir, "write PNG plots into this directory (created if missing)");
+  app.add_option("--trace", trace_dir,
+                 "write a CSV per run into this directory: every cycle's event, its re-localisation's error against "
+                 "ground truth and its template match (created if missing)");
   app.add_option("--paper-row", paper_names, "add the paper's Table I row: visual, tactile or vita (repeatable)")
       ->check(CLI::IsMember({"visual", "tactile", "vita"}));
   app.add_option("--centre", centre, "arena centre X,Y (m) for the first revolution (base set)")
@@ -120,6 +124,15 @@ int run(int argc, char** argv) {
                           loaded_inputs[i], reports[i].result);
       plot_relocalisations(base + "_relocalisations.png", reports[i].label + ": re-localisations",
                            loaded_inputs[i], reports[i].result, params);
+    }
+  }
+  if (!trace_dir.empty()) {
+    std::filesystem::create_directories(trace_dir);
+    for (std::size_t i = 0; i < reports.size(); ++i) {
+      const std::string path = (std::filesystem::path(trace_dir) / (reports[i].label + "_trace.csv")).string();
+      std::ofstream out(path);
+      out << format_trace_csv(trace_cycles(loaded_inputs[i], reports[i].result.exm));
+      if (!out) throw std::runtime_error("cannot write " + path);
     }
   }
   return 0;

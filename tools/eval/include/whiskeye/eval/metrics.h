@@ -171,11 +171,24 @@ EnmResult compute_enm(const ExperienceMap& map, const GroundTruth& gt);
 
 // ---- Everything ----
 
+// One cycle's template-matching result (VITA_MATCH); only the per-cycle trace uses it.
+struct TemplateMatch {
+  int64_t utime = 0;
+  int64_t cycle = 0;
+  int32_t template_id = -1;
+  bool is_new = false;
+  double error = 0.0, visual_error = 0.0, pfh_error = 0.0, sda_error = 0.0;  // divided by their σ
+  int32_t visual_shift = 0;
+  bool visual_used = false;
+  bool tactile_used = false;
+};
+
 struct EvalInput {
   std::vector<PoseSample> estimate;       // VITA_POSE
   std::vector<ExperienceEvent> events;    // VITA_EVENT
   ExperienceMap map;                      // last VITA_MAP
   std::vector<PoseSample> ground_truth;   // GROUND_TRUTH
+  std::vector<TemplateMatch> matches;     // VITA_MATCH
 };
 
 struct EvalResult {
@@ -188,5 +201,21 @@ struct EvalResult {
 };
 
 EvalResult evaluate(const EvalInput& input, const EvalParams& params);
+
+// ---- Per-cycle trace ----
+
+// What happened in one whisk cycle, against ground truth: where a run went wrong, and why. One row
+// per VITA_EVENT, in the order compute_exm() takes them.
+struct CycleTrace {
+  ExperienceEvent event;
+  double t_s = 0.0;                              // seconds after the first ground-truth sample
+  std::optional<Pose2> gt;                       // ground truth at the event (none outside it)
+  std::optional<Relocalisation> relocalisation;  // a counted re-localisation: its error, correctness
+  std::optional<TemplateMatch> match;            // the cycle's VITA_MATCH (the same cycle number)
+};
+
+// `exm` is compute_exm()'s result for the same input (its re-localisations are joined by time and
+// target).
+std::vector<CycleTrace> trace_cycles(const EvalInput& input, const ExmResult& exm);
 
 }  // namespace whiskeye::eval
