@@ -93,6 +93,8 @@ void Socket::open_socket() {
   if (::setsockopt(fd_, SOL_SOCKET, SO_TIMESTAMP, &on, sizeof(on)) < 0) fail("enable timestamps");
   if (::setsockopt(fd_, SOL_SOCKET, SO_RXQ_OVFL, &on, sizeof(on)) < 0) fail("enable drop counting");
   last_drop_count_ = 0;
+  sent_ok_ = false;
+  down_reported_by_send_ = false;
   apply_filters();
   if (rcvbuf_ > 0) set_receive_buffer(rcvbuf_);
   sockaddr_can addr{};
@@ -147,7 +149,7 @@ bool Socket::reopen() {
 }
 
 Socket::Rx Socket::receive(Frame& frame, int64_t timeout_us) {
-  if (fd_ < 0) return Rx::kDown;
+  if (fd_ < 0 || down_reported_by_send_) return Rx::kDown;  // last_error() says why
   pollfd p{fd_, POLLIN, 0};
   const int timeout_ms = timeout_us <= 0 ? 0 : static_cast<int>((timeout_us + 999) / 1000);
   const int n = ::poll(&p, 1, timeout_ms);
@@ -229,10 +231,16 @@ bool Socket::send(const Frame& frame) {
   const std::size_t size = frame.fd ? CANFD_MTU : CAN_MTU;
   const ssize_t n = ::write(fd_, &raw, size);
   if (n != static_cast<ssize_t>(size)) {
+    const int err = errno;
     ++counters_.tx_errors;
-    set_error("send", errno);
+    set_error("send", err);
+    if (err == ENETDOWN || err == ENODEV) {
+      down_reported_by_send_ = down_reported_by_send_ || sent_ok_;
+      sent_ok_ = false;
+    }
     return false;
   }
+  sent_ok_ = true;
   ++counters_.tx_frames;
   return true;
 }

@@ -108,6 +108,12 @@ class Socket {
   std::vector<Filter> filters_;
   int rcvbuf_ = 0;
   uint32_t last_drop_count_ = 0;
+  // The kernel reports an interface going down once, as a pending socket error, and whichever call
+  // comes next takes it: a receive (poll error, kDown) or a send (ENETDOWN). So a send that fails
+  // with ENETDOWN or ENODEV after one that succeeded is that report, and the next receive returns
+  // kDown. Failing sends on a socket opened while the interface is down are not (no reopen loop).
+  bool sent_ok_ = false;
+  bool down_reported_by_send_ = false;
   BusState state_ = BusState::kErrorActive;
   Counters counters_;
   std::array<char, 160> last_error_{};
