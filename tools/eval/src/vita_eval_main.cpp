@@ -15,6 +15,7 @@
 #include <iostream>
 #include <set>
 #include <sstream>
+#include <stdexcept>
 
 namespace {
 
@@ -25,6 +26,13 @@ bool parse_centre(const std::string& text, double& x, double& y) {
   std::istringstream in(text);
   char comma = 0;
   return static_cast<bool>(in >> x >> comma >> y) && comma == ',' && (in >> std::ws).eof();
+}
+
+// Writes `text` to `path`; throws naming the file if it cannot.
+void write_text(const std::string& path, const std::string& text) {
+  std::ofstream out(path);
+  out << text;
+  if (!out) throw std::runtime_error("cannot write " + path);
 }
 
 int run(int argc, char** argv) {
@@ -111,11 +119,7 @@ int run(int argc, char** argv) {
 
   std::cout << format_table(reports, paper);
 
-  if (!json_path.empty()) {
-    std::ofstream out(json_path);
-    out << to_json(reports, params, paper).dump(2) << "\n";
-    if (!out) throw std::runtime_error("cannot write " + json_path);
-  }
+  if (!json_path.empty()) write_text(json_path, to_json(reports, params, paper).dump(2) + "\n");
   if (!plots_dir.empty()) {
     std::filesystem::create_directories(plots_dir);
     for (std::size_t i = 0; i < reports.size(); ++i) {
@@ -129,10 +133,8 @@ int run(int argc, char** argv) {
   if (!trace_dir.empty()) {
     std::filesystem::create_directories(trace_dir);
     for (std::size_t i = 0; i < reports.size(); ++i) {
-      const std::string path = (std::filesystem::path(trace_dir) / (reports[i].label + "_trace.csv")).string();
-      std::ofstream out(path);
-      out << format_trace_csv(trace_cycles(loaded_inputs[i], reports[i].result.exm));
-      if (!out) throw std::runtime_error("cannot write " + path);
+      write_text((std::filesystem::path(trace_dir) / (reports[i].label + "_trace.csv")).string(),
+                 format_trace_csv(trace_cycles(loaded_inputs[i], reports[i].result.exm)));
     }
   }
   return 0;
