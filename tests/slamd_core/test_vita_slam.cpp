@@ -93,15 +93,17 @@ TEST(VitaSlam, AMissingSenseDegradesToTheOtherAndNeverStops) {
   EXPECT_FALSE(r1.match.visual_used);
   EXPECT_TRUE(r1.match.tactile_used);
   EXPECT_EQ(r1.match.template_id, 0);
-  // A whisk cycle without contact: vision alone.
-  const WhiskCycleInput nothing = test::whisk_cycle(w.geometry, {}, 0.003, 5);
+  // No touch data (every sample invalid, whiskerd's boards silent): vision alone recognises the place.
+  WhiskCycleInput silent = w.place(0).whisk;
+  for (WhiskSample& s : silent.samples) s.valid = false;
   CycleInput no_touch = input(w.place(0), 3);
-  no_touch.whisk = &nothing;
+  no_touch.whisk = &silent;
   const CycleResult r2 = slam.process_cycle(no_touch);
   EXPECT_TRUE(r2.match.visual_used);
   EXPECT_FALSE(r2.match.tactile_used);
   EXPECT_EQ(r2.match.template_id, 0);
   EXPECT_FALSE(r2.dense);
+  EXPECT_FALSE(r2.whisk_warning.empty());
   // Neither: no template, the map stays where it is, the pose still follows odometry.
   CycleInput none;
   none.utime = 4000000;
@@ -111,6 +113,42 @@ TEST(VitaSlam, AMissingSenseDegradesToTheOtherAndNeverStops) {
   EXPECT_EQ(r3.event.type, EventType::SameExperience);
   EXPECT_EQ(r3.experience_id, 0);
   EXPECT_NEAR(r3.pose.x, 0.09, 1e-9);  // 9 of the 10 samples have a previous sample to integrate from
+}
+
+TEST(VitaSlam, AViTaCycleThatTouchedNothingIsNotTakenForAPlaceWhereSomethingWasTouched) {
+  World w;
+  const WhiskCycleInput nothing = test::whisk_cycle(w.geometry, {}, 0.003, 5);
+  CycleInput touched = input(w.place(0), 1);  // the view of place 0, and its box touched
+  CycleInput open = input(w.place(0), 2);     // the same view, nothing within reach
+  open.whisk = &nothing;
+  VitaSlam slam(SlamParams{}, w.geometry);
+  ASSERT_EQ(slam.process_cycle(touched).match.template_id, 0);
+  // Vision decides a contact-free cycle, but only among contact-free templates: the touched place
+  // is not here, so this view makes a template of its own.
+  const CycleResult a = slam.process_cycle(open);
+  EXPECT_TRUE(a.match.visual_used);
+  EXPECT_FALSE(a.match.tactile_used);
+  EXPECT_TRUE(a.match.is_new);
+  EXPECT_EQ(a.match.template_id, 1);
+  EXPECT_FALSE(a.dense);
+  // The same view with nothing touched again is recognised, by vision alone (ε = its visual term).
+  open.utime += 1000000;
+  const CycleResult b = slam.process_cycle(open);
+  EXPECT_FALSE(b.match.is_new);
+  EXPECT_EQ(b.match.template_id, 1);
+  EXPECT_EQ(b.match.error, b.match.visual_error);
+  // And the touch brings place 0 back (a contact is never taken for a contact-free template).
+  touched.utime = 4000000;
+  const CycleResult c = slam.process_cycle(touched);
+  EXPECT_FALSE(c.match.is_new);
+  EXPECT_EQ(c.match.template_id, 0);
+  // Vision alone cannot tell the two apart: the visual mode takes the open view for place 0.
+  SlamParams visual;
+  visual.mode = Mode::Visual;
+  VitaSlam eyes(visual, w.geometry);
+  eyes.process_cycle(touched);
+  open.utime = 5000000;
+  EXPECT_EQ(eyes.process_cycle(open).match.template_id, 0);
 }
 
 TEST(VitaSlam, OdometryNoBaseCanProduceIsSkippedAndTheNextSampleCoversItsInterval) {

@@ -276,6 +276,7 @@ BestMatch TemplateStore::match(const Query& q, const Terms& terms, const MatchPa
       continue;
     }
     if (terms.tactile && has_tactile_[iu] == 0) continue;
+    if (terms.contact_free_only && num_contacts_[iu] > 0) continue;
     double ev = 0.0, ep = 0.0, es = 0.0;
     int shift = 0;
     if (terms.tactile) {

@@ -98,10 +98,17 @@ CycleResult VitaSlam::process_cycle(const CycleInput& in) {
     }
   }
   Terms terms{vt.has_value(), tt.has_value()};
-  // No contact this cycle: in ViTa mode touch says nothing about the place, so vision decides alone,
-  // and without a usable frame nothing does (an empty touch matches every contact-free template with
-  // ε = 0). Touch alone (tactile mode) compares empty touches, and is fooled by them, as the paper's.
-  if (params_.mode == Mode::Vita && terms.tactile && !tt->has_contact()) terms.tactile = false;
+  // No contact this cycle, in ViTa mode: the empty touch adds no term (it would be 0 against every
+  // contact-free template), so vision decides, with the visual threshold, but only among templates
+  // that touched nothing either: where something was touched is not here. (A contact cycle is never
+  // taken for a contact-free template the same way: its PFH differs from an empty one by 1/σ_PFH.)
+  // Without a usable frame nothing decides. Touch alone (tactile mode) compares empty touches, and
+  // is fooled by them, as the paper's. A cycle without touch data (no valid sample) has no tt: vision
+  // alone, against every template.
+  if (params_.mode == Mode::Vita && terms.tactile && !tt->has_contact()) {
+    terms.tactile = false;
+    terms.contact_free_only = true;
+  }
   const Query q{vt ? &*vt : nullptr, tt ? &*tt : nullptr};
   out.dense = tt.has_value() && tt->has_contact();
 

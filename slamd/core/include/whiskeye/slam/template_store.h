@@ -51,6 +51,9 @@ void load(const ParamNode& node, MatchParams& p);
 struct Terms {
   bool visual = false;
   bool tactile = false;
+  // Compare only with templates whose cycle touched nothing (a ViTa cycle that measured no contact:
+  // a place where something was touched is not this place).
+  bool contact_free_only = false;
 };
 
 // The current cycle's template (parts absent are nullptr).

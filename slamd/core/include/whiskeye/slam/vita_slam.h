@@ -4,8 +4,8 @@
 //      cells take one step per path_integration_period with the samples' mean (body-frame vx, vy, ω);
 //   2. templates: visual (if the mode uses vision and a frame came) and tactile (if the mode uses
 //      touch and a whisk cycle came); the terms compared are the mode's terms that are present —
-//      a missing sense degrades, never stops; a whisk cycle without contact adds no tactile terms
-//      when vision is available;
+//      a missing sense degrades, never stops; a ViTa whisk cycle without contact adds no tactile
+//      terms and is compared, by vision, only with templates that touched nothing either;
 //   3. match against every stored template: ε ≤ τ → match (inject energy at the template's pose
 //      cells, with the decay rule) else a new template (stored with the current pose-cell estimate);
 //   4. the experience map's action rule (same / new / re-localise) and relaxation.
