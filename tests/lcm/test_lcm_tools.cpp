@@ -11,6 +11,7 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <map>
@@ -58,9 +59,11 @@ class LcmTools : public ::testing::Test {
     return rx;
   }
 
-  // Records our traffic with the real lcm-logger and returns the log path.
+  // Records our traffic with the real lcm-logger and returns the log path. recording_start_us_ and
+  // recording_end_us_ bracket the recording on the wall clock lcm-logger stamps events with.
   std::string record_with_lcm_logger() {
     const std::string log = (dir_ / "recorded.lcmlog").string();
+    recording_start_us_ = wall_clock_us();
     Subprocess logger({"lcm-logger", "-f", log});
     // lcm-logger prints nothing once subscribed; it opens the file first, so wait for the file and
     // then keep publishing until it has seen every type at least once.
@@ -84,10 +87,18 @@ class LcmTools : public ::testing::Test {
       std::this_thread::sleep_for(std::chrono::milliseconds(25));
     }
     EXPECT_EQ(logger.stop(10.0, SIGINT), 0) << logger.output();
+    recording_end_us_ = wall_clock_us();
     return log;
   }
 
+  static int64_t wall_clock_us() {
+    return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
+        .count();
+  }
+
   fs::path dir_;
+  int64_t recording_start_us_ = 0;
+  int64_t recording_end_us_ = 0;
 };
 
 TEST_F(LcmTools, EveryTypeRoundTripsOverUdpmBetweenProcesses) {
@@ -114,10 +125,12 @@ TEST_F(LcmTools, OurLogReaderReadsWhatLcmLoggerRecorded) {
   std::set<std::string> seen;
   LogReader reader(log);
   LogEvent ev;
-  int64_t last_utime = 0;
+  // An event's utime is lcm-logger's receive time. It is not monotonic in file order (a message
+  // of several UDP fragments can be stamped before a short one logged ahead of it: CI once saw
+  // 152 us backwards), so it is checked against the recording's window, not against its neighbour.
   while (reader.next(ev)) {
-    EXPECT_GE(ev.utime, last_utime) << "lcm-logger writes events in time order";
-    last_utime = ev.utime;
+    EXPECT_GE(ev.utime, recording_start_us_) << ev.channel << " stamped before lcm-logger started";
+    EXPECT_LE(ev.utime, recording_end_us_) << ev.channel << " stamped after lcm-logger stopped";
     const auto it = by_channel.find(ev.channel);
     ASSERT_NE(it, by_channel.end()) << "unexpected channel " << ev.channel;
     EXPECT_TRUE(it->second->round_trips(ev.data)) << ev.channel;
