@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
+#include <iterator>
+#include <utility>
 
 namespace whiskeye::slamd {
 
@@ -71,32 +73,69 @@ std::string out_of_order(const char* name, int64_t utime, int64_t newest) {
 
 void CycleSynchroniser::advance_data_time(int64_t utime) { data_time_ = std::max(data_time_, utime); }
 
+bool CycleSynchroniser::confirms(Step& step, int input, int64_t utime) {
+  const int64_t limit = seconds_to_utime(params_.max_jump_s);
+  if (step.input >= 0 && step.input != input && std::llabs(utime - step.last) <= limit) {
+    step.input = -1;
+    return true;  // two inputs agree: the clock (or the recording) moved
+  }
+  if (step.input == input && utime > step.last && utime - step.last <= limit) {
+    // The same input goes on from its new time (after a pause, or a clock step), and no other input
+    // was heard meanwhile (any sample of theirs would have cancelled the step or confirmed it).
+    step.last = utime;
+    ++step.samples;
+    if (step.samples >= kConfirmSamples && step.last - step.first >= kConfirmSpanUs) {
+      step.input = -1;
+      return true;
+    }
+    return false;
+  }
+  step = Step{input, utime, utime, 1};
+  return false;
+}
+
 std::string CycleSynchroniser::check_jump(int input, int64_t utime, const char* name) {
   const int64_t limit = seconds_to_utime(params_.max_jump_s);
   if (data_time_ == INT64_MIN || utime <= plus(data_time_, limit)) {
-    if (input == jump_input_) jump_input_ = -1;  // that input is back in line: it was one bad time
+    ahead_.input = behind_.input = -1;  // a sample in line: whatever stepped was one bad clock
     return {};
   }
-  bool confirmed = false;
-  if (jump_input_ >= 0 && jump_input_ != input && std::llabs(utime - jump_time_) <= limit) {
-    confirmed = true;  // two inputs agree: the clock (or the recording) moved on
-  } else if (jump_input_ == input && utime > jump_time_ && utime - jump_time_ <= limit) {
-    jump_time_ = utime;  // the same input goes on from its new time: after a pause, or a clock step
-    confirmed = ++jump_samples_ >= kConfirmSamples;
-  } else {
-    jump_input_ = input;
-    jump_time_ = utime;
-    jump_samples_ = 1;
-  }
-  if (confirmed) {
+  behind_.input = -1;
+  if (confirms(ahead_, input, utime)) {
     ++counters_.jumps_followed;
-    jump_input_ = -1;
     return {};
   }
   ++counters_.time_jumps;
   return std::string(name) + ": sample time " + seconds(utime - data_time_) +
-         " s past the other inputs (dropped until another input, or " + std::to_string(kConfirmSamples) +
-         " samples in a row of this one, confirm the jump)";
+         " s past the other inputs (dropped until another input, or this one alone over " +
+         seconds(kConfirmSpanUs) + " s, confirm the jump)";
+}
+
+std::string CycleSynchroniser::check_step_back(int input, int64_t utime, int64_t own_newest, const char* name) {
+  const int64_t limit = seconds_to_utime(params_.max_jump_s);
+  if (data_time_ == INT64_MIN || plus(utime, limit) >= data_time_) {
+    ++counters_.out_of_order;
+    return out_of_order(name, utime, own_newest);
+  }
+  ahead_.input = -1;
+  if (confirms(behind_, input, utime)) {
+    ++counters_.jumps_followed;
+    restart_time_line();
+    return {};
+  }
+  ++counters_.time_jumps;
+  return std::string(name) + ": sample time " + seconds(data_time_ - utime) +
+         " s before the other inputs (a clock stepped back? dropped until another input, or this one "
+         "alone over " + seconds(kConfirmSpanUs) + " s, confirm it)";
+}
+
+void CycleSynchroniser::restart_time_line() {
+  restarted_ = flush();  // every pending cycle, with what arrived for it; the rest is the old time line
+  frames_.clear();
+  odometry_.clear();
+  data_time_ = newest_camera_ = newest_odometry_ = consumed_until_ = INT64_MIN;
+  ahead_ = behind_ = Step{};
+  std::fill(std::begin(agreeing_), std::end(agreeing_), 0);
 }
 
 int64_t CycleSynchroniser::others_newest(int input) const {
@@ -128,13 +167,13 @@ void CycleSynchroniser::recompute_data_time() {
 
 std::string CycleSynchroniser::add_camera(CameraFrame frame) {
   if (frame.utime < newest_camera_) {
-    if (!own_time_was_corrupt(0, frame.utime, newest_camera_)) {
-      ++counters_.out_of_order;
-      return out_of_order("CAMERA", frame.utime, newest_camera_);
+    if (own_time_was_corrupt(0, frame.utime, newest_camera_)) {
+      std::erase_if(frames_, [&](const CameraFrame& f) { return f.utime > frame.utime; });
+      newest_camera_ = frames_.empty() ? INT64_MIN : frames_.back().utime;
+      recompute_data_time();
+    } else if (std::string why = check_step_back(0, frame.utime, newest_camera_, "CAMERA"); !why.empty()) {
+      return why;
     }
-    std::erase_if(frames_, [&](const CameraFrame& f) { return f.utime > frame.utime; });
-    newest_camera_ = frames_.empty() ? INT64_MIN : frames_.back().utime;
-    recompute_data_time();
   }
   if (std::string why = check_jump(0, frame.utime, "CAMERA"); !why.empty()) return why;
   newest_camera_ = frame.utime;
@@ -154,8 +193,7 @@ std::string CycleSynchroniser::add_odometry(const odometry_t& odometry) {
     newest = std::max(newest_odometry_, consumed_until_);
   }
   if (odometry.utime <= newest) {
-    ++counters_.out_of_order;
-    return out_of_order("ODOMETRY", odometry.utime, newest);
+    if (std::string why = check_step_back(1, odometry.utime, newest, "ODOMETRY"); !why.empty()) return why;
   }
   if (std::string why = check_jump(1, odometry.utime, "ODOMETRY"); !why.empty()) return why;
   newest_odometry_ = odometry.utime;
@@ -177,8 +215,9 @@ std::string CycleSynchroniser::add_whisk_cycle(const whisk_cycle_t& cycle) {
     recompute_data_time();
   }
   if (cycle.utime_end <= last_cycle_end()) {
-    ++counters_.out_of_order;
-    return out_of_order("WHISK_CYCLE", cycle.utime_end, last_cycle_end());
+    if (std::string why = check_step_back(2, cycle.utime_end, last_cycle_end(), "WHISK_CYCLE"); !why.empty()) {
+      return why;
+    }
   }
   if (std::string why = check_jump(2, cycle.utime_end, "WHISK_CYCLE"); !why.empty()) return why;
   advance_data_time(cycle.utime_end);
@@ -221,7 +260,7 @@ SyncedCycle CycleSynchroniser::assemble(const whisk_cycle_t& cycle) {
 }
 
 std::vector<SyncedCycle> CycleSynchroniser::take_ready() {
-  std::vector<SyncedCycle> out;
+  std::vector<SyncedCycle> out = std::exchange(restarted_, {});
   while (!pending_.empty() && ready(pending_.front())) {
     out.push_back(assemble(pending_.front()));
     pending_.pop_front();
@@ -230,7 +269,7 @@ std::vector<SyncedCycle> CycleSynchroniser::take_ready() {
 }
 
 std::vector<SyncedCycle> CycleSynchroniser::flush() {
-  std::vector<SyncedCycle> out;
+  std::vector<SyncedCycle> out = std::exchange(restarted_, {});
   while (!pending_.empty()) {
     out.push_back(assemble(pending_.front()));
     pending_.pop_front();

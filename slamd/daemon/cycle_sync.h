@@ -12,12 +12,17 @@
 // (the node counts and logs it): older than what that input already delivered (out of order), or
 // more than max_jump_s past data time. The latter is one bad timestamp (dropping it keeps one
 // message from stalling every cycle behind it, or from ending the run early) until the jump is
-// confirmed — by a second input, or by the same input's next samples (kConfirmSamples in a row, each
-// in line with the one before: whisking resumed after a pause, a clock step forward, a new
-// recording) — and then followed. A corrupt time that could not be checked (an input's first
-// sample) is undone the same way: when an input's newest time lies more than max_jump_s past every
-// other input's and kConfirmSamples of its samples in a row agree with the others, that time (and
-// what was buffered at it) is dropped and the input goes on from its new samples.
+// confirmed — by a second input, or by the same input's next samples while every other input is
+// silent (kConfirmSamples in a row, each in line with the one before, over kConfirmSpanUs: whisking
+// resumed after a pause, a clock step forward, a new recording) — and then followed. A clock stepped
+// *back* is followed the same way: samples more than max_jump_s older than data time (and than
+// what their input delivered) are dropped until confirmed, then pending cycles are handed out as
+// complete as they are and the synchroniser starts over on the new time line. Any sample in line with
+// data time cancels a step awaiting confirmation, so one input with a wrong clock never takes data
+// time from inputs that are still running. A corrupt time that could not be checked (an input's
+// first sample) is undone the same way: when an input's newest time lies more than max_jump_s past
+// every other input's and kConfirmSamples of its samples in a row agree with the others, that time
+// (and what was buffered at it) is dropped and the input goes on from its new samples.
 #pragma once
 
 #include <whiskeye/image_t.hpp>
@@ -74,8 +79,8 @@ struct SyncedCycle {
 struct SyncCounters {
   int64_t cycles_without_camera = 0;
   int64_t out_of_order = 0;            // messages older than what was already consumed: dropped
-  int64_t time_jumps = 0;              // messages too far ahead of the others, dropped
-  int64_t jumps_followed = 0;          // jumps confirmed (second input, or the same input's next samples) and followed
+  int64_t time_jumps = 0;              // messages too far from data time (ahead, or behind: a step back), dropped
+  int64_t jumps_followed = 0;          // jumps (forward or back) confirmed and followed
   int64_t outliers_dropped = 0;        // an input's corrupt newest time undone (and what it buffered at it)
   int64_t odometry_overflow = 0;       // oldest samples dropped from a full buffer (no whisk cycles)
   bool operator==(const SyncCounters&) const = default;
@@ -85,6 +90,9 @@ class CycleSynchroniser {
  public:
   // Samples in a row, on one input, that confirm that input's own jump or undo its corrupt time.
   static constexpr int kConfirmSamples = 3;
+  // Time those samples must span for one input alone to confirm its jump: longer than any input's
+  // period (whisk cycles come about once a second), so that an input still running is heard first.
+  static constexpr int64_t kConfirmSpanUs = 2'000'000;
 
   explicit CycleSynchroniser(const SyncParams& params);
 
@@ -106,8 +114,24 @@ class CycleSynchroniser {
   bool ready(const whisk_cycle_t& cycle) const;
   SyncedCycle assemble(const whisk_cycle_t& cycle);
   void advance_data_time(int64_t utime);
+  // A sample time far from data time, awaiting confirmation that the clock (or the recording) moved.
+  struct Step {
+    int input = -1;     // the input that stepped; -1: none
+    int64_t first = 0;  // its first sample time on the new time line
+    int64_t last = 0;   // its newest
+    int samples = 0;    // its samples in a row, each in line with the one before
+  };
   // "" if `utime` on input `input` (0 camera, 1 odometry, 2 whisk) may advance data time.
   std::string check_jump(int input, int64_t utime, const char* name);
+  // For a sample older than what its input delivered: "" when it confirmed a clock stepped back (the
+  // synchroniser has started over and the sample is to be taken), else why it was dropped (late:
+  // out of order; far behind data time: a step back awaiting confirmation).
+  std::string check_step_back(int input, int64_t utime, int64_t own_newest, const char* name);
+  // True when `utime` from `input` confirms `step` (a second input near it, or the same input going
+  // on alone for kConfirmSamples over kConfirmSpanUs); otherwise `step` follows it.
+  bool confirms(Step& step, int input, int64_t utime);
+  // Hands the pending cycles out at the next take_ready() and forgets the old time line.
+  void restart_time_line();
   // True when `utime`, older than what `input` delivered (`own_newest`), is the kConfirmSamples-th
   // sample in a row that agrees with the other inputs while `own_newest` lies far past all of them.
   bool own_time_was_corrupt(int input, int64_t utime, int64_t own_newest);
@@ -126,9 +150,9 @@ class CycleSynchroniser {
   int64_t newest_camera_ = INT64_MIN;
   int64_t newest_odometry_ = INT64_MIN;
   int64_t consumed_until_ = INT64_MIN;  // end of the last cycle handed out
-  int jump_input_ = -1;                 // the input whose jump awaits confirmation
-  int64_t jump_time_ = 0;               // its newest sample time
-  int jump_samples_ = 0;                // its samples in a row, each in line with the one before
+  Step ahead_;                          // a jump forward awaiting confirmation
+  Step behind_;                         // a step back awaiting confirmation
+  std::vector<SyncedCycle> restarted_;  // cycles handed out by a step back, for the next take_ready()
   int agreeing_[3] = {0, 0, 0};         // per input: samples in a row behind its own outlying newest time
   SyncCounters counters_;
 };

@@ -172,19 +172,20 @@ int run_replay(const Loaded& cfg, const Options& o) {
   Progress progress;
   LogReader::EventView ev;
   int64_t next_status = INT64_MIN;
-  int64_t last_utime = 0;
-  int64_t first_utime = INT64_MIN;
+  int64_t last_utime = INT64_MIN;
+  int64_t data_us = 0;  // log time covered, counting only forward steps (a clock stepped back adds none)
   const int64_t t0 = monotonic_us();
   std::string channel;
   while (reader.next(ev)) {
-    if (first_utime == INT64_MIN) first_utime = ev.utime;
+    if (last_utime != INT64_MIN && ev.utime > last_utime) data_us += ev.utime - last_utime;
     last_utime = ev.utime;
     out.set_time(ev.utime);
     in.set_time(ev.utime);
     channel.assign(ev.channel);
     if (channel == "GROUND_TRUTH" || channel == "SIM_CONTACT_TRUTH") out.publish_raw(channel, ev.data);
     in.publish_shared(channel, ev.data, ev.owner);  // views into the mapped log, valid while it is
-    if (next_status == INT64_MIN) next_status = ev.utime + kUtimePerSecond;
+    // First event, or log time stepped back (a recording across a clock step): 1 s from now.
+    if (next_status == INT64_MIN || ev.utime < next_status - kUtimePerSecond) next_status = ev.utime + kUtimePerSecond;
     if (ev.utime >= next_status) {
       node.publish_status(ev.utime);
       next_status += kUtimePerSecond;
@@ -192,10 +193,11 @@ int run_replay(const Loaded& cfg, const Options& o) {
     progress.update(reader.progress());
   }
   node.flush();
+  if (last_utime == INT64_MIN) last_utime = 0;  // an empty log
   node.publish_status(last_utime);
   progress.done();
   const double wall = static_cast<double>(monotonic_us() - t0) * 1e-6;
-  const double data = first_utime == INT64_MIN ? 0.0 : static_cast<double>(last_utime - first_utime) * 1e-6;
+  const double data = static_cast<double>(data_us) * 1e-6;
   const auto st = node.status(last_utime);
   std::fprintf(stderr,
                "slamd: replayed %.1f s of data in %.2f s (%.0fx real time): %lld cycles, %d templates, %d experiences, "

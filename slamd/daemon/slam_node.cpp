@@ -331,7 +331,8 @@ void SlamNode::process_one(const SyncedCycle& cycle) {
   publish(out_, "VITA_MATCH", m);
 
   if (r.event.type != slam::EventType::SameExperience || r.match.is_new) map_dirty_ = true;
-  if (map_dirty_ && (last_map_utime_ == INT64_MIN ||
+  // (A cycle before the last map's time: the clock was stepped back and followed; not throttled.)
+  if (map_dirty_ && (last_map_utime_ == INT64_MIN || input.utime < last_map_utime_ ||
                      input.utime - last_map_utime_ >= seconds_to_utime(params_.map_period_s))) {
     publish_map(input.utime);
   }
@@ -425,6 +426,9 @@ bool SlamNode::Recent::changed_within(int64_t now_value, int64_t utime, int64_t 
     value = now_value;
     changed_at = utime;
   }
+  // A window clock that went back (a replayed log across a clock step): the change counts from now,
+  // instead of for as long as the step.
+  if (changed_at != INT64_MIN && utime < changed_at) changed_at = utime;
   return changed_at != INT64_MIN && utime - changed_at < window_us;
 }
 

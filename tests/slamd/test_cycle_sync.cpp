@@ -213,6 +213,76 @@ TEST(CycleSync, OneInputAloneGoesOnAfterAPause) {
   EXPECT_EQ(ready[1].whisk.cycle, 8);
 }
 
+TEST(CycleSync, AClockSteppedBackIsFollowed) {
+  // NTP stepping the robot's clock back an hour: every input goes back together. Every message used
+  // to be dropped as out of order until the clock had caught up: an hour of nothing mapped.
+  CycleSynchroniser s(SyncParams{});
+  const int64_t before = 3600 * kS;
+  feed(s, before + 20'000, before + 2 * kS);
+  EXPECT_EQ(s.add_whisk_cycle(cycle(1, before + kS)), "");
+  EXPECT_EQ(s.add_whisk_cycle(cycle(2, before + 2 * kS)), "");
+  ASSERT_EQ(s.take_ready().size(), 1u) << "cycle 1 is complete; cycle 2 waits for a frame at +2.15 s";
+  const std::string why = s.add_odometry(odo(20'000));
+  EXPECT_NE(why.find("ODOMETRY: sample time 3601.980 s before the other inputs (a clock stepped back?"),
+            std::string::npos)
+      << why;
+  EXPECT_EQ(s.add_camera(frame(40'000)), "") << "a second input confirms the step";
+  EXPECT_EQ(s.counters().jumps_followed, 1);
+  EXPECT_EQ(s.counters().time_jumps, 1);
+  const auto handed = s.take_ready();
+  ASSERT_EQ(handed.size(), 1u) << "the pending cycle is handed out as complete as it was";
+  EXPECT_EQ(handed[0].whisk.cycle, 2);
+  EXPECT_TRUE(handed[0].image);
+  // The new time line runs as the old one did.
+  feed(s, 60'000, 3 * kS);
+  EXPECT_EQ(s.add_whisk_cycle(cycle(3, 2 * kS)), "");
+  const auto ready = s.take_ready();
+  ASSERT_EQ(ready.size(), 1u);
+  EXPECT_EQ(ready[0].whisk.cycle, 3);
+  EXPECT_TRUE(ready[0].image);
+  EXPECT_EQ(ready[0].image->utime, 2 * kS);
+  ASSERT_FALSE(ready[0].odometry.empty());
+  EXPECT_EQ(ready[0].odometry.front().utime, 60'000);
+  EXPECT_EQ(ready[0].odometry.back().utime, 2 * kS);
+  EXPECT_EQ(s.counters().out_of_order, 0);
+  // A late message of a few seconds is still just out of order.
+  EXPECT_NE(s.add_odometry(odo(kS)).find("out of order"), std::string::npos);
+}
+
+TEST(CycleSync, OneInputAloneFollowsItsClockSteppedBackOnlyWhileTheOthersAreSilent) {
+  // Only whiskerd running: its clock goes back; three cycles over 2 s confirm it.
+  CycleSynchroniser s(SyncParams{});
+  const int64_t before = 3600 * kS;
+  for (int n = 1; n <= 3; ++n) EXPECT_EQ(s.add_whisk_cycle(cycle(n, before + n * kS)), "");
+  EXPECT_NE(s.add_whisk_cycle(cycle(4, kS)), "");
+  EXPECT_NE(s.add_whisk_cycle(cycle(5, 2 * kS)), "");
+  EXPECT_EQ(s.add_whisk_cycle(cycle(6, 3 * kS)), "");
+  EXPECT_EQ(s.counters().jumps_followed, 1);
+  // The base alone with a clock an hour behind the camera and whiskerd, which are still running:
+  // its samples never take data time from them, however many come in a row.
+  CycleSynchroniser t(SyncParams{});
+  feed(t, before + 20'000, before + 2 * kS);
+  for (int i = 1; i <= 200; ++i) {
+    EXPECT_NE(t.add_odometry(odo(i * 20'000)), "") << i;
+    if (i % 10 == 0) {
+      EXPECT_EQ(t.add_camera(frame(before + 2 * kS + i * 20'000)), "") << i;
+    }
+  }
+  EXPECT_EQ(t.counters().jumps_followed, 0);
+  EXPECT_EQ(t.data_time(), before + 6 * kS);
+  // Nor, ahead, one input with a clock an hour fast while another is running (it used to win after
+  // three samples, and every sample of the others was then dropped as out of order).
+  CycleSynchroniser u(SyncParams{});
+  feed(u, 20'000, 2 * kS);
+  for (int i = 1; i <= 200; ++i) {
+    EXPECT_NE(u.add_odometry(odo(before + i * 20'000)), "") << i;
+    if (i % 10 == 0) {
+      EXPECT_EQ(u.add_camera(frame(2 * kS + i * 20'000)), "") << i;
+    }
+  }
+  EXPECT_EQ(u.counters().jumps_followed, 0);
+}
+
 TEST(CycleSync, BadTimesBetweenGoodOnesAreNeverFollowed) {
   // A sender stamping every other sample an hour ahead: each bad time starts over, none confirms.
   CycleSynchroniser s(SyncParams{});

@@ -230,6 +230,27 @@ TEST_F(SlamNodeTest, ImplausibleSampleTimesAreRejectedAndNeitherStallNorMovePose
   EXPECT_GT(poses_.size(), poses + 90);
 }
 
+TEST_F(SlamNodeTest, AClockSteppedBackIsFollowedAndMappingGoesOn) {
+  // NTP steps the robot's clock back an hour. Every message used to be dropped as out of order
+  // until the clock had caught up: an hour with no event, no pose and no map.
+  stream({8, 40, 8, 8, 40}, 3600);
+  ASSERT_EQ(events_.size(), 4u) << "the last cycle waits for its next frame";
+  const std::size_t maps_before = maps_.size();
+  stream({8, 40, 8, 40}, 0);  // an hour earlier
+  EXPECT_EQ(events_.size(), 8u) << "the pending cycle was handed out, and the new ones mapped";
+  EXPECT_LT(events_.back().utime, kT0 + 3600 * kS);
+  EXPECT_LT(poses_.back().utime, kT0 + 3600 * kS) << "poses on the new time line";
+  ASSERT_GT(maps_.size(), maps_before);
+  EXPECT_LT(maps_.back().utime, kT0 + 3600 * kS) << "the map is not held back by the old time line";
+  const slam_status_t st = node_->status(kT0 + 4 * kS);
+  EXPECT_EQ(st.jumps_followed, 1);
+  EXPECT_EQ(st.out_of_order, 0);
+  EXPECT_EQ(st.cycles_without_camera, 0);
+  node_->flush();
+  EXPECT_EQ(events_.size(), 9u);
+  EXPECT_EQ(matches_[5].template_id, matches_[0].template_id) << "the map made before the step is still used";
+}
+
 TEST_F(SlamNodeTest, AFullOdometryBufferIsLoggedOncePerStretchWithoutWhiskCycles) {
   MemoryBus in;  // a node with a small buffer of its own: the fixture's node stays subscribed to in_
   NodeParams params;

@@ -170,6 +170,28 @@ TEST(VitaSlam, OdometryNoBaseCanProduceIsSkippedAndTheNextSampleCoversItsInterva
   EXPECT_DOUBLE_EQ(rb.pose.y, ra.pose.y);
 }
 
+TEST(VitaSlam, PathIntegrationGoesOnAfterTheClockWasSteppedBack) {
+  // The robot's clock stepped back an hour (and slamd followed it): every later odometry sample used
+  // to be skipped as out of order, for an hour, and after a restart from a checkpoint too.
+  World w;
+  VitaSlam slam(SlamParams{}, w.geometry);
+  slam.process_cycle(input(w.place(0), 1, odometry(1, 0.1, 0.0, 0.0)));  // x 0 -> 0.09
+  std::vector<OdometrySample> back = odometry(-3599, 0.1, 0.0, 0.0);      // an hour earlier
+  CycleInput in = input(w.place(1), 2, back);
+  in.utime = back.back().utime;
+  const CycleResult r = slam.process_cycle(in);
+  EXPECT_EQ(slam.stats().odometry_gaps, 1);
+  EXPECT_EQ(slam.stats().odometry_rejected, 0);
+  EXPECT_NEAR(r.pose.x, 0.18, 1e-9) << "the first sample after the step restarts the clock, the rest integrate";
+  // A sample a little older than the last (reordered, within max_odometry_dt) is still skipped.
+  std::vector<OdometrySample> late = {{back.back().utime - 500000, 0.1, 0.0, 0.0}};
+  CycleInput again = input(w.place(1), 3, late);
+  again.utime = back.back().utime + 1000000;
+  const CycleResult r2 = slam.process_cycle(again);
+  EXPECT_EQ(slam.stats().odometry_rejected, 1);
+  EXPECT_NEAR(r2.pose.x, r.pose.x, 1e-9);
+}
+
 TEST(VitaSlam, WithoutAFrameAndWithoutContactViTaMatchesNothing) {
   World w;
   VitaSlam slam(SlamParams{}, w.geometry);

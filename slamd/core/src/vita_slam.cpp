@@ -52,9 +52,21 @@ CycleResult VitaSlam::process_cycle(const CycleInput& in) {
     // integrates the whole interval (and the pose cells' sub-steps stay bounded).
     const bool usable = std::isfinite(o.vx) && std::isfinite(o.vy) && std::isfinite(o.omega) &&
                         std::hypot(o.vx, o.vy) <= kMaxSpeed && std::abs(o.omega) <= kMaxTurnRate;
-    if (!usable || (have_odometry_time_ && o.utime < last_odometry_utime_)) {
+    if (!usable) {
       ++stats_.odometry_rejected;
       continue;
+    }
+    if (have_odometry_time_ && o.utime < last_odometry_utime_) {
+      // A little older: reordered, skipped. Older by more than a gap: the clock was stepped back
+      // (and the daemon followed it), so integration goes on from this sample's time, counted as a
+      // gap; its own interval is unknown and not integrated. Skipping it would stop path integration
+      // for as long as the step, even across a restart from a checkpoint.
+      if (static_cast<double>(last_odometry_utime_ - o.utime) * 1e-6 <= params_.max_odometry_dt) {
+        ++stats_.odometry_rejected;
+        continue;
+      }
+      ++stats_.odometry_gaps;
+      have_odometry_time_ = false;
     }
     double dt = 0.0;
     if (have_odometry_time_) {

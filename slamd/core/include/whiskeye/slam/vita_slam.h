@@ -64,7 +64,7 @@ struct SlamStats {
   int64_t bad_images = 0;           // frames refused (InputError); the cycle went on without vision
   int64_t empty_whisk_cycles = 0;   // whisk cycles without a valid sample; went on without touch
   int64_t odometry_rejected = 0;    // samples out of order, non-finite or faster than kMaxSpeed: skipped
-  int64_t odometry_gaps = 0;        // dt > max_odometry_dt, clamped
+  int64_t odometry_gaps = 0;        // dt > max_odometry_dt, clamped; or time back by more (a clock step)
 };
 
 class VitaSlam {
