@@ -192,6 +192,9 @@ void WhiskerCore::on_frame(uint32_t id, bool fd, std::span<const uint8_t> data, 
       break;
     case wp::FrameKind::kHeartbeat:
       ++counters_[Counters::kHeartbeats];
+      // A board that rebooted starts its seq over: without this, the jump from its old seq was
+      // counted as up to 32767 lost samples when that seq was in the upper half of the u16 space.
+      if (d.heartbeat.state == wp::kNmtBootUp) assembler_.restart(d.heartbeat.board);
       break;
     case wp::FrameKind::kCommand:
       break;  // another host's command (or our own echo): not ours to act on

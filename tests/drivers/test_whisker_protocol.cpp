@@ -222,6 +222,35 @@ TEST(WhiskerProtocol, RebootedBoardIsResynchronisedAfterAFewLateSamples) {
   EXPECT_EQ(a.latest(3).seq, 7);  // other boards untouched
 }
 
+TEST(WhiskerProtocol, ABootUpHeartbeatRestartsTheBoardsSequenceWithoutAGap) {
+  // Board 2 at seq 40000 reboots and restarts at 0: a step of 25536, in the lower half of the u16
+  // space, so without its boot-up it counts as 25535 lost samples.
+  SampleAssembler without(BusMode::kFd), with(BusMode::kFd);
+  for (SampleAssembler* a : {&without, &with}) {
+    for (uint16_t s = 39990; s <= 40000; ++s) a->add(make_sample(2, s));
+    a->add(make_sample(3, 7));
+  }
+  EXPECT_TRUE(without.add(make_sample(2, 0)));
+  EXPECT_EQ(without.gaps(2), 25535) << "the phantom gap the boot-up heartbeat prevents";
+  std::array<uint8_t, 2> buf{};
+  encode_heartbeat({2, kNmtBootUp, 0}, buf);
+  const Decoded hb = decode_frame(0x703, false, buf, BusMode::kFd);
+  ASSERT_EQ(hb.kind, FrameKind::kHeartbeat);
+  ASSERT_EQ(hb.heartbeat.state, kNmtBootUp);
+  with.restart(hb.heartbeat.board);
+  EXPECT_TRUE(with.has_sample(2)) << "the last sample before the reboot is still the latest";
+  EXPECT_TRUE(with.add(make_sample(2, 0)));
+  EXPECT_TRUE(with.add(make_sample(2, 2)));
+  EXPECT_EQ(with.gaps(2), 1) << "no gap to the restart; seq 1 lost after it";
+  EXPECT_EQ(with.resyncs(), 1);
+  EXPECT_EQ(with.late(), 0);
+  EXPECT_EQ(with.latest(3).seq, 7);
+  // A board's first boot-up (nothing received from it before) is not a restart.
+  SampleAssembler fresh(BusMode::kClassic);
+  fresh.restart(5);
+  EXPECT_EQ(fresh.resyncs(), 0);
+}
+
 TEST(WhiskerProtocol, SingleLateFramesNeverResynchronise) {
   SampleAssembler a(BusMode::kClassic);
   auto sample = [&](uint8_t seq) {

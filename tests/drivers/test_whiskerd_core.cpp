@@ -73,6 +73,26 @@ TEST(WhiskerdCore, CountsRejectedFramesByReasonAndGapsPerBoard) {
   EXPECT_EQ(c[Counters::kGaps], 3 * wp::kNumBoards);
 }
 
+TEST(WhiskerdCore, ABoardsBootUpHeartbeatRestartsItsSequenceWithoutAPhantomGap) {
+  // Board 2 reboots at seq 40000 (upper half of the u16 space, so its restart at 0 looks like a
+  // forward step): its boot-up heartbeat keeps the 25535 samples it never sent out of gaps_board2.
+  Rig rig;
+  rig.seq = 39900;
+  rig.run(101);
+  ASSERT_EQ(rig.core.counters()[Counters::kGaps], 0);
+  rig.heartbeat(2, wp::kNmtBootUp);
+  for (int i = 0; i < 10; ++i) {
+    rig.feed(rig.seq++, 20, /*skip_board=*/2);
+    rig.send(2, i);
+    rig.step();
+  }
+  EXPECT_EQ(rig.core.counters()[Counters::kGapsBoard0 + 2], 0);
+  EXPECT_EQ(rig.core.counters()[Counters::kGaps], 0);
+  EXPECT_EQ(rig.core.counters()[Counters::kBoardResyncs], 1);
+  EXPECT_EQ(rig.core.counters()[Counters::kLateSamples], 0);
+  for (int w = 8; w < 12; ++w) EXPECT_EQ(rig.out.status[w], 0) << w;  // board 2 fresh
+}
+
 TEST(WhiskerdCore, RebootedBoardIsFollowedAndCountedInDriverStatus) {
   Rig rig;
   rig.run(300);

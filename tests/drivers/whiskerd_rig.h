@@ -40,12 +40,13 @@ struct Rig {
       if (b != skip_board) send(b, seq, x5);
     }
   }
+  void heartbeat(int b, uint8_t state = 0x05) {
+    std::array<uint8_t, 2> buf{};
+    wp::encode_heartbeat({b, state, 0}, buf);
+    core.on_frame(wp::heartbeat_id({}, b), false, buf, mono);
+  }
   void heartbeats() {
-    for (int b = 0; b < wp::kNumBoards; ++b) {
-      std::array<uint8_t, 2> buf{};
-      wp::encode_heartbeat({b, 0x05, 0}, buf);
-      core.on_frame(wp::heartbeat_id({}, b), false, buf, mono);
-    }
+    for (int b = 0; b < wp::kNumBoards; ++b) heartbeat(b);
   }
   void step() {
     mono += period;

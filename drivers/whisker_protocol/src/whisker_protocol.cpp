@@ -239,7 +239,7 @@ std::size_t encode_command_classic(const MotorCommand& c, int board, std::span<u
 }
 
 bool SampleAssembler::accept(Board& b, const BoardSample& s) {
-  if (b.have) {
+  if (b.have && !b.restarted) {
     const uint32_t modulus = mode_ == BusMode::kFd ? 0x10000u : 0x100u;
     auto steps = [modulus](uint16_t from, uint16_t to) {
       return (static_cast<uint32_t>(to) + modulus - from) % modulus;
@@ -263,10 +263,23 @@ bool SampleAssembler::accept(Board& b, const BoardSample& s) {
     }
   }
   b.late_run = 0;
+  b.restarted = false;
   b.latest = s;
   b.have = true;
   ++b.samples;
   return true;
+}
+
+void SampleAssembler::restart(int board) {
+  if (board < 0 || board >= kNumBoards) return;
+  Board& b = boards_[board];
+  if (b.pending_active) ++incomplete_;
+  b.pending_active = false;
+  b.late_run = 0;
+  if (b.have) {
+    ++resyncs_;         // a board seen before started over (its first boot is no restart)
+    b.restarted = true;  // its next sample is the first of the new sequence: no step, no gap
+  }
 }
 
 bool SampleAssembler::add(const BoardSample& s) {

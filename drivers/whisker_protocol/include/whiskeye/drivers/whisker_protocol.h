@@ -71,9 +71,12 @@ struct WhiskerFragment {
   WhiskerRaw whisker;
 };
 
+// CANopen NMT state of a heartbeat that announces a board's boot-up (sent once, when it starts).
+constexpr uint8_t kNmtBootUp = 0x00;
+
 struct Heartbeat {
   int board = 0;
-  uint8_t state = 0;  // CANopen NMT state: 0x05 operational, 0x7F pre-operational, 0x04 stopped
+  uint8_t state = 0;  // CANopen NMT state: 0x00 boot-up, 0x05 operational, 0x7F pre-operational, 0x04 stopped
   uint8_t error = 0;  // kBoard* bits
 };
 
@@ -158,10 +161,13 @@ struct DecodeCounters {
 
 // Keeps the latest complete sample of each board and counts sequence gaps per board. Classic-mode
 // fragments are assembled: a board sample is complete when all 4 whiskers of one seq have arrived.
-// A board that reboots restarts its sequence at 0, which looks like a run of late samples: after
-// kResyncAfterLate consecutive late samples of one board (each ahead of the previous one, with no
-// accepted sample in between) the last of them is accepted as the board's new sequence and counted
-// in resyncs(); a single reordered frame stays late.
+// A board that reboots restarts its sequence at 0. It says so with its boot-up heartbeat, and
+// restart() then takes its next sample as the start of a new sequence. Without it (the frame lost),
+// the restart looks like a run of late samples when the old seq was in the lower half of the
+// sequence space: after kResyncAfterLate consecutive late samples of one board (each ahead of the
+// previous one, with no accepted sample in between) the last of them is accepted as the board's new
+// sequence and counted in resyncs(); a single reordered frame stays late. (In the upper half, the
+// restart is indistinguishable from a gap, and counted as one.)
 class SampleAssembler {
  public:
   static constexpr int kResyncAfterLate = 3;
@@ -179,8 +185,11 @@ class SampleAssembler {
   int64_t incomplete() const { return incomplete_; }
   // Samples that arrived after a newer one of their board (reordered): ignored, their seq stays a gap.
   int64_t late() const { return late_; }
-  // Times a board's sequence was resynchronised after a run of late samples (a reboot).
+  // Times a board's sequence was restarted: after its boot-up heartbeat, or after a run of late samples.
   int64_t resyncs() const { return resyncs_; }
+  // The board announced its boot-up: its next sample starts a new sequence (no gap is counted to it,
+  // and a half-assembled classic sample of the old one is dropped as incomplete).
+  void restart(int board);
   // Count of complete samples per board since start.
   int64_t samples(int board) const { return boards_[board].samples; }
 
@@ -195,6 +204,7 @@ class SampleAssembler {
     bool pending_active = false;
     int late_run = 0;            // consecutive late samples since the last accepted one
     uint16_t last_late_seq = 0;  // seq of the last of them
+    bool restarted = false;      // booted up since the latest sample: the next one starts a sequence
   };
   bool accept(Board& b, const BoardSample& s);
   BusMode mode_;
