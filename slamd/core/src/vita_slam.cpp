@@ -61,7 +61,8 @@ CycleResult VitaSlam::process_cycle(const CycleInput& in) {
       // (and the daemon followed it), so integration goes on from this sample's time, counted as a
       // gap; its own interval is unknown and not integrated. Skipping it would stop path integration
       // for as long as the step, even across a restart from a checkpoint.
-      if (static_cast<double>(last_odometry_utime_ - o.utime) * 1e-6 <= params_.max_odometry_dt) {
+      const double back_s = (static_cast<double>(last_odometry_utime_) - static_cast<double>(o.utime)) * 1e-6;
+      if (back_s <= params_.max_odometry_dt) {
         ++stats_.odometry_rejected;
         continue;
       }
