@@ -48,6 +48,7 @@ struct Script {
   int bad_at = 200;
   int bus_off_at = 400;     // an error frame says bus-off here ...
   int restart_at = 1100;    // ... and the controller restarted here
+  int reboot_at = 600;      // board 4 reboots here: boot-up heartbeat, its seq starts over at 0
   long period_ns = 2000000;
   wp::BusMode mode() const { return classic ? wp::BusMode::kClassic : wp::BusMode::kFd; }
 };
@@ -59,6 +60,7 @@ Script classic_script() {
   s.bad_at = 40;
   s.bus_off_at = 80;
   s.restart_at = 220;
+  s.reboot_at = 190;
   s.period_ns = 10000000;
   return s;
 }
@@ -70,6 +72,14 @@ int16_t value_x(int w) { return static_cast<int16_t>(10 * (w / 4) + w % 4); }
 int16_t value_theta(int w) { return static_cast<int16_t>(100 + 5 * w); }
 // 6 lost samples; 270 is past the 8-bit classic sequence wrap.
 bool board2_skips(int seq) { return (seq >= 100 && seq <= 104) || seq == 270; }
+// Board 4 reboots at script.reboot_at. Before, its seq runs ahead of the others by an offset that
+// puts it in the upper half of the sequence space at the reboot (FD 40599, classic 133), where the
+// step back to 0 looks like a forward one: only its boot-up heartbeat keeps that out of the gaps.
+constexpr int kRebootBoard = 4;
+int board_seq(int b, int seq, const Script& script) {
+  if (b != kRebootBoard) return seq;
+  return seq < script.reboot_at ? seq + (script.classic ? 200 : 40000) : seq - script.reboot_at;
+}
 
 struct Results {
   std::ofstream out;
@@ -276,11 +286,17 @@ int main(int argc, char** argv) {
   clock_gettime(CLOCK_MONOTONIC, &t);
   int64_t contact_onset_mono = 0;
   for (int seq = 0; seq < script.samples; ++seq) {
+    if (seq == script.reboot_at) {
+      can::Frame h;
+      h.id = wp::heartbeat_id({}, kRebootBoard);
+      h.len = static_cast<uint8_t>(wp::encode_heartbeat({kRebootBoard, wp::kNmtBootUp, 0}, h.data));
+      send_reliably(tx, h);
+    }
     for (int b = 0; b < wp::kNumBoards; ++b) {
       if (b == 2 && board2_skips(seq)) continue;
       wp::BoardSample s;
       s.board = b;
-      s.seq = static_cast<uint16_t>(seq);
+      s.seq = static_cast<uint16_t>(board_seq(b, seq, script));
       for (int k = 0; k < 4; ++k) {
         const int w = 4 * b + k;
         s.whiskers[k].x = (w == kContactWhisker && seq >= script.contact_from) ? kContactX : value_x(w);
@@ -291,7 +307,8 @@ int main(int argc, char** argv) {
         for (int k = 0; k < 4; ++k) {
           can::Frame f;
           f.id = wp::sample_id({}, b);
-          f.len = static_cast<uint8_t>(wp::encode_fragment({b, static_cast<uint8_t>(seq & 0xff), k, 0, s.whiskers[k]}, f.data));
+          f.len = static_cast<uint8_t>(
+              wp::encode_fragment({b, static_cast<uint8_t>(s.seq & 0xff), k, 0, s.whiskers[k]}, f.data));
           send_reliably(tx, f);
         }
       } else {
@@ -447,6 +464,8 @@ int main(int argc, char** argv) {
   };
   counter_is("gaps_board2", 6);
   counter_is("gaps_board0", 0);
+  counter_is("gaps_board4", 0);  // its reboot is no loss
+  counter_is("board_resyncs", 1);
   counter_is("gaps", 6);
   counter_is("rejected_wrong_length", 1);
   counter_is("rejected_unknown_id", 1);
