@@ -6,12 +6,12 @@
 #include "subprocess.h"
 
 #include "whiskeye/common/bus.h"
+#include "whiskeye/common/clock.h"
 
 #include <whiskeye/pose2d_t.hpp>
 
 #include <gtest/gtest.h>
 
-#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <map>
@@ -63,7 +63,7 @@ class LcmTools : public ::testing::Test {
   // recording_end_us_ bracket the recording on the wall clock lcm-logger stamps events with.
   std::string record_with_lcm_logger() {
     const std::string log = (dir_ / "recorded.lcmlog").string();
-    recording_start_us_ = wall_clock_us();
+    recording_start_us_ = now_utime();
     Subprocess logger({"lcm-logger", "-f", log});
     // lcm-logger prints nothing once subscribed; it opens the file first, so wait for the file and
     // then keep publishing until it has seen every type at least once.
@@ -87,13 +87,8 @@ class LcmTools : public ::testing::Test {
       std::this_thread::sleep_for(std::chrono::milliseconds(25));
     }
     EXPECT_EQ(logger.stop(10.0, SIGINT), 0) << logger.output();
-    recording_end_us_ = wall_clock_us();
+    recording_end_us_ = now_utime();
     return log;
-  }
-
-  static int64_t wall_clock_us() {
-    return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
-        .count();
   }
 
   fs::path dir_;

@@ -76,6 +76,12 @@ bool board2_skips(int seq) { return (seq >= 100 && seq <= 104) || seq == 270; }
 // puts it in the upper half of the sequence space at the reboot (FD 40599, classic 133), where the
 // step back to 0 looks like a forward one: only its boot-up heartbeat keeps that out of the gaps.
 constexpr int kRebootBoard = 4;
+can::Frame heartbeat_frame(int board, uint8_t nmt_state) {
+  can::Frame h;
+  h.id = wp::heartbeat_id({}, board);
+  h.len = static_cast<uint8_t>(wp::encode_heartbeat({board, nmt_state, 0}, h.data));
+  return h;
+}
 int board_seq(int b, int seq, const Script& script) {
   if (b != kRebootBoard) return seq;
   return seq < script.reboot_at ? seq + (script.classic ? 200 : 40000) : seq - script.reboot_at;
@@ -286,12 +292,7 @@ int main(int argc, char** argv) {
   clock_gettime(CLOCK_MONOTONIC, &t);
   int64_t contact_onset_mono = 0;
   for (int seq = 0; seq < script.samples; ++seq) {
-    if (seq == script.reboot_at) {
-      can::Frame h;
-      h.id = wp::heartbeat_id({}, kRebootBoard);
-      h.len = static_cast<uint8_t>(wp::encode_heartbeat({kRebootBoard, wp::kNmtBootUp, 0}, h.data));
-      send_reliably(tx, h);
-    }
+    if (seq == script.reboot_at) send_reliably(tx, heartbeat_frame(kRebootBoard, wp::kNmtBootUp));
     for (int b = 0; b < wp::kNumBoards; ++b) {
       if (b == 2 && board2_skips(seq)) continue;
       wp::BoardSample s;
@@ -319,12 +320,7 @@ int main(int argc, char** argv) {
     }
     if (seq == script.contact_from) contact_onset_mono = monotonic_us();
     if (seq % (script.classic ? 10 : 50) == 0) {
-      for (int b = 0; b < wp::kNumBoards; ++b) {
-        can::Frame h;
-        h.id = wp::heartbeat_id({}, b);
-        h.len = static_cast<uint8_t>(wp::encode_heartbeat({b, 0x05, 0}, h.data));
-        send_reliably(tx, h);
-      }
+      for (int b = 0; b < wp::kNumBoards; ++b) send_reliably(tx, heartbeat_frame(b, 0x05));
     }
     if (seq == script.bus_off_at && !inject_error_frame(interface, CAN_ERR_BUSOFF)) std::cout << "cannot inject bus-off" << std::endl;
     if (seq == script.restart_at && !inject_error_frame(interface, CAN_ERR_RESTARTED)) std::cout << "cannot inject restart" << std::endl;
