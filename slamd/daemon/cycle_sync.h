@@ -17,12 +17,13 @@
 // resumed after a pause, a clock step forward, a new recording) — and then followed. A clock stepped
 // *back* is followed the same way: samples more than max_jump_s older than data time (and than
 // what their input delivered) are dropped until confirmed, then pending cycles are handed out as
-// complete as they are and the synchroniser starts over on the new time line. Any sample in line with
-// data time cancels a step awaiting confirmation, so one input with a wrong clock never takes data
-// time from inputs that are still running. A corrupt time that could not be checked (an input's
-// first sample) is undone the same way: when an input's newest time lies more than max_jump_s past
-// every other input's and kConfirmSamples of its samples in a row agree with the others, that time
-// (and what was buffered at it) is dropped and the input goes on from its new samples.
+// complete as they are and the synchroniser starts over on the new time line. Any sample taken in
+// line with data time (a late one is not taken) cancels a step awaiting confirmation, so one input
+// with a wrong clock never takes data time from inputs that are still running. A corrupt time that
+// could not be checked (an input's first sample) is undone the same way: when an input's newest
+// time lies more than max_jump_s past every other input's and kConfirmSamples of its samples in a
+// row agree with the others, that time (and what was buffered at it) is dropped and the input goes
+// on from its new samples.
 #pragma once
 
 #include <whiskeye/image_t.hpp>
