@@ -2,7 +2,8 @@
 // permitted) runs at the sample rate on absolute clock_nanosleep deadlines: drain CAN frames ->
 // WhiskerCore::step -> motor command on the bus -> hand the period's messages to the publisher
 // thread through a lock-free ring. Only the publisher thread touches LCM, so a slow or failing LCM
-// never delays the control loop. SIGTERM / SIGINT retract the whiskers and drop the enable line.
+// never delays the control loop; it also reopens a CAN socket that went down (socket_custody.h).
+// SIGTERM / SIGINT retract the whiskers and drop the enable line.
 #include <pthread.h>
 #include <sched.h>
 #include <signal.h>
@@ -29,6 +30,7 @@
 #include <whiskeye/whisk_cycle_t.hpp>
 #include <whiskeye/whisker_sample_t.hpp>
 
+#include "socket_custody.h"
 #include "spsc_ring.h"
 #include "whiskerd_core.h"
 #include "whiskeye/drivers/can_socket.h"
@@ -112,16 +114,16 @@ void send_command(can::Socket& sock, const Params& p, const wp::MotorCommand& cm
 // Drops the enable line and sends the boards a disabled command. Never throws: a second failure
 // while shutting down must not end in std::terminate with the line high. Returns "" or why the
 // line could not be dropped (the boards' disabled command went out regardless).
-std::string disable_motors(gpio::MotorLines& lines, can::Socket& sock, const Params& p, WhiskerCore& core) {
+std::string disable_motors(gpio::MotorLines& lines, can::Socket* sock, const Params& p, WhiskerCore& core) {
   std::string error;
   try {
     lines.set_enable(false);
   } catch (const std::exception& e) {
     error = e.what();
   }
-  if (sock.is_open()) {
+  if (sock != nullptr && sock->is_open()) {
     wp::MotorCommand off;
-    send_command(sock, p, off, core);
+    send_command(*sock, p, off, core);
   }
   return error;
 }
@@ -131,6 +133,8 @@ struct Shared {
   // Published whisk cycles travel back to the control thread, which recycles their storage: the
   // real-time loop then never allocates at a cycle completion. A full ring frees the cycle here.
   SpscRing<std::unique_ptr<rcp::WhiskCycle>, 8> used_cycles;
+  // A CAN socket that went down is reopened by the publisher thread, not in the control loop.
+  SocketCustody<can::Socket> can_socket;
   std::atomic<int64_t> rt_periods{0};
   std::atomic<bool> rt_done{false};
   std::atomic<int> exit_code{0};
@@ -148,7 +152,7 @@ void rt_log(Shared& shared, const char* fmt, ...) {
   shared.ring.try_push(item);  // a full ring loses the line, never blocks
 }
 
-void control_thread(const Params& p, can::Socket& sock, gpio::MotorLines& lines, Shared& shared,
+void control_thread(const Params& p, std::unique_ptr<can::Socket> sock, gpio::MotorLines& lines, Shared& shared,
                     ServiceNotifier& service) {
   const bool rt = make_realtime(p);
   WhiskerCore core(p);
@@ -161,11 +165,10 @@ void control_thread(const Params& p, can::Socket& sock, gpio::MotorLines& lines,
       jitter(static_cast<std::size_t>(per_status) + 16);
   Item item;
   LineGuard guard(lines);
-  int64_t next_reopen_mono = 0;
-  int64_t reopen_backoff_us = 100000;
   int64_t last_wake = 0;
   can::Frame frame;
-  can::BusState bus_state = sock.state();
+  can::BusState bus_state = sock->state();
+  can::Counters can_counters = sock->counters();  // as of the last period the socket was here
   std::unique_ptr<rcp::WhiskCycle> used_cycle;
 
   timespec next;
@@ -188,34 +191,29 @@ void control_thread(const Params& p, can::Socket& sock, gpio::MotorLines& lines,
       last_wake = woke;
       while (shared.used_cycles.try_pop(used_cycle)) core.recycle(std::move(used_cycle));
 
-      // Drain the socket without waiting.
-      if (sock.is_open()) {
+      // Drain the socket without waiting. One that went down is handed to the publisher thread to be
+      // reopened and comes back in a later period.
+      if (!sock && shared.can_socket.take_back(sock)) bus_state = sock->state();
+      if (sock) {
         for (int guard = 0; guard < 1024; ++guard) {
-          const can::Socket::Rx rx = sock.receive(frame, 0);
+          const can::Socket::Rx rx = sock->receive(frame, 0);
           if (rx == can::Socket::Rx::kFrame) {
             core.on_frame(frame.id, frame.fd, frame.payload(), mono_now_us());
           } else if (rx == can::Socket::Rx::kDown) {
-            rt_log(shared, "whiskerd: %s; reopening", sock.last_error());
-            sock.reopen();
+            rt_log(shared, "whiskerd: %s; reopening", sock->last_error());
+            can_counters = sock->counters();
+            shared.can_socket.give_up(sock);
             break;
           } else if (rx == can::Socket::Rx::kTimeout) {
             break;
           }
         }
-      } else if (woke >= next_reopen_mono) {
-        if (sock.reopen()) {
-          rt_log(shared, "whiskerd: CAN %s reopened", sock.interface().c_str());
-          reopen_backoff_us = 100000;
-        } else {
-          reopen_backoff_us = std::min<int64_t>(reopen_backoff_us * 2, 5000000);
-        }
-        next_reopen_mono = woke + reopen_backoff_us;
       }
 
-      if (sock.state() != bus_state) {
-        rt_log(shared, "whiskerd: CAN %s %s -> %s", sock.interface().c_str(), can::bus_state_name(bus_state),
-               can::bus_state_name(sock.state()));
-        bus_state = sock.state();
+      if (sock && sock->state() != bus_state) {
+        rt_log(shared, "whiskerd: CAN %s %s -> %s", sock->interface().c_str(), can::bus_state_name(bus_state),
+               can::bus_state_name(sock->state()));
+        bus_state = sock->state();
       }
       if (guard.poll_fault(core)) rt_log(shared, "whiskerd: motor fault / emergency stop: motors disabled");
       if (g_stop.load(std::memory_order_relaxed)) core.request_stop();
@@ -226,7 +224,7 @@ void control_thread(const Params& p, can::Socket& sock, gpio::MotorLines& lines,
         rt_log(shared, "whiskerd: %s -> %s%s%s%s", safety_name(before), safety_name(core.safety()),
                core.reason()[0] ? " (" : "", core.reason(), core.reason()[0] ? ")" : "");
       }
-      if (sock.is_open()) send_command(sock, p, item.period.command, core);
+      if (sock) send_command(*sock, p, item.period.command, core);
       guard.update(core);
       item.kind = Item::Kind::kPeriod;
       if (!shared.ring.try_push(item)) ++core.counters()[Counters::kPublishDrops];
@@ -245,9 +243,10 @@ void control_thread(const Params& p, can::Socket& sock, gpio::MotorLines& lines,
         s.utime = now_utime();
         s.safety = core.safety();
         s.reason = core.reason();
-        s.bus_state = sock.is_open() ? can::bus_state_name(sock.state()) : "down";
+        s.bus_state = sock ? can::bus_state_name(sock->state()) : "down";
         s.counters = core.counters().values;
-        const can::Counters& cc = sock.counters();
+        if (sock) can_counters = sock->counters();
+        const can::Counters& cc = can_counters;
         s.can_rx = cc.rx_frames;
         s.can_error_frames = cc.error_frames;
         s.can_bus_off = cc.bus_off;
@@ -275,7 +274,8 @@ void control_thread(const Params& p, can::Socket& sock, gpio::MotorLines& lines,
   }
   // Whatever happened: the enable line ends low and the boards get a last disabled command, before
   // anything that may block (stderr into a full journal pipe); then say why.
-  const std::string not_dropped = disable_motors(lines, sock, p, core);
+  if (!sock) shared.can_socket.take_back(sock);
+  const std::string not_dropped = disable_motors(lines, sock.get(), p, core);
   if (!fatal.empty()) std::cerr << "whiskerd: fatal: " << fatal << "; motors disabled\n";
   if (!not_dropped.empty()) std::cerr << "whiskerd: the enable line could not be dropped: " << not_dropped << "\n";
   if (!fatal.empty() || !not_dropped.empty()) shared.exit_code.store(1);
@@ -289,6 +289,7 @@ void publisher_thread(const Params& p, Bus& bus, Shared& shared, ServiceNotifier
   whisk_cycle_t cycle;
   driver_status_t status;
   int64_t last_periods = -1;
+  bool reopen_failed = false;  // this outage's first failure is logged, not every retry
   while (true) {
     bool any = false;
     while (shared.ring.try_pop(item)) {
@@ -311,6 +312,21 @@ void publisher_thread(const Params& p, Bus& bus, Shared& shared, ServiceNotifier
         status.num_counters = static_cast<int32_t>(status.counter_names.size());
         publish(bus, p.channel_status, status);
       }
+    }
+    // After the control thread's log lines, so its "reopening" comes before this "reopened".
+    switch (shared.can_socket.service(monotonic_us())) {
+      case SocketCustody<can::Socket>::Attempt::kReopened:
+        std::cerr << "whiskerd: CAN " << p.interface << " reopened\n";
+        reopen_failed = false;
+        break;
+      case SocketCustody<can::Socket>::Attempt::kFailed:
+        if (!reopen_failed) {
+          std::cerr << "whiskerd: " << shared.can_socket.held()->last_error() << "; retrying, every "
+                    << SocketCustody<can::Socket>::kMaxBackoffUs / 1000000 << " s at the most\n";
+        }
+        reopen_failed = true;
+        break;
+      case SocketCustody<can::Socket>::Attempt::kNone: break;
     }
     // Only pet the watchdog while the control loop makes progress: a stuck control thread must get
     // the service restarted even though this thread is fine.
@@ -389,7 +405,7 @@ int main(int argc, char** argv) {
   sigaction(SIGINT, &sa, nullptr);
 
   auto shared = std::make_unique<Shared>();
-  std::thread control([&] { control_thread(params, *sock, *lines, *shared, *service); });
+  std::thread control([&] { control_thread(params, std::move(sock), *lines, *shared, *service); });
   std::thread publisher([&] { publisher_thread(params, *bus, *shared, *service); });
   service->ready();
   control.join();

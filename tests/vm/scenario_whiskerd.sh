@@ -77,6 +77,11 @@ wait_for "$log" "vcan0 (CAN FD" 60 || echo "whiskerd did not start"
 heartbeats() { for _ in $(seq "$1"); do cansend vcan0 701#0500; sleep 0.01; done; }
 ip link set vcan0 down
 check whiskerd_notices_the_interface_going_down wait_for "$log" "reopening" 20
+# Reopened while still down, the socket waits for the interface; it must not report itself down again
+# and again (the first receive after a reopen taking can-raw's pending ENETDOWN: a reopen every period).
+sleep 2
+check whiskerd_does_not_reopen_again_and_again_while_the_interface_is_down \
+  bash -c "n=\$(grep -c 'reopening' '$log'); echo \"\$n reopenings\"; [ \"\$n\" -le 2 ]"
 ip link set vcan0 up
 heartbeats 20
 "$PROBE" --driver whiskerd --seconds 3 > /tmp/status_up.txt
@@ -84,9 +89,13 @@ cat /tmp/status_up.txt
 check whiskerd_receives_again_after_down_and_up \
   bash -c "grep -Eq '^can_reopens=[1-9]' /tmp/status_up.txt && grep -Eq '^can_rx_frames=([2-9][0-9]|[1-9][0-9]{2,})$' /tmp/status_up.txt && grep -Eq '^heartbeats=([2-9][0-9]|[1-9][0-9]{2,})$' /tmp/status_up.txt"
 ip link del vcan0
+check whiskerd_says_it_retries_while_the_interface_does_not_exist \
+  wait_for "$log" "CAN vcan0: no such interface: No such device; retrying" 20
 sleep 2  # whiskerd retries with backoff while vcan0 does not exist
 setup_vcan vcan0
-check whiskerd_reopens_a_recreated_interface wait_for "$log" "CAN vcan0 reopened" 30
+# The earlier down/up reopened it too: only a "reopened" after the "retrying" counts.
+check whiskerd_reopens_a_recreated_interface \
+  bash -c "for _ in \$(seq 300); do sed -n '/; retrying/,\$p' '$log' | grep -q 'CAN vcan0 reopened' && exit 0; sleep 0.1; done; exit 1"
 heartbeats 20
 "$PROBE" --driver whiskerd --seconds 3 > /tmp/status_new.txt
 cat /tmp/status_new.txt

@@ -101,6 +101,14 @@ void Socket::open_socket() {
   addr.can_family = AF_CAN;
   addr.can_ifindex = ifr.ifr_ifindex;
   if (::bind(fd_, reinterpret_cast<sockaddr*>(&addr), sizeof(addr)) < 0) fail("bind");
+  // Bound to an interface that is down, the socket starts with ENETDOWN pending (can-raw's bind
+  // reports it). It is not news: it receives once the interface comes up. Taken here, it cannot make
+  // the first receive return kDown, which would reopen the socket again and again while the
+  // interface stays down.
+  int pending = 0;
+  socklen_t len = sizeof(pending);
+  ::getsockopt(fd_, SOL_SOCKET, SO_ERROR, &pending, &len);
+  if (pending != 0) set_error("opened while the interface is down", pending);
 }
 
 void Socket::apply_filters() {
