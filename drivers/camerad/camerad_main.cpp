@@ -115,10 +115,12 @@ int main(int argc, char** argv) {
   v4l2::Backoff backoff(p.reopen_initial_s, p.reopen_max_s);
   int64_t next_open_us = 0;
   std::string last_open_error;
-  int64_t frames = 0, reopens = 0, device_lost = 0, open_failures = 0, sequence_gaps = 0;
+  int64_t frames = 0, reopens = 0, device_lost = 0, open_failures = 0, sequence_gaps = 0, dequeue_errors = 0;
   // Totals of the capture sessions already closed; the open one adds its own (Capture counts since open).
   int64_t closed_corrupt_frames = 0, closed_requeue_failures = 0;
   bool corrupt_logged = false;  // one log line per capture session, the counter says how many
+  bool dequeue_error_logged = false;  // likewise
+  int64_t session_frames = 0;
   auto close_capture = [&] {
     closed_corrupt_frames += cap->corrupt_frames();
     closed_requeue_failures += cap->requeue_failures();
@@ -129,6 +131,8 @@ int main(int argc, char** argv) {
   int64_t last_frame_us = 0;
   int64_t last_sequence = -1;
   int64_t frame_timeout_us = static_cast<int64_t>(p.frame_timeout_s * 1e6);
+  // The longest silence for which DRIVER_STATUS still says OK (1 s, or three frame periods).
+  int64_t healthy_gap_us = 1000000;
   const int64_t status_period_us = static_cast<int64_t>(p.status_period_s * 1e6);
   int64_t next_status_us = monotonic_us() + status_period_us;
   bool ready_sent = false;
@@ -149,10 +153,13 @@ int main(int argc, char** argv) {
         last_frame_us = now;
         last_sequence = -1;
         corrupt_logged = false;
+        dequeue_error_logged = false;
+        session_frames = 0;
         // At least three frame periods of the negotiated rate (the driver may pick a slower one
         // than asked, or the configuration ask for less than a frame per frame_timeout_s).
         frame_timeout_us = static_cast<int64_t>(
             std::max(p.frame_timeout_s, cap->fps() > 0.0 ? 3.0 / cap->fps() : 0.0) * 1e6);
+        healthy_gap_us = static_cast<int64_t>(std::max(1.0, cap->fps() > 0.0 ? 3.0 / cap->fps() : 0.0) * 1e6);
       } catch (const v4l2::CaptureError& e) {
         ++open_failures;
         if (e.what() != last_open_error) std::cerr << "camerad: " << e.what() << "; retrying\n";
@@ -178,6 +185,7 @@ int main(int argc, char** argv) {
         img.data.assign(f.data, f.data + f.size);
         publish(*bus, p.channel, img);  // a failed send is counted by the bus
         ++frames;
+        ++session_frames;
         ++interval_frames;
         const double latency = static_cast<double>(now_utime() - f.utime);
         interval_latency_sum_us += latency;
@@ -191,6 +199,14 @@ int main(int argc, char** argv) {
         std::cerr << "camerad: " << cap->device() << ": skipping a frame "
                   << v4l2::frame_check_name(cap->last_skip()) << " (counted in corrupt_frames)\n";
         corrupt_logged = true;
+      } else if (r == v4l2::Capture::Result::kError) {
+        ++dequeue_errors;
+        if (!dequeue_error_logged) {
+          std::cerr << "camerad: " << cap->last_error() << " (counted in dequeue_errors)\n";
+          dequeue_error_logged = true;
+        }
+        // The driver may keep failing at once: do not spin. No frames -> reopened after frame_timeout.
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
       }
       if (r != v4l2::Capture::Result::kFrame &&
           (r == v4l2::Capture::Result::kGone ||
@@ -212,16 +228,21 @@ int main(int argc, char** argv) {
       driver_status_t st;
       st.utime = now_utime();
       st.driver = "camerad";
-      st.state = cap ? driver_status_t::STATE_OK : driver_status_t::STATE_DEGRADED;
+      // Open is not enough: OK only while frames arrive.
+      const std::string problem =
+          cap ? v4l2::stream_problem(session_frames, t - last_frame_us, healthy_gap_us, cap->corrupt_frames()) : "";
+      st.state = cap && problem.empty() ? driver_status_t::STATE_OK : driver_status_t::STATE_DEGRADED;
       st.message = cap ? cap->device() + " " + std::to_string(cap->width()) + "x" + std::to_string(cap->height()) +
-                             " " + v4l2::fourcc_name(cap->pixelformat())
+                             " " + v4l2::fourcc_name(cap->pixelformat()) + (problem.empty() ? "" : ": " + problem)
                        : "no camera: " + (last_open_error.empty() ? std::string("reopening") : last_open_error);
       const int64_t corrupt_frames = closed_corrupt_frames + (cap ? cap->corrupt_frames() : 0);
       const int64_t requeue_failures = closed_requeue_failures + (cap ? cap->requeue_failures() : 0);
-      st.counter_names = {"frames",        "device_lost",    "reopens",          "open_failures",
-                          "sequence_gaps", "corrupt_frames", "requeue_failures", "lcm_publish_errors"};
-      st.counter_values = {frames,        device_lost,    reopens,          open_failures,
-                           sequence_gaps, corrupt_frames, requeue_failures, bus->publish_errors()};
+      st.counter_names = {"frames",           "device_lost",    "reopens",        "open_failures",
+                          "sequence_gaps",    "corrupt_frames", "dequeue_errors", "requeue_failures",
+                          "lcm_publish_errors"};
+      st.counter_values = {frames,           device_lost,    reopens,        open_failures,
+                           sequence_gaps,    corrupt_frames, dequeue_errors, requeue_failures,
+                           bus->publish_errors()};
       st.num_counters = static_cast<int32_t>(st.counter_names.size());
       st.stat_names = {"fps", "latency_mean_us", "latency_max_us"};
       st.stat_values = {static_cast<double>(interval_frames) / p.status_period_s,

@@ -56,35 +56,45 @@ TEST(V4l2Capture, NoMatchingCardIsAnError) {
   EXPECT_THROW(find_device(c), CaptureError);
 }
 
+// The mapped length of each test buffer: larger than any frame below.
+constexpr std::size_t kMapped = 1 << 20;
+
 TEST(V4l2FrameCheck, WholeFramesAreUsable) {
   // 640x480 YUYV: stride 1280, 614400 bytes; GREY: stride 640; MJPG: any non-empty size.
-  EXPECT_EQ(check_frame(0, 614400, kYUYV, 1280, 480), FrameCheck::kUsable);
-  EXPECT_EQ(check_frame(0, 700000, kYUYV, 1280, 480), FrameCheck::kUsable);  // driver padding
-  EXPECT_EQ(check_frame(0, 307200, kGREY, 640, 480), FrameCheck::kUsable);
-  EXPECT_EQ(check_frame(0, 23456, kMJPG, 0, 480), FrameCheck::kUsable);
-  EXPECT_EQ(check_frame(~kBufFlagError, 614400, kYUYV, 1280, 480), FrameCheck::kUsable);  // other flags
+  EXPECT_EQ(check_frame(0, 614400, kMapped, kYUYV, 1280, 480), FrameCheck::kUsable);
+  EXPECT_EQ(check_frame(0, 700000, kMapped, kYUYV, 1280, 480), FrameCheck::kUsable);  // driver padding
+  EXPECT_EQ(check_frame(0, 307200, kMapped, kGREY, 640, 480), FrameCheck::kUsable);
+  EXPECT_EQ(check_frame(0, 23456, kMapped, kMJPG, 0, 480), FrameCheck::kUsable);
+  EXPECT_EQ(check_frame(~kBufFlagError, 614400, kMapped, kYUYV, 1280, 480), FrameCheck::kUsable);  // other flags
 }
 
 TEST(V4l2FrameCheck, BufferFlaggedAsErrorIsSkippedWhateverItsSize) {
-  EXPECT_EQ(check_frame(kBufFlagError, 614400, kYUYV, 1280, 480), FrameCheck::kErrorFlag);
-  EXPECT_EQ(check_frame(kBufFlagError | 0x1, 23456, kMJPG, 0, 480), FrameCheck::kErrorFlag);
+  EXPECT_EQ(check_frame(kBufFlagError, 614400, kMapped, kYUYV, 1280, 480), FrameCheck::kErrorFlag);
+  EXPECT_EQ(check_frame(kBufFlagError | 0x1, 23456, kMapped, kMJPG, 0, 480), FrameCheck::kErrorFlag);
 }
 
 TEST(V4l2FrameCheck, TruncatedRawFrameIsSkipped) {
-  EXPECT_EQ(check_frame(0, 614399, kYUYV, 1280, 480), FrameCheck::kShortPayload);
-  EXPECT_EQ(check_frame(0, 1280 * 240, kYUYV, 1280, 480), FrameCheck::kShortPayload);
-  EXPECT_EQ(check_frame(0, 640 * 479, kGREY, 640, 480), FrameCheck::kShortPayload);
+  EXPECT_EQ(check_frame(0, 614399, kMapped, kYUYV, 1280, 480), FrameCheck::kShortPayload);
+  EXPECT_EQ(check_frame(0, 1280 * 240, kMapped, kYUYV, 1280, 480), FrameCheck::kShortPayload);
+  EXPECT_EQ(check_frame(0, 640 * 479, kMapped, kGREY, 640, 480), FrameCheck::kShortPayload);
   // A compressed frame has no fixed size: a small JPEG is whole.
-  EXPECT_EQ(check_frame(0, 1000, kMJPG, 0, 480), FrameCheck::kUsable);
+  EXPECT_EQ(check_frame(0, 1000, kMapped, kMJPG, 0, 480), FrameCheck::kUsable);
 }
 
 TEST(V4l2FrameCheck, EmptyBufferIsSkipped) {
-  EXPECT_EQ(check_frame(0, 0, kMJPG, 0, 480), FrameCheck::kEmpty);
-  EXPECT_EQ(check_frame(0, 0, kYUYV, 1280, 480), FrameCheck::kEmpty);
+  EXPECT_EQ(check_frame(0, 0, kMapped, kMJPG, 0, 480), FrameCheck::kEmpty);
+  EXPECT_EQ(check_frame(0, 0, kMapped, kYUYV, 1280, 480), FrameCheck::kEmpty);
+}
+
+TEST(V4l2FrameCheck, ABufferClaimingMoreThanItsMappedLengthIsSkipped) {
+  EXPECT_EQ(check_frame(0, 614401, 614400, kYUYV, 1280, 480), FrameCheck::kOverlong);
+  EXPECT_EQ(check_frame(0, 614400, 614400, kYUYV, 1280, 480), FrameCheck::kUsable);
+  EXPECT_EQ(check_frame(0, 50001, 50000, kMJPG, 0, 480), FrameCheck::kOverlong);
 }
 
 TEST(V4l2FrameCheck, EveryReasonHasAName) {
-  for (FrameCheck c : {FrameCheck::kUsable, FrameCheck::kErrorFlag, FrameCheck::kShortPayload, FrameCheck::kEmpty}) {
+  for (FrameCheck c : {FrameCheck::kUsable, FrameCheck::kErrorFlag, FrameCheck::kShortPayload, FrameCheck::kEmpty,
+                       FrameCheck::kOverlong}) {
     EXPECT_STRNE(frame_check_name(c), "?");
   }
   EXPECT_STREQ(frame_check_name(FrameCheck::kShortPayload), "shorter than stride x height");
@@ -106,4 +116,49 @@ TEST(V4l2Requeue, BufferWhoseQbufFailsIsKeptAndRetried) {
   EXPECT_EQ(requeue_all(pending, qbuf), 0);
   EXPECT_TRUE(pending.empty());
   EXPECT_EQ(queued, (std::vector<uint32_t>{0, 2}));
+}
+
+TEST(V4l2Format, WhatTheDriverSettledOnIsCheckedBeforeStreaming) {
+  const std::vector<uint32_t> wanted{kYUYV, kGREY};
+  NegotiatedFormat yuyv{kYUYV, 640, 480, 1280, 614400, kFieldNone};
+  EXPECT_EQ(format_problem(yuyv, wanted), "");
+  NegotiatedFormat padded = yuyv;  // lines padded to 1344 bytes: fine, camerad publishes the stride
+  padded.bytesperline = 1344;
+  padded.sizeimage = 1344 * 480;
+  EXPECT_EQ(format_problem(padded, wanted), "");
+
+  NegotiatedFormat other = yuyv;
+  other.pixelformat = kMJPG;
+  EXPECT_EQ(format_problem(other, wanted), "the driver chose pixel format MJPG, which was not asked for");
+  NegotiatedFormat interlaced = yuyv;
+  interlaced.field = 4;  // V4L2_FIELD_INTERLACED
+  EXPECT_EQ(format_problem(interlaced, wanted),
+            "the driver chose interlaced fields (v4l2_field 4), not progressive frames");
+  NegotiatedFormat no_stride = yuyv;
+  no_stride.bytesperline = 0;
+  EXPECT_EQ(format_problem(no_stride, wanted), "the driver's YUYV line of 0 bytes is shorter than 640 pixels x 2 bytes");
+  NegotiatedFormat grey_short{kGREY, 640, 480, 639, 640 * 480, kFieldNone};
+  EXPECT_NE(format_problem(grey_short, wanted).find("639 bytes is shorter than 640 pixels x 1 bytes"), std::string::npos);
+  NegotiatedFormat small_image = yuyv;
+  small_image.sizeimage = 1280 * 479;
+  EXPECT_EQ(format_problem(small_image, wanted),
+            "the driver's image size 613120 is smaller than 480 lines of 1280 bytes");
+  NegotiatedFormat empty = yuyv;
+  empty.height = 0;
+  EXPECT_EQ(format_problem(empty, wanted), "the driver chose an empty image (640x0)");
+  // A compressed format has no line length to check.
+  NegotiatedFormat mjpg{kMJPG, 640, 480, 0, 0, kFieldNone};
+  EXPECT_EQ(format_problem(mjpg, {kMJPG}), "");
+}
+
+TEST(V4l2Health, AnOpenCameraIsHealthyOnlyWhileFramesArrive) {
+  constexpr int64_t kGap = 1000000;
+  EXPECT_EQ(stream_problem(10, 200000, kGap, 0), "");
+  EXPECT_EQ(stream_problem(10, 1000000, kGap, 0), "");
+  // Open but no frame yet is not OK, however short the wait: a camera that opens and sends nothing
+  // (USB bandwidth) must not look healthy after every reopen.
+  EXPECT_EQ(stream_problem(0, 300000, kGap, 0), "open for 0.3 s, no frame yet");
+  EXPECT_EQ(stream_problem(10, 2500000, kGap, 0), "no frame for 2.5 s");
+  EXPECT_EQ(stream_problem(0, 1500000, kGap, 0), "open for 1.5 s, no frame yet");
+  EXPECT_EQ(stream_problem(0, 1500000, kGap, 7), "open for 1.5 s, only damaged frames (7)");
 }

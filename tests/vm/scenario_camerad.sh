@@ -40,6 +40,57 @@ check camerad_streams_grey grep -q "streaming /dev/video[0-9]* 640x480 GREY" "$R
 check camerad_publishes_grey_frames_none_damaged \
   bash -c "grep -Eq '^frames=([5-9]|[1-9][0-9]+)$' /tmp/grey_status.txt && grep -q '^corrupt_frames=0$' /tmp/grey_status.txt"
 
+# Faults injected through vivid's own controls into a running camerad (640x480 YUYV at 5 fps): each
+# shows in DRIVER_STATUS, and camerad streams on or recovers by itself.
+printf 'camera: {match_card: vivid}\n' > /tmp/faults.yaml
+"$CAMERAD" -c /tmp/faults.yaml > "$RESULTS_DIR/camerad_faults.log" 2>&1 &
+faults_pid=$!
+wait_for "$RESULTS_DIR/camerad_faults.log" streaming 60 || true
+probe() { "$PROBE" --driver camerad --seconds "${2:-3}" > "/tmp/faults_$1.txt"; cp "/tmp/faults_$1.txt" "$RESULTS_DIR/status_$1.txt"; }
+counter() { sed -n "s/^$2=//p" "/tmp/faults_$1.txt"; }
+has() { grep -Eq "^$2\$" "/tmp/faults_$1.txt"; }  # has PROBE 'name=regex'
+ctl() { v4l2-ctl -d /dev/video0 -c "$1"; }
+probe streaming
+check camerad_is_ok_while_frames_arrive has streaming 'state=1'
+# One buffer flagged V4L2_BUF_FLAG_ERROR, one VIDIOC_QBUF that fails: skipped and counted; the
+# buffer whose QBUF failed is given back at the next call, so the stream goes on at full rate.
+ctl inject_v4l2_buf_flag_error=1
+sleep 1
+ctl inject_vidioc_qbuf_error=1
+sleep 2
+probe injected
+check camerad_counts_a_buffer_the_driver_flagged_as_damaged has injected 'corrupt_frames=[1-9][0-9]*'
+check camerad_counts_a_failed_requeue has injected 'requeue_failures=[1-9][0-9]*'
+sleep 2
+probe after_requeue
+streams_on() { [ $(( $(counter after_requeue frames) - $(counter injected frames) )) -ge 5 ] && has after_requeue 'state=1'; }
+check camerad_streams_on_after_a_failed_requeue streams_on
+# Half the buffers dropped by the driver: the sequence numbers say how many.
+ctl percentage_of_dropped_buffers=50
+sleep 3
+probe dropping
+check camerad_counts_frames_the_driver_dropped has dropping 'sequence_gaps=[1-9][0-9]*'
+# All of them: still open, but DEGRADED, saying no frame arrives (then reopened after frame_timeout).
+ctl percentage_of_dropped_buffers=100
+sleep 2
+probe silent 1
+degraded() { has silent 'state=2' && has silent 'message=.*no frame.*'; }
+check camerad_is_degraded_while_open_but_silent degraded
+ctl percentage_of_dropped_buffers=0
+sleep 4
+probe back
+check camerad_is_ok_again_when_frames_return has back 'state=1'
+# A fatal streaming error (vb2_queue_error: DQBUF fails with EIO): closed, reopened, streaming again.
+ctl inject_fatal_streaming_error=1
+wait_for "$RESULTS_DIR/camerad_faults.log" "closing and reopening" 20 || true
+sleep 4
+probe after_fatal
+reopened() { [ "$(counter back device_lost)" -lt "$(counter after_fatal device_lost)" ] && has after_fatal 'state=1'; }
+check camerad_reopens_after_a_fatal_streaming_error reopened
+kill -TERM $faults_pid
+wait $faults_pid
+check camerad_survives_the_injected_faults test $? = 0
+
 "$CAMERAD" -c "$CONFIG" > "$RESULTS_DIR/camerad.log" 2>&1 &
 cam_pid=$!
 "$CHECK" --seconds 60 --results "$RESULTS_DIR/results.txt" > "$RESULTS_DIR/check.log" 2>&1 &

@@ -8,9 +8,11 @@
 #include <sys/mman.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 
 namespace whiskeye::v4l2 {
@@ -39,6 +41,7 @@ std::string card_of(const v4l2_capability& cap) {
 }  // namespace
 
 static_assert(kBufFlagError == V4L2_BUF_FLAG_ERROR);
+static_assert(kFieldNone == V4L2_FIELD_NONE);
 
 const char* frame_check_name(FrameCheck c) {
   switch (c) {
@@ -46,20 +49,58 @@ const char* frame_check_name(FrameCheck c) {
     case FrameCheck::kErrorFlag: return "flagged as damaged by the driver";
     case FrameCheck::kShortPayload: return "shorter than stride x height";
     case FrameCheck::kEmpty: return "empty";
+    case FrameCheck::kOverlong: return "longer than its buffer";
   }
   return "?";
 }
 
 bool is_raw_format(uint32_t pixelformat) { return pixelformat == kYUYV || pixelformat == kGREY; }
 
-FrameCheck check_frame(uint32_t buffer_flags, std::size_t bytesused, uint32_t pixelformat, uint32_t stride,
-                       uint32_t height) {
+FrameCheck check_frame(uint32_t buffer_flags, std::size_t bytesused, std::size_t buffer_length, uint32_t pixelformat,
+                       uint32_t stride, uint32_t height) {
   if (buffer_flags & kBufFlagError) return FrameCheck::kErrorFlag;
   if (bytesused == 0) return FrameCheck::kEmpty;
+  if (bytesused > buffer_length) return FrameCheck::kOverlong;
   if (is_raw_format(pixelformat) && bytesused < static_cast<std::size_t>(stride) * height) {
     return FrameCheck::kShortPayload;
   }
   return FrameCheck::kUsable;
+}
+
+std::string format_problem(const NegotiatedFormat& f, const std::vector<uint32_t>& wanted) {
+  const std::string fmt = fourcc_name(f.pixelformat);
+  if (std::find(wanted.begin(), wanted.end(), f.pixelformat) == wanted.end()) {
+    return "the driver chose pixel format " + fmt + ", which was not asked for";
+  }
+  if (f.field != kFieldNone) {
+    return "the driver chose interlaced fields (v4l2_field " + std::to_string(f.field) + "), not progressive frames";
+  }
+  if (f.width == 0 || f.height == 0) {
+    return "the driver chose an empty image (" + std::to_string(f.width) + "x" + std::to_string(f.height) + ")";
+  }
+  if (!is_raw_format(f.pixelformat)) return "";
+  const uint64_t bytes_per_pixel = f.pixelformat == kYUYV ? 2 : 1;
+  if (f.bytesperline < f.width * bytes_per_pixel) {
+    return "the driver's " + fmt + " line of " + std::to_string(f.bytesperline) + " bytes is shorter than " +
+           std::to_string(f.width) + " pixels x " + std::to_string(bytes_per_pixel) + " bytes";
+  }
+  if (f.sizeimage < static_cast<uint64_t>(f.bytesperline) * f.height) {
+    return "the driver's image size " + std::to_string(f.sizeimage) + " is smaller than " +
+           std::to_string(f.height) + " lines of " + std::to_string(f.bytesperline) + " bytes";
+  }
+  return "";
+}
+
+std::string stream_problem(int64_t session_frames, int64_t since_frame_us, int64_t max_gap_us,
+                           int64_t session_corrupt) {
+  if (session_frames > 0 && since_frame_us <= max_gap_us) return "";
+  char seconds[32];
+  std::snprintf(seconds, sizeof(seconds), "%.1f s", static_cast<double>(since_frame_us) / 1e6);
+  if (session_frames > 0) return std::string("no frame for ") + seconds;
+  if (session_corrupt > 0) {
+    return std::string("open for ") + seconds + ", only damaged frames (" + std::to_string(session_corrupt) + ")";
+  }
+  return std::string("open for ") + seconds + ", no frame yet";
 }
 
 std::string fourcc_name(uint32_t code) {
@@ -102,9 +143,7 @@ Capture::Capture(const CaptureConfig& config, Log log) : log_(std::move(log)) {
   }
   try {
     v4l2_capability cap{};
-    if (xioctl(fd_, VIDIOC_QUERYCAP, &cap) < 0) {
-      throw CaptureError(device_ + ": not a V4L2 device: " + std::strerror(errno), gone_errno(errno));
-    }
+    if (xioctl(fd_, VIDIOC_QUERYCAP, &cap) < 0) fail("not a V4L2 device");
     const uint32_t caps = (cap.capabilities & V4L2_CAP_DEVICE_CAPS) ? cap.device_caps : cap.capabilities;
     if (!(caps & V4L2_CAP_VIDEO_CAPTURE) || !(caps & V4L2_CAP_STREAMING)) {
       throw CaptureError(device_ + " (" + card_of(cap) + ") cannot stream video capture", false);
@@ -117,12 +156,10 @@ Capture::Capture(const CaptureConfig& config, Log log) : log_(std::move(log)) {
       b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
       b.memory = V4L2_MEMORY_MMAP;
       b.index = i;
-      if (xioctl(fd_, VIDIOC_QBUF, &b) < 0) throw CaptureError(device_ + ": QBUF: " + std::strerror(errno), gone_errno(errno));
+      if (xioctl(fd_, VIDIOC_QBUF, &b) < 0) fail("QBUF");
     }
     int type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-    if (xioctl(fd_, VIDIOC_STREAMON, &type) < 0) {
-      throw CaptureError(device_ + ": STREAMON: " + std::strerror(errno), gone_errno(errno));
-    }
+    if (xioctl(fd_, VIDIOC_STREAMON, &type) < 0) fail("STREAMON");
     streaming_ = true;
   } catch (...) {
     close_device();
@@ -131,6 +168,11 @@ Capture::Capture(const CaptureConfig& config, Log log) : log_(std::move(log)) {
 }
 
 Capture::~Capture() { close_device(); }
+
+void Capture::fail(const std::string& what) const {
+  const int e = errno;
+  throw CaptureError(device_ + ": " + what + ": " + std::strerror(e), gone_errno(e));
+}
 
 void Capture::close_device() {
   if (fd_ >= 0 && streaming_) {
@@ -157,18 +199,27 @@ void Capture::negotiate(const CaptureConfig& config) {
     fmt.fmt.pix.height = config.height;
     fmt.fmt.pix.pixelformat = want;
     fmt.fmt.pix.field = V4L2_FIELD_NONE;
-    // TRY_FMT first: the driver answers with its nearest mode without changing anything.
-    if (xioctl(fd_, VIDIOC_TRY_FMT, &fmt) == 0 && fmt.fmt.pix.pixelformat == want) {
+    // TRY_FMT first: the driver answers with its nearest mode without changing anything. It is
+    // optional (V4L2 spec): a driver without it (ENOTTY) is asked with S_FMT itself.
+    int r = xioctl(fd_, VIDIOC_TRY_FMT, &fmt);
+    if (r < 0 && errno == ENOTTY) r = xioctl(fd_, VIDIOC_S_FMT, &fmt);
+    if (r == 0 && fmt.fmt.pix.pixelformat == want) {
       found = true;
       break;
     }
+    if (r < 0 && gone_errno(errno)) fail("TRY_FMT");
   }
   if (!found) {
     std::string wanted;
     for (uint32_t f : config.formats) wanted += (wanted.empty() ? "" : ", ") + fourcc_name(f);
     throw CaptureError(device_ + " supports none of the pixel formats " + wanted, false);
   }
-  if (xioctl(fd_, VIDIOC_S_FMT, &fmt) < 0) throw CaptureError(device_ + ": S_FMT: " + std::strerror(errno), gone_errno(errno));
+  if (xioctl(fd_, VIDIOC_S_FMT, &fmt) < 0) fail("S_FMT");
+  const NegotiatedFormat got{fmt.fmt.pix.pixelformat, fmt.fmt.pix.width,     fmt.fmt.pix.height,
+                             fmt.fmt.pix.bytesperline, fmt.fmt.pix.sizeimage, fmt.fmt.pix.field};
+  if (const std::string problem = format_problem(got, config.formats); !problem.empty()) {
+    throw CaptureError(device_ + ": " + problem, false);
+  }
   width_ = fmt.fmt.pix.width;
   height_ = fmt.fmt.pix.height;
   stride_ = fmt.fmt.pix.pixelformat == kMJPG ? 0 : fmt.fmt.pix.bytesperline;
@@ -198,7 +249,7 @@ void Capture::map_buffers(unsigned count) {
   req.count = count < 4 ? 4 : count;
   req.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
   req.memory = V4L2_MEMORY_MMAP;
-  if (xioctl(fd_, VIDIOC_REQBUFS, &req) < 0) throw CaptureError(device_ + ": REQBUFS: " + std::strerror(errno), gone_errno(errno));
+  if (xioctl(fd_, VIDIOC_REQBUFS, &req) < 0) fail("REQBUFS");
   if (req.count < 2) throw CaptureError(device_ + ": only " + std::to_string(req.count) + " buffer(s)", false);
   buffers_.resize(req.count);
   for (unsigned i = 0; i < req.count; ++i) {
@@ -206,10 +257,10 @@ void Capture::map_buffers(unsigned count) {
     b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
     b.memory = V4L2_MEMORY_MMAP;
     b.index = i;
-    if (xioctl(fd_, VIDIOC_QUERYBUF, &b) < 0) throw CaptureError(device_ + ": QUERYBUF: " + std::strerror(errno), gone_errno(errno));
+    if (xioctl(fd_, VIDIOC_QUERYBUF, &b) < 0) fail("QUERYBUF");
     buffers_[i].length = b.length;
     buffers_[i].start = ::mmap(nullptr, b.length, PROT_READ | PROT_WRITE, MAP_SHARED, fd_, b.m.offset);
-    if (buffers_[i].start == MAP_FAILED) throw CaptureError(device_ + ": mmap: " + std::strerror(errno), gone_errno(errno));
+    if (buffers_[i].start == MAP_FAILED) fail("mmap");
   }
 }
 
@@ -221,8 +272,9 @@ bool Capture::requeue_pending() {
     b.memory = V4L2_MEMORY_MMAP;
     b.index = index;
     if (xioctl(fd_, VIDIOC_QBUF, &b) == 0) return true;
-    last_error_ = device_ + ": QBUF: " + std::strerror(errno);
-    gone = gone || gone_errno(errno);
+    const int e = errno;
+    last_error_ = device_ + ": QBUF: " + std::strerror(e);
+    gone = gone || gone_errno(e);
     return false;
   });
   return !gone;
@@ -241,7 +293,8 @@ Capture::Result Capture::next(FrameView& frame, int timeout_ms) {
       b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
       b.memory = V4L2_MEMORY_MMAP;
       if (xioctl(fd_, VIDIOC_DQBUF, &b) < 0 && errno != EAGAIN) {
-        last_error_ = device_ + ": " + std::strerror(errno);
+        const int e = errno;
+        last_error_ = device_ + ": " + std::strerror(e);
         return Result::kGone;
       }
       last_error_ = device_ + ": poll error";
@@ -252,12 +305,19 @@ Capture::Result Capture::next(FrameView& frame, int timeout_ms) {
   b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
   b.memory = V4L2_MEMORY_MMAP;
   if (xioctl(fd_, VIDIOC_DQBUF, &b) < 0) {
-    if (errno == EAGAIN) return Result::kTimeout;
-    last_error_ = device_ + ": DQBUF: " + std::strerror(errno);
-    return gone_errno(errno) ? Result::kGone : Result::kTimeout;
+    const int e = errno;
+    if (e == EAGAIN) return Result::kTimeout;
+    last_error_ = device_ + ": DQBUF: " + std::strerror(e);
+    return gone_errno(e) ? Result::kGone : Result::kError;
+  }
+  if (b.index >= buffers_.size()) {  // videobuf2 never does this; nothing to requeue or read
+    last_error_ = device_ + ": DQBUF returned buffer " + std::to_string(b.index) + " of " +
+                  std::to_string(buffers_.size());
+    return Result::kError;
   }
   pending_.push_back(b.index);  // lent to the caller (or skipped): back to the driver at the next call
-  if (const FrameCheck c = check_frame(b.flags, b.bytesused, pixelformat_, stride_, height_); c != FrameCheck::kUsable) {
+  if (const FrameCheck c = check_frame(b.flags, b.bytesused, buffers_[b.index].length, pixelformat_, stride_, height_);
+      c != FrameCheck::kUsable) {
     ++corrupt_frames_;
     last_skip_ = c;
     return requeue_pending() ? Result::kSkipped : Result::kGone;

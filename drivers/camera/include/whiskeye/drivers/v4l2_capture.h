@@ -32,15 +32,37 @@ inline int64_t monotonic_to_utime(int64_t ts_mono_us, int64_t now_mono_us, int64
 
 // Whether a dequeued buffer holds a whole frame. The driver flags a frame it knows is damaged
 // (V4L2_BUF_FLAG_ERROR: lost USB packets, a resync); an uncompressed frame (YUYV, GREY) shorter than
-// stride x height is truncated; an empty buffer holds nothing. A compressed frame (MJPG) has no
-// fixed size and is usable whenever it is not empty or flagged. Such buffers are requeued, counted
-// (camerad's corrupt_frames) and never published.
-enum class FrameCheck { kUsable, kErrorFlag, kShortPayload, kEmpty };
+// stride x height is truncated; an empty buffer holds nothing; one that says it holds more than its
+// mapped length cannot be read. A compressed frame (MJPG) has no fixed size and is usable whenever
+// it is none of these. Such buffers are requeued, counted (camerad's corrupt_frames) and never
+// published.
+enum class FrameCheck { kUsable, kErrorFlag, kShortPayload, kEmpty, kOverlong };
 const char* frame_check_name(FrameCheck c);
 inline constexpr uint32_t kBufFlagError = 0x00000040;  // V4L2_BUF_FLAG_ERROR (checked in the source)
 bool is_raw_format(uint32_t pixelformat);
-FrameCheck check_frame(uint32_t buffer_flags, std::size_t bytesused, uint32_t pixelformat, uint32_t stride,
-                       uint32_t height);
+FrameCheck check_frame(uint32_t buffer_flags, std::size_t bytesused, std::size_t buffer_length, uint32_t pixelformat,
+                       uint32_t stride, uint32_t height);
+
+// What the driver settled on when asked for a format (VIDIOC_S_FMT's answer).
+inline constexpr uint32_t kFieldNone = 1;  // V4L2_FIELD_NONE: progressive (checked in the source)
+struct NegotiatedFormat {
+  uint32_t pixelformat = 0;
+  uint32_t width = 0, height = 0;
+  uint32_t bytesperline = 0, sizeimage = 0;
+  uint32_t field = kFieldNone;
+};
+// "" if frames in this format can be read as camerad publishes them, else why not, naming the
+// values: a pixel format that was not asked for, interlaced fields, an empty image, a raw line
+// shorter than width x bytes per pixel, or an image smaller than its lines.
+std::string format_problem(const NegotiatedFormat& f, const std::vector<uint32_t>& wanted);
+
+// camerad's health while a capture session is open: OK only once a frame has arrived, and while
+// frames go on arriving (a camera that opens and sends nothing is not OK). `session_frames`
+// were published since the open, the last one `since_frame_us` ago (or the open, if none);
+// `max_gap_us` is the longest silence still healthy; `session_corrupt` buffers were skipped as
+// damaged. Returns "" when healthy, else what is wrong, for DRIVER_STATUS's message.
+std::string stream_problem(int64_t session_frames, int64_t since_frame_us, int64_t max_gap_us,
+                           int64_t session_corrupt);
 
 // Gives every pending (dequeued) buffer back through `qbuf(index)` (true on success). A buffer that
 // qbuf refuses stays in `pending` for the next try instead of being forgotten: a lost buffer would
@@ -112,8 +134,9 @@ class Capture {
   Capture& operator=(const Capture&) = delete;
 
   // kSkipped: a buffer arrived but failed check_frame(); it went straight back to the driver and is
-  // counted in corrupt_frames() (last_skip() says why).
-  enum class Result { kFrame, kTimeout, kGone, kSkipped };
+  // counted in corrupt_frames() (last_skip() says why). kError: dequeuing failed while the device
+  // is still there (last_error() says how); the caller counts it and should not retry at once.
+  enum class Result { kFrame, kTimeout, kGone, kSkipped, kError };
   // Waits up to timeout_ms for the next frame. The view stays valid until the next call.
   Result next(FrameView& frame, int timeout_ms);
 
@@ -136,6 +159,9 @@ class Capture {
   void negotiate(const CaptureConfig& config);
   void map_buffers(unsigned count);
   void close_device();
+  // Throws a CaptureError "<device>: <what>: <strerror(errno)>", gone if errno says the device is.
+  // errno is read first, before building the message can change it.
+  [[noreturn]] void fail(const std::string& what) const;
   // Gives every dequeued buffer back to the driver; false if the device is gone.
   bool requeue_pending();
 
