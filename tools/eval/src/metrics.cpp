@@ -276,8 +276,12 @@ ExmResult compute_exm(const std::vector<ExperienceEvent>& events_in, const Exper
     r.arr = static_cast<double>(r.relocalisations_after_base) /
             static_cast<double>(r.experience_events_after_base);
   }
+  if (r.relocalisations_total > 0) {
+    r.arcr = static_cast<double>(r.correct_total) / static_cast<double>(r.relocalisations_total);
+  }
   if (r.relocalisations_after_base > 0) {
-    r.arcr = static_cast<double>(r.correct_after_base) / static_cast<double>(r.relocalisations_after_base);
+    r.arcr_after_base =
+        static_cast<double>(r.correct_after_base) / static_cast<double>(r.relocalisations_after_base);
   }
   if (r.experiences_created > 0) {
     r.valid_fraction = static_cast<double>(r.valid_experiences) / static_cast<double>(r.experiences_created);

@@ -88,6 +88,7 @@ nlohmann::json exm_json(const ExmResult& x) {
   }
   return {{"arr", opt_json(x.arr)},
           {"arcr", opt_json(x.arcr)},
+          {"arcr_after_base", opt_json(x.arcr_after_base)},
           {"valid_fraction", opt_json(x.valid_fraction)},
           {"base_end_found", x.base_end_found},
           {"base_end_utime", x.base_end_found ? nlohmann::json(x.base_end_utime) : nlohmann::json(nullptr)},
@@ -161,7 +162,7 @@ std::string format_table(const std::vector<RunReport>& runs, const std::vector<P
                              : std::string("revolution never completed: all are base"))
         << "); after it " << x.experience_events_after_base << " experience events, "
         << x.relocalisations_after_base << " re-localisations, " << x.correct_after_base << " correct\n";
-    out << "       all re-localisations incl. base set: " << x.relocalisations_total << ", correct "
+    out << "       all re-localisations incl. base set (ARCR's): " << x.relocalisations_total << ", correct "
         << x.correct_total << "; valid experiences " << x.valid_experiences << "/" << x.experiences_created
         << " = " << opt(x.valid_fraction) << "\n";
     if (x.events_outside_gt + x.relocalise_unknown_target + x.relocalise_to_current > 0) {

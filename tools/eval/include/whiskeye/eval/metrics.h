@@ -134,7 +134,10 @@ struct ExmResult {
   std::size_t relocalisations_total = 0;         // including those during the base set
   std::size_t correct_total = 0;
   std::optional<double> arr;   // undefined when there is no experience event after the base set
-  std::optional<double> arcr;  // undefined when there is no re-localisation after the base set
+  // metrics.md: correct / re-localisations, all of them (the base set's too: a false loop closure in
+  // the first lap counts). Undefined, not 1, when there is none.
+  std::optional<double> arcr;
+  std::optional<double> arcr_after_base;  // the same over ARR's re-localisations only (not the metric)
   std::size_t experiences_created = 0;  // NEW_EXPERIENCE events (with ground truth)
   std::size_t valid_experiences = 0;
   std::optional<double> valid_fraction;
