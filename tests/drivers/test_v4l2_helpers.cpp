@@ -130,10 +130,19 @@ TEST(V4l2Format, WhatTheDriverSettledOnIsCheckedBeforeStreaming) {
   NegotiatedFormat other = yuyv;
   other.pixelformat = kMJPG;
   EXPECT_EQ(format_problem(other, wanted), "the driver chose pixel format MJPG, which was not asked for");
-  NegotiatedFormat interlaced = yuyv;
-  interlaced.field = 4;  // V4L2_FIELD_INTERLACED
-  EXPECT_EQ(format_problem(interlaced, wanted),
-            "the driver chose interlaced fields (v4l2_field 4), not progressive frames");
+  // Both fields interleaved (a TV input, as vivid's): a whole frame, line by line.
+  for (uint32_t field : {4u, 8u, 9u}) {  // V4L2_FIELD_INTERLACED, _TB, _BT
+    NegotiatedFormat interlaced = yuyv;
+    interlaced.field = field;
+    EXPECT_EQ(format_problem(interlaced, wanted), "") << field;
+  }
+  // One field per buffer (top, bottom, alternate), or the fields one after the other (seq_tb/bt).
+  for (uint32_t field : {2u, 3u, 5u, 6u, 7u}) {
+    NegotiatedFormat halves = yuyv;
+    halves.field = field;
+    EXPECT_EQ(format_problem(halves, wanted), "the driver chose v4l2_field " + std::to_string(field) +
+                                                  ", which does not put a whole frame in a buffer line by line");
+  }
   NegotiatedFormat no_stride = yuyv;
   no_stride.bytesperline = 0;
   EXPECT_EQ(format_problem(no_stride, wanted), "the driver's YUYV line of 0 bytes is shorter than 640 pixels x 2 bytes");

@@ -72,8 +72,13 @@ std::string format_problem(const NegotiatedFormat& f, const std::vector<uint32_t
   if (std::find(wanted.begin(), wanted.end(), f.pixelformat) == wanted.end()) {
     return "the driver chose pixel format " + fmt + ", which was not asked for";
   }
-  if (f.field != kFieldNone) {
-    return "the driver chose interlaced fields (v4l2_field " + std::to_string(f.field) + "), not progressive frames";
+  // Whole frames only: progressive, or both fields interleaved line by line (a TV input). One field
+  // per buffer (top, bottom, alternate) is half a frame; fields one after the other (seq_tb/bt) are
+  // not an image of row_stride lines.
+  if (f.field != V4L2_FIELD_NONE && f.field != V4L2_FIELD_INTERLACED && f.field != V4L2_FIELD_INTERLACED_TB &&
+      f.field != V4L2_FIELD_INTERLACED_BT) {
+    return "the driver chose v4l2_field " + std::to_string(f.field) +
+           ", which does not put a whole frame in a buffer line by line";
   }
   if (f.width == 0 || f.height == 0) {
     return "the driver chose an empty image (" + std::to_string(f.width) + "x" + std::to_string(f.height) + ")";

@@ -52,8 +52,10 @@ struct NegotiatedFormat {
   uint32_t field = kFieldNone;
 };
 // "" if frames in this format can be read as camerad publishes them, else why not, naming the
-// values: a pixel format that was not asked for, interlaced fields, an empty image, a raw line
-// shorter than width x bytes per pixel, or an image smaller than its lines.
+// values: a pixel format that was not asked for, a field order that does not put a whole frame in a
+// buffer line by line (one field per buffer, or the fields one after the other; progressive and
+// interleaved fields are fine), an empty image, a raw line shorter than width x bytes per pixel, or
+// an image smaller than its lines.
 std::string format_problem(const NegotiatedFormat& f, const std::vector<uint32_t>& wanted);
 
 // camerad's health while a capture session is open: OK only once a frame has arrived, and while
