@@ -303,8 +303,14 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   }
+  Loaded cfg;
   try {
-    const Loaded cfg = load_config(o);
+    cfg = load_config(o);
+  } catch (const std::exception& e) {  // ParamError, or a --mode it does not know: as the drivers do
+    std::fprintf(stderr, "slamd: bad config: %s\n", e.what());
+    return 2;
+  }
+  try {
     if (o.print_config) {
       std::cout << cfg.dump;
       return 0;

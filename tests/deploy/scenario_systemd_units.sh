@@ -158,6 +158,29 @@ n=$(count_messages CAMERA 8)
 check camerad_publishes_camera_frames_over_lcm test "$n" -ge 2
 check camerad_stops_cleanly stopped_cleanly camerad.service
 journal camerad.service > "$RESULTS_DIR/camerad.journal"
+# A misspelt key: exit status 2, which the unit does not restart on (RestartPreventExitStatus=2).
+printf 'camera: {widht: 640}\n' > /run/camerad-bad.yaml
+mkdir -p $U/camerad.service.d
+cat > $U/camerad.service.d/bad.conf <<EOF
+[Service]
+ExecStart=
+ExecStart=$P/bin/camerad --config /run/camerad-bad.yaml
+EOF
+systemctl daemon-reload
+fails_once() {
+  systemctl start camerad.service 2>/dev/null && { echo "camerad started with a bad config"; return 1; }
+  sleep 4  # RestartSec=1s: a restart loop would have begun
+  local restarts status
+  restarts=$(systemctl show -P NRestarts camerad.service)
+  status=$(systemctl show -P ExecMainStatus camerad.service)
+  [ "$restarts" = 0 ] && [ "$status" = 2 ] && systemctl is-failed -q camerad.service &&
+    journal camerad.service | grep -q "camerad: bad config: .*widht" ||
+    { echo "NRestarts=$restarts ExecMainStatus=$status"; journal camerad.service | tail -n 3; return 1; }
+}
+check camerad_with_a_bad_config_fails_once_and_is_not_restarted fails_once
+rm $U/camerad.service.d/bad.conf
+systemctl daemon-reload
+systemctl reset-failed camerad.service
 
 # --- whiskerd, on a vcan named can0 (whiskeye-can0.service brings it up) ---
 setup_vcan can0

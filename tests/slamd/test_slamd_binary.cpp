@@ -249,11 +249,13 @@ TEST_F(SlamdBinary, LocalisesInASavedMapWithoutGrowingIt) {
 TEST_F(SlamdBinary, BadInvocationsFailWithAOneLineReason) {
   const std::string bad = (dir_ / "bad.yaml").string();
   std::ofstream(bad) << "slam:\n  match:\n    shift_maxx: 3\n";
+  // A bad configuration exits 2, as in the drivers: the units do not restart on it.
   Subprocess p1({kSlamd, "--config", bad, "--print-config"});
-  EXPECT_EQ(p1.wait(30), 1);
+  EXPECT_EQ(p1.wait(30), 2);
+  EXPECT_THAT(p1.output(), HasSubstr("slamd: bad config: "));
   EXPECT_THAT(p1.output(), HasSubstr("unknown key 'slam.match.shift_maxx'"));
   Subprocess p2({kSlamd, "--mode", "sonar", "--print-config"});
-  EXPECT_EQ(p2.wait(30), 1);
+  EXPECT_EQ(p2.wait(30), 2);
   EXPECT_THAT(p2.output(), HasSubstr("sonar"));
   Subprocess p3({kSlamd, "--localise"});
   EXPECT_NE(p3.wait(30), 0);
