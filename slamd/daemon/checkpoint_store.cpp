@@ -3,6 +3,7 @@
 #include <zlib.h>
 
 #include <algorithm>
+#include <array>
 #include <charconv>
 #include <string_view>
 #include <cerrno>
@@ -11,6 +12,8 @@
 #include <fcntl.h>
 #include <filesystem>
 #include <fstream>
+#include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 namespace whiskeye::slamd {
@@ -79,6 +82,9 @@ std::string file_name(uint64_t number) {
   return name;
 }
 
+// Larger numbers are not ours (a hand-named file): counting from one would wrap the next number.
+constexpr uint64_t kMaxFileNumber = 999'999'999'999'999;
+
 // n of "checkpoint-<n>.vslam[.corrupt]", or 0.
 uint64_t file_number(const std::string& name) {
   if (name.rfind(kPrefix, 0) != 0) return 0;
@@ -89,34 +95,45 @@ uint64_t file_number(const std::string& name) {
   if (ec != std::errc() || end == first || std::string_view(end, static_cast<std::size_t>(last - end)).rfind(".vslam", 0) != 0) {
     return 0;
   }
-  return n;
+  return n <= kMaxFileNumber ? n : 0;
 }
 
 }  // namespace
 
 Checkpoint read_checkpoint(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    fail(path, std::string("cannot open: ") + std::strerror(errno), CheckpointError::Kind::kUnusable);
+  }
+  if (!S_ISREG(st.st_mode)) fail(path, "not a regular file", CheckpointError::Kind::kUnusable);
   std::ifstream in(path, std::ios::binary);
   if (!in) fail(path, std::string("cannot open: ") + std::strerror(errno), CheckpointError::Kind::kUnusable);
-  std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (bytes.size() < kHeaderSize) fail(path, "truncated header (" + std::to_string(bytes.size()) + " bytes)");
-  if (std::memcmp(bytes.data(), kMagic, sizeof kMagic) != 0) fail(path, "not a slamd checkpoint (bad magic)");
-  const uint32_t version = get<uint32_t>(bytes.data() + 8);
+  const uint64_t file_size = static_cast<uint64_t>(st.st_size);
+  std::array<uint8_t, kHeaderSize> header{};
+  in.read(reinterpret_cast<char*>(header.data()), static_cast<std::streamsize>(std::min<uint64_t>(file_size, kHeaderSize)));
+  if (in.bad()) fail(path, "read error", CheckpointError::Kind::kUnusable);
+  if (file_size < kHeaderSize) fail(path, "truncated header (" + std::to_string(file_size) + " bytes)");
+  if (std::memcmp(header.data(), kMagic, sizeof kMagic) != 0) fail(path, "not a slamd checkpoint (bad magic)");
+  const uint32_t version = get<uint32_t>(header.data() + 8);
   if (version != kCheckpointFormatVersion) {
     fail(path,
          "unsupported checkpoint format version " + std::to_string(version) + " (this slamd reads " +
              std::to_string(kCheckpointFormatVersion) + ")",
          CheckpointError::Kind::kUnusable);
   }
-  const uint32_t crc = get<uint32_t>(bytes.data() + 12);
+  const uint32_t crc = get<uint32_t>(header.data() + 12);
   Checkpoint cp;
   cp.path = path;
-  cp.sequence = get<uint64_t>(bytes.data() + 16);
-  const uint64_t size = get<uint64_t>(bytes.data() + 24);
-  if (size != bytes.size() - kHeaderSize) {
-    fail(path, "payload size " + std::to_string(bytes.size() - kHeaderSize) + " differs from the header's " +
+  cp.sequence = get<uint64_t>(header.data() + 16);
+  const uint64_t size = get<uint64_t>(header.data() + 24);
+  if (size != file_size - kHeaderSize) {
+    fail(path, "payload size " + std::to_string(file_size - kHeaderSize) + " differs from the header's " +
                    std::to_string(size) + " (truncated or appended)");
   }
-  cp.payload.assign(bytes.begin() + kHeaderSize, bytes.end());
+  cp.payload.resize(size);
+  in.read(reinterpret_cast<char*>(cp.payload.data()), static_cast<std::streamsize>(size));
+  if (in.bad()) fail(path, "read error", CheckpointError::Kind::kUnusable);  // the disk, not the file
+  if (static_cast<uint64_t>(in.gcount()) != size) fail(path, "shorter than its size while being read");
   if (crc_of(cp.payload) != crc) fail(path, "checksum mismatch (corrupt data)");
   return cp;
 }
@@ -158,6 +175,20 @@ CheckpointStore::CheckpointStore(std::string directory, int keep) : directory_(s
     throw CheckpointError(directory_ + ": cannot create the checkpoint directory" + (ec ? ": " + ec.message() : ""),
                           CheckpointError::Kind::kUnusable);
   }
+  lock_fd_ = ::open(directory_.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (lock_fd_ < 0) {
+    throw CheckpointError(directory_ + ": cannot open the checkpoint directory: " + std::strerror(errno),
+                          CheckpointError::Kind::kUnusable);
+  }
+  if (::flock(lock_fd_, LOCK_EX | LOCK_NB) != 0) {
+    const int e = errno;
+    ::close(lock_fd_);
+    throw CheckpointError(directory_ + (e == EWOULDBLOCK
+                                            ? std::string(": in use by another slamd (it holds the directory's lock); "
+                                                          "give this one its own --state-dir")
+                                            : std::string(": cannot lock the checkpoint directory: ") + std::strerror(e)),
+                          CheckpointError::Kind::kUnusable);
+  }
   for (const auto& entry : fs::directory_iterator(directory_)) {
     const std::string name = entry.path().filename().string();
     next_number_ = std::max(next_number_, file_number(name) + 1);
@@ -166,6 +197,10 @@ CheckpointStore::CheckpointStore(std::string directory, int keep) : directory_(s
       if (fs::remove(entry.path(), rm)) removed_temp_files_.push_back(entry.path().string());
     }
   }
+}
+
+CheckpointStore::~CheckpointStore() {
+  if (lock_fd_ >= 0) ::close(lock_fd_);  // releases the lock
 }
 
 std::vector<std::string> CheckpointStore::list() const {

@@ -11,7 +11,9 @@
 // and the directory is fsync'ed: a crash leaves either the old or the new checkpoint, never half of one.
 // Files are named checkpoint-<n>.vslam, n one more than any file in the directory: the newest file is
 // always the last one written, whatever map it holds (a resumed one, or a new one after --fresh), so
-// rotation never prunes what was just written.
+// rotation never prunes what was just written. One process at a time owns a directory (an flock on
+// the directory itself): a second slamd on it (a replay by hand next to the service) would take the
+// first one's temp files for unfinished writes and rotate its checkpoints out.
 #pragma once
 
 #include <cstdint>
@@ -45,6 +47,8 @@ struct Checkpoint {
 };
 
 // Reads and validates one checkpoint file; CheckpointError "<path>: <reason>" when it is unusable.
+// Only a regular file is read, and its payload only once the header agrees with the file's size, so
+// a wrong path (/dev/zero, a FIFO, a huge stray file) is refused before anything is allocated.
 Checkpoint read_checkpoint(const std::string& path);
 // Writes one checkpoint file atomically (temp + fsync + rename + directory fsync).
 void write_checkpoint_file(const std::string& path, uint64_t sequence, std::span<const uint8_t> payload);
@@ -52,9 +56,13 @@ void write_checkpoint_file(const std::string& path, uint64_t sequence, std::span
 // A directory of numbered checkpoints, newest kept, older ones pruned.
 class CheckpointStore {
  public:
-  // Creates the directory if needed; CheckpointError naming it when that fails. Temp files a crash
-  // left behind (.checkpoint-*.tmp) are removed and listed in removed_temp_files().
+  // Creates the directory if needed and locks it for this process; CheckpointError (kUnusable) naming
+  // it when that fails or another process holds it. Temp files a crash left behind
+  // (.checkpoint-*.tmp) are then removed and listed in removed_temp_files().
   CheckpointStore(std::string directory, int keep);
+  ~CheckpointStore();
+  CheckpointStore(const CheckpointStore&) = delete;
+  CheckpointStore& operator=(const CheckpointStore&) = delete;
 
   // Writes the next checkpoint-<n>.vslam (header sequence = `sequence`) and prunes all but the
   // newest `keep`. Returns its path.
@@ -76,6 +84,7 @@ class CheckpointStore {
 
  private:
   std::string directory_;
+  int lock_fd_ = -1;  // the directory, flock'ed while this store lives
   int keep_;
   uint64_t next_number_ = 1;
   std::vector<std::string> removed_temp_files_;

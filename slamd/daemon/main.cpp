@@ -154,19 +154,26 @@ int run_replay(const Loaded& cfg, const Options& o) {
   MemoryBus in;
   DecodeErrors errors;
   errors.set_callback([](const std::string& ch, const std::string& why) { log_line(ch + ": " + why); });
+  // --localise writes no checkpoints: it needs no state directory (nor its lock).
   std::optional<slamd::CheckpointStore> store;
-  if (!o.state_dir.empty()) store.emplace(o.state_dir, o.checkpoint_keep);
+  if (!o.state_dir.empty() && !o.localise) store.emplace(o.state_dir, o.checkpoint_keep);
   slamd::SlamNode node(in, out, make_slam(cfg, o, store ? &*store : nullptr), cfg.node, errors);
   node.set_logger(log_line);
   if (o.timing) node.set_latency_clock(monotonic_us);
-  if (store && o.checkpoint_every > 0 && !o.localise) {
+  int64_t checkpointed_cycles = -1;
+  const auto checkpoint = [&] {
+    try {
+      store->write(static_cast<uint64_t>(node.slam().stats().cycles), node.slam().serialise());
+      checkpointed_cycles = node.counters().cycles;
+      return true;
+    } catch (const std::exception& e) {
+      log_line(std::string("checkpoint failed: ") + e.what());  // as live: the replay goes on
+      return false;
+    }
+  };
+  if (store && o.checkpoint_every > 0) {
     node.set_cycle_hook([&](const slam::CycleResult&) {
-      if (node.counters().cycles % o.checkpoint_every != 0) return;
-      try {
-        store->write(static_cast<uint64_t>(node.slam().stats().cycles), node.slam().serialise());
-      } catch (const std::exception& e) {
-        log_line(std::string("checkpoint failed: ") + e.what());  // as live: the replay goes on
-      }
+      if (node.counters().cycles % o.checkpoint_every == 0) checkpoint();
     });
   }
   Progress progress;
@@ -193,6 +200,10 @@ int run_replay(const Loaded& cfg, const Options& o) {
     progress.update(reader.progress());
   }
   node.flush();
+  // The final state, as live slamd writes it on SIGTERM: the cycles after the last periodic
+  // checkpoint (or all of them, with --checkpoint-every 0) are not lost.
+  bool final_saved = true;
+  if (store && checkpointed_cycles != node.counters().cycles) final_saved = checkpoint();
   if (last_utime == INT64_MIN) last_utime = 0;  // an empty log
   node.publish_status(last_utime);
   progress.done();
@@ -210,7 +221,7 @@ int run_replay(const Loaded& cfg, const Options& o) {
     std::fprintf(stderr, "slamd: %s (every readable event was replayed)\n", reader.damage().summary().c_str());
     return 1;
   }
-  return 0;
+  return final_saved ? 0 : 1;
 }
 
 int run_live(const Loaded& cfg, const Options& o) {
@@ -219,18 +230,21 @@ int run_live(const Loaded& cfg, const Options& o) {
     const char* sd = std::getenv("STATE_DIRECTORY");  // systemd StateDirectory=
     state_dir = sd ? sd : "/var/lib/slamd";
   }
-  slamd::CheckpointStore store(state_dir, o.checkpoint_keep);
+  // --localise writes no checkpoints: it needs no state directory (nor its lock), so it can run next
+  // to the service.
+  std::optional<slamd::CheckpointStore> store;
+  if (!o.localise) store.emplace(state_dir, o.checkpoint_keep);
   LcmBus bus(o.lcm_url);
   DecodeErrors errors;
   errors.set_callback([](const std::string& ch, const std::string& why) { log_line(ch + ": " + why); });
-  slamd::SlamNode node(bus, bus, make_slam(cfg, o, &store), cfg.node, errors);
+  slamd::SlamNode node(bus, bus, make_slam(cfg, o, store ? &*store : nullptr), cfg.node, errors);
   node.set_logger(log_line);
   node.set_latency_clock(monotonic_us);
   // The loop only copies the state out; the checksum and the disk are the writer thread's work.
   slamd::CheckpointWriter writer(
       [&store](uint64_t sequence, std::vector<uint8_t>& payload) {
         slam::VitaSlam::seal(payload);
-        store.write(sequence, payload);
+        store->write(sequence, payload);
       },
       log_line);
   auto checkpoint = [&] {
@@ -245,7 +259,8 @@ int run_live(const Loaded& cfg, const Options& o) {
   std::signal(SIGINT, on_signal);
   ServiceNotifier service("slamd", monotonic_us());
   service.ready("running");
-  log_line("running in " + slam::to_string(cfg.slam.mode) + " mode, state in " + state_dir);
+  log_line("running in " + slam::to_string(cfg.slam.mode) + " mode, " +
+           (store ? "state in " + state_dir : "localising in " + o.map_file + ", no checkpoints"));
   int64_t next_tick = monotonic_us();
   int exit_code = 0;
   while (!g_stop) {
@@ -271,9 +286,15 @@ int run_live(const Loaded& cfg, const Options& o) {
   }
   service.stopping();
   node.flush();  // cycles still waiting for a camera frame go into the final state
-  if (!o.localise) checkpoint();
+  const int64_t errors_before_final = writer.counters().errors;
+  if (store) checkpoint();
   writer.finish();  // the final state is on disk before slamd exits
   log_line("stopped after " + std::to_string(node.counters().cycles) + " cycles");
+  if (writer.counters().errors > errors_before_final) {
+    // Logged by the writer; the exit status says so too, for systemd and whoever stopped slamd.
+    log_line("the final checkpoint was not written: the state since the last one is lost");
+    return 1;
+  }
   return exit_code;
 }
 

@@ -187,6 +187,64 @@ TEST_F(CheckpointStoreTest, TempFilesOfAnInterruptedWriteAreRemovedOnStart) {
   EXPECT_TRUE(fs::exists(dir_ / "notes.txt"));
 }
 
+// Two slamd on one state directory would take each other's temp files for unfinished writes and
+// rotate each other's checkpoints out (one map lost): the second is refused, naming the directory.
+TEST_F(CheckpointStoreTest, OneStoreAtATimeOwnsADirectory) {
+  std::string written;
+  {
+    CheckpointStore first(dir_.string(), 1);
+    written = first.write(1, payload(20, 1));
+    try {
+      CheckpointStore second(dir_.string(), 1);
+      FAIL() << "a second store on the same directory";
+    } catch (const CheckpointError& e) {
+      EXPECT_EQ(e.kind(), CheckpointError::Kind::kUnusable);
+      EXPECT_THAT(e.what(), HasSubstr(dir_.string() + ": in use by another slamd"));
+    }
+    EXPECT_EQ(first.list(), std::vector<std::string>{written}) << "the refused one touched nothing";
+  }
+  CheckpointStore after(dir_.string(), 1);  // released with the first
+  EXPECT_EQ(after.list(), std::vector<std::string>{written});
+}
+
+TEST_F(CheckpointStoreTest, OnlyARegularFileIsReadAndNotBeyondWhatItsHeaderSays) {
+  try {
+    read_checkpoint("/dev/zero");  // --map /dev/zero: refused before reading a byte
+    FAIL();
+  } catch (const CheckpointError& e) {
+    EXPECT_EQ(e.kind(), CheckpointError::Kind::kUnusable);
+    EXPECT_THAT(e.what(), HasSubstr("/dev/zero: not a regular file"));
+  }
+  fs::create_directories(dir_);
+  EXPECT_THROW(read_checkpoint(dir_.string()), CheckpointError);
+  // A header claiming an enormous payload: refused by the file's size, nothing allocated for it.
+  const std::string path = (dir_ / "huge.vslam").string();
+  write_checkpoint_file(path, 1, payload(40, 3));
+  {
+    std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(24);
+    const char huge[8] = {0, 0, 0, 0, 0, 0, 0, 0x40};  // 2^62 bytes
+    f.write(huge, sizeof huge);
+  }
+  try {
+    read_checkpoint(path);
+    FAIL();
+  } catch (const CheckpointError& e) {
+    EXPECT_EQ(e.kind(), CheckpointError::Kind::kCorrupt);
+    EXPECT_THAT(e.what(), HasSubstr("payload size 40 differs from the header's 4611686018427387904"));
+  }
+}
+
+TEST_F(CheckpointStoreTest, AHandNamedFileWithAHugeNumberIsNotCountedFrom) {
+  fs::create_directories(dir_);
+  write_checkpoint_file((dir_ / "checkpoint-18446744073709551615.vslam").string(), 9, payload(10, 9));
+  CheckpointStore store(dir_.string(), 1);
+  const std::string path = store.write(1, payload(10, 1));
+  EXPECT_EQ(fs::path(path).filename(), "checkpoint-000000000001.vslam") << "the next number did not wrap";
+  EXPECT_EQ(store.list(), std::vector<std::string>{path}) << "the file just written is kept";
+  EXPECT_TRUE(fs::exists(dir_ / "checkpoint-18446744073709551615.vslam")) << "not ours: left alone";
+}
+
 TEST_F(CheckpointStoreTest, NothingValidMeansNoCheckpoint) {
   CheckpointStore store(dir_.string(), 3);
   std::vector<std::string> problems;

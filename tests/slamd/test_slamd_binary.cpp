@@ -17,6 +17,7 @@
 #include <filesystem>
 #include <fstream>
 #include <mutex>
+#include <regex>
 #include <sstream>
 #include <unistd.h>
 
@@ -164,6 +165,45 @@ TEST_F(SlamdBinary, CheckpointsAndResumesSkippingACorruptOne) {
   EXPECT_THAT(log, HasSubstr("skipped unusable checkpoint " + files.back().string()));
   EXPECT_THAT(log, HasSubstr("resuming from " + files.front().string()));
   EXPECT_TRUE(fs::exists(files.back().string() + ".corrupt"));
+}
+
+// The cycles after the last periodic checkpoint are saved at the end of a replay, as live slamd
+// saves them on SIGTERM.
+TEST_F(SlamdBinary, AReplaySavesItsFinalStateWhateverTheCheckpointPeriod) {
+  const fs::path state = dir_ / "final_state";
+  fs::remove_all(state);
+  std::string log;
+  ASSERT_EQ(replay((dir_ / "final.lcmlog").string(), {"--state-dir", state.string(), "--checkpoint-every", "5"}, &log),
+            0)
+      << log;
+  const auto files = checkpoints(state);
+  ASSERT_FALSE(files.empty());
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(log, m, std::regex(R"(of data in .*: (\d+) cycles)"))) << log;
+  const uint64_t replayed = std::stoull(m[1]);
+  ASSERT_NE(replayed % 5, 0u) << "the log must end between two periodic checkpoints";
+  EXPECT_EQ(slamd::read_checkpoint(files.back().string()).sequence, replayed)
+      << "the newest checkpoint is the final state, not the last multiple of 5";
+}
+
+// A replay by hand pointed at the state directory of a running slamd: refused, naming it, and the
+// running one's map is untouched.
+TEST_F(SlamdBinary, ASecondSlamdOnTheSameStateDirectoryIsRefused) {
+  const fs::path state = dir_ / "shared_state";
+  fs::remove_all(state);
+  Subprocess live({kSlamd, "--config", kConfig, "--state-dir", state.string()});
+  ASSERT_TRUE(wait_until([&] { return live.output().find("running in vita mode") != std::string::npos; }, 20))
+      << live.output();
+  std::string log;
+  EXPECT_EQ(replay((dir_ / "second.lcmlog").string(), {"--state-dir", state.string(), "--mode", "tactile"}, &log), 1);
+  EXPECT_THAT(log, HasSubstr(state.string() + ": in use by another slamd"));
+  EXPECT_TRUE(checkpoints(state).empty()) << "the refused replay wrote nothing";
+  live.signal(SIGTERM);
+  EXPECT_EQ(live.wait(30), 0) << live.output();
+  ASSERT_EQ(checkpoints(state).size(), 1u) << "the live one's final checkpoint";
+  // With the directory free again, the same replay resumes from it (same mode) and runs.
+  EXPECT_EQ(replay((dir_ / "third.lcmlog").string(), {"--state-dir", state.string()}, &log), 0) << log;
+  EXPECT_THAT(log, HasSubstr("resuming from "));
 }
 
 TEST_F(SlamdBinary, EverySessionResumesFromThePreviousOneAndFreshStartsANewMap) {
