@@ -10,6 +10,8 @@
 
 #include <gtest/gtest.h>
 
+#include <functional>
+
 #include <cmath>
 
 namespace whiskeye::slamd {
@@ -320,6 +322,66 @@ TEST_F(SlamNodeTest, AFrameTheCoreCannotUseIsCountedAndLoggedAndTheCycleRunsWith
   EXPECT_EQ(node_->counters().validation_errors, 1);
   ASSERT_EQ(lines.size(), 1u);
   EXPECT_NE(lines[0].find("cycle 0: image: MJPEG frame"), std::string::npos) << lines[0];
+}
+
+// Finite but impossible values (found by fuzzing): each rejected with a line naming the field, counted,
+// and nothing of it stored; valid input goes on being mapped.
+TEST_F(SlamNodeTest, ImpossibleWhiskerAndOdometryValuesAreRejectedNamingTheField) {
+  struct Case {
+    std::function<void(whisk_cycle_t&, odometry_t&)> change;
+    bool odometry;
+    std::string says;
+  };
+  const std::vector<Case> cases{
+      // INT64_MIN - 1 overflowed in the contact estimator (UBSan); now it never gets that far.
+      {[](whisk_cycle_t& c, odometry_t&) { c.sample_utime[0] = INT64_MIN; }, false, "at sample 0 is outside the cycle"},
+      {[](whisk_cycle_t& c, odometry_t&) { c.sample_utime[499] = c.utime_end + 3'600 * kS; }, false,
+       "at sample 499 is outside the cycle"},
+      {[](whisk_cycle_t& c, odometry_t&) { c.utime_start = c.sample_utime[0] = c.utime_end - 3'600 * kS; }, false,
+       "(more than 60 s)"},
+      {[](whisk_cycle_t& c, odometry_t&) { c.sample_valid[7] = 127; }, false, "sample_valid 127 at sample 7 (0 or 1)"},
+      {[](whisk_cycle_t& c, odometry_t&) { c.num_missing = -5; }, false, "num_missing -5 but 0 samples are marked lost"},
+      {[](whisk_cycle_t& c, odometry_t&) { c.theta[3][2] = 3e38f; }, false, "at sample 3, whisker 2 (beyond ±pi)"},
+      {[](whisk_cycle_t& c, odometry_t&) { c.deflection_x[4][5] = 1e30f; }, false,
+       "at sample 4, whisker 5 (calibrated -1..1)"},
+      {[](whisk_cycle_t&, odometry_t& o) { o.x = 1e300; }, true, "is beyond 100 km"},
+      {[](whisk_cycle_t&, odometry_t& o) { o.theta = 10.0; }, true, "theta 10.000000 rad is not in (-pi, pi]"},
+  };
+  const auto bad_message = [](const Case& c, MemoryBus& bus) {
+    whisk_cycle_t cycle = free_cycle(1, kT0 + 2 * kS);
+    odometry_t odo{};
+    odo.utime = kT0 + kS + 30'000;
+    c.change(cycle, odo);
+    if (c.odometry) {
+      publish(bus, "ODOMETRY", odo);
+    } else {
+      publish(bus, "WHISK_CYCLE", cycle);
+    }
+  };
+  // Each on a node of its own: the log names what was wrong (a node logs the first of a burst).
+  for (const Case& c : cases) {
+    MemoryBus in, out;
+    DecodeErrors errors;
+    SlamNode node(in, out, std::make_unique<slam::VitaSlam>(slam::SlamParams{}, default_robot_geometry()),
+                  NodeParams{}, errors);
+    std::vector<std::string> lines;
+    node.set_logger([&](const std::string& l) { lines.push_back(l); });
+    bad_message(c, in);
+    EXPECT_EQ(node.counters().validation_errors, 1) << c.says;
+    ASSERT_EQ(lines.size(), 1u) << c.says;
+    EXPECT_NE(lines[0].find(c.says), std::string::npos) << lines[0];
+  }
+  // All of them amid valid input: counted, nothing stored, and mapping goes on.
+  stream({8});
+  node_->flush();
+  const int64_t cycles = node_->counters().cycles;
+  const int32_t templates = node_->status(kT0 + kS).num_templates;
+  for (const Case& c : cases) bad_message(c, in_);
+  EXPECT_EQ(node_->counters().validation_errors, static_cast<int64_t>(cases.size()));
+  stream({8, 8}, 1);
+  node_->flush();
+  EXPECT_EQ(node_->counters().cycles, cycles + 2) << "valid cycles are mapped as before";
+  EXPECT_LE(node_->status(kT0 + 3 * kS).num_templates, templates + 2) << "nothing of the rejected cycles was stored";
 }
 
 TEST_F(SlamNodeTest, RejectsBadMessagesCountsThemAndCarriesOn) {

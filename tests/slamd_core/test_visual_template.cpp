@@ -122,6 +122,36 @@ TEST(VisualTemplate, AnMjpegFrameLargerThanItsMessageSaysIsRefusedBeforeDecoding
   }
   const std::vector<uint8_t> not_jpeg{0xff, 0xd8, 0xff, 0xda, 0x00, 0x02, 0x00, 0x00};
   EXPECT_THROW(make_visual_template(view(not_jpeg, 16, 16, 0, kPixMjpeg), p), InputError);
+  // A header claiming 10000 x 10000 for a message that says the same: refused before decoding
+  // (it took 2 s and 550 MB, and the grey it decoded to became a template).
+  for (std::size_t at : {sof + 5, sof + 7}) {
+    jpeg[at] = 10000 >> 8;
+    jpeg[at + 1] = 10000 & 0xff;
+  }
+  try {
+    make_visual_template(view(jpeg, 10000, 10000, 0, kPixMjpeg), p);
+    FAIL() << "a 100 MP MJPEG frame must be refused before decoding";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("10000x10000 is larger than 4096x4096"), std::string::npos) << e.what();
+  }
+}
+
+TEST(VisualTemplate, AnMjpegFrameCutOffInTransferIsRefusedNotDecodedToGrey) {
+  std::vector<uint8_t> grey(64 * 48);
+  for (std::size_t i = 0; i < grey.size(); ++i) grey[i] = static_cast<uint8_t>(i * 7);
+  std::vector<uint8_t> jpeg;
+  cv::imencode(".jpg", cv::Mat(48, 64, CV_8UC1, grey.data()), jpeg);
+  const VisualParams p = plain_params();
+  std::vector<uint8_t> padded = jpeg;  // zero padding after the end marker, as some cameras send
+  padded.resize(padded.size() + 100, 0x00);
+  EXPECT_NO_THROW(make_visual_template(view(padded, 64, 48, 0, kPixMjpeg), p));
+  std::vector<uint8_t> cut(jpeg.begin(), jpeg.begin() + static_cast<std::ptrdiff_t>(jpeg.size() * 2 / 3));
+  try {
+    make_visual_template(view(cut, 64, 48, 0, kPixMjpeg), p);
+    FAIL() << "OpenCV decodes a cut-off JPEG, greying out the rest";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("cut off (no end-of-image marker)"), std::string::npos) << e.what();
+  }
 }
 
 TEST(VisualTemplate, RefusesBadFramesWithAReason) {

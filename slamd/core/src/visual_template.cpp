@@ -83,6 +83,19 @@ std::pair<int, int> jpeg_size(std::span<const uint8_t> d) {
   return {0, 0};
 }
 
+// Whether a JPEG ends with its end-of-image marker (FF D9), ignoring zero padding after it (some UVC
+// cameras pad their buffers). A frame cut off in transfer has none; OpenCV would decode it anyway,
+// greying out what is missing, and that grey would become a template.
+bool ends_with_eoi(std::span<const uint8_t> d) {
+  std::size_t end = d.size();
+  while (end > 0 && d[end - 1] == 0x00) --end;
+  return end >= 2 && d[end - 2] == 0xff && d[end - 1] == 0xd9;
+}
+
+// Decoding costs what the header claims, not what the message weighs: a 331-byte JPEG claiming
+// 10000 x 10000 took 2 s and 550 MB. No camera of this robot comes near 16.8 MP.
+constexpr int64_t kMaxJpegPixels = int64_t{4096} * 4096;
+
 cv::Mat to_grey8(const ImageView& im) {
   // OpenCV wants a non-const pointer for a header over foreign data; it is only read.
   auto* data = const_cast<uint8_t*>(im.data.data());
@@ -113,6 +126,11 @@ cv::Mat to_grey8(const ImageView& im) {
                          " by its JPEG header, the message says " + std::to_string(im.width) + "x" +
                          std::to_string(im.height));
       }
+      if (int64_t{width} * height > kMaxJpegPixels) {
+        throw InputError("image: MJPEG frame of " + std::to_string(width) + "x" + std::to_string(height) +
+                         " is larger than 4096x4096 pixels");
+      }
+      if (!ends_with_eoi(im.data)) throw InputError("image: MJPEG frame cut off (no end-of-image marker)");
       const cv::Mat buf(1, static_cast<int>(im.data.size()), CV_8UC1, data);
       try {
         grey = cv::imdecode(buf, cv::IMREAD_GRAYSCALE);
