@@ -67,7 +67,28 @@ INSTANTIATE_TEST_SUITE_P(
                       BadReply{"[0, \"1\", 0, 0, 0, 0, 1]", "y is not a number"},
                       BadReply{"[0, 0, 0, 0, 0, 0, 1.5]", "seq is not a non-negative integer"},
                       BadReply{"[0, 0, 0, 0, 0, 0, -3]", "seq is negative"},
-                      BadReply{"[0, 0, 0, 0, 0, 0, 18446744073709551615]", "seq is negative or too large"}));
+                      BadReply{"[0, 0, 0, 0, 0, 0, 18446744073709551615]", "seq is negative or too large"},
+                      // Finite but impossible (found by fuzzing): each left ODOMETRY wrong until a restart.
+                      BadReply{"[1.7976931348623157e308, 0, 0, 0, 0, 0, 1]", "element x = 1.7976931348623157e+308 is beyond"},
+                      BadReply{"[0, 1e20, 1, 0.2, 0, 0.1, 1]", "element y = 1e+20 is beyond any base's (100000.0)"},
+                      BadReply{"[0, 0, 1e17, 0.2, 0, 0.1, 1]", "element rot = 1e+17 is beyond"},
+                      BadReply{"[0.5, 0.5, 0, 1e300, 0, 0, 1]", "element vx = 1e+300 is beyond"},
+                      BadReply{"[0, 0, 0, 0, 0, 5000, 1]", "element omega = 5000.0 is beyond"},
+                      BadReply{"[0, \"0123456789012345678901234567890123456789xyz\", 0, 0, 0, 0, 1]",
+                               "y is not a number: \"0123456789012345678901234567890123456789\"..."}));
+
+// A reply nested 100,000 deep in an element: the error line describes it by its size (dumping it
+// recursed once per level and overflowed the poll thread's stack, killing based).
+TEST(OdometryReply, ADeeplyNestedElementIsRejectedWithoutRecursing) {
+  const std::string deep = "[" + std::string(100000, '[') + std::string(100000, ']') + ",0,0,0,0,0,0]";
+  OdometrySample s;
+  std::string error;
+  EXPECT_FALSE(parse_odometry_reply(deep, s, error));
+  EXPECT_NE(error.find("odometry reply of 200014 bytes, more than 4 KiB"), std::string::npos) << error;
+  const std::string nested = "[" + std::string(1000, '[') + std::string(1000, ']') + ",0,0,0,0,0,0]";
+  EXPECT_FALSE(parse_odometry_reply(nested, s, error));
+  EXPECT_NE(error.find("element x is not a number: a JSON array of 1 elements"), std::string::npos) << error;
+}
 
 TEST(OmnidriveCommand, IsAJsonArrayOfThreeNumbersThatRoundTrips) {
   const std::string body = format_omnidrive_command(0.25, -0.125, 1.0 / 3.0);

@@ -45,7 +45,35 @@ bool parse_base_url(std::string_view url, BaseUrl& out, std::string& error) {
   return true;
 }
 
+namespace {
+
+// Bounds of a plausible reply (a Robotino drives at under 1 m/s): beyond them the tracker's
+// re-anchoring would overflow or lose precision and every later sample would be wrong.
+constexpr std::size_t kMaxReplyBytes = 4096;      // seven numbers take under 200
+constexpr double kMaxPosition = 1e5;              // m
+constexpr double kMaxHeading = 1e6;               // rad, in case the firmware does not wrap it
+constexpr double kMaxSpeed = 20.0;                // m/s
+constexpr double kMaxTurnRate = 50.0;             // rad/s
+
+// A short description of an element for an error line: a scalar as it is, a string cut to 40
+// characters, a container by its size (dump() recurses once per level: a deeply nested reply
+// overflowed the stack).
+std::string describe(const nlohmann::json& v) {
+  if (v.is_array() || v.is_object()) return std::string("a JSON ") + v.type_name() + " of " + std::to_string(v.size()) + " elements";
+  if (v.is_string()) {
+    const auto& s = v.get_ref<const std::string&>();
+    return nlohmann::json(s.substr(0, 40)).dump() + (s.size() > 40 ? "..." : "");
+  }
+  return v.dump();
+}
+
+}  // namespace
+
 bool parse_odometry_reply(std::string_view body, OdometrySample& out, std::string& error) {
+  if (body.size() > kMaxReplyBytes) {
+    error = "odometry reply of " + std::to_string(body.size()) + " bytes, more than 4 KiB";
+    return false;
+  }
   // No exceptions: a malformed reply is routine input here, not an exceptional event.
   const nlohmann::json j = nlohmann::json::parse(body.begin(), body.end(), nullptr, false);
   const auto excerpt = [&] {
@@ -71,12 +99,20 @@ bool parse_odometry_reply(std::string_view body, OdometrySample& out, std::strin
   double v[7];
   for (std::size_t i = 0; i < 7; ++i) {
     if (!j[i].is_number()) {
-      error = std::string("odometry reply element ") + kNames[i] + " is not a number: " + j[i].dump();
+      error = std::string("odometry reply element ") + kNames[i] + " is not a number: " + describe(j[i]);
       return false;
     }
     v[i] = j[i].get<double>();
     if (!std::isfinite(v[i])) {
       error = std::string("odometry reply element ") + kNames[i] + " is not finite";
+      return false;
+    }
+  }
+  static const double kLimits[6] = {kMaxPosition, kMaxPosition, kMaxHeading, kMaxSpeed, kMaxSpeed, kMaxTurnRate};
+  for (std::size_t i = 0; i < 6; ++i) {
+    if (std::abs(v[i]) > kLimits[i]) {
+      error = std::string("odometry reply element ") + kNames[i] + " = " + nlohmann::json(v[i]).dump() +
+              " is beyond any base's (" + nlohmann::json(kLimits[i]).dump() + ")";
       return false;
     }
   }
@@ -86,13 +122,13 @@ bool parse_odometry_reply(std::string_view body, OdometrySample& out, std::strin
               ? -1
               : j[6].get<int64_t>();
     if (seq < 0) {
-      error = "odometry reply seq is negative or too large: " + j[6].dump();
+      error = "odometry reply seq is negative or too large: " + describe(j[6]);
       return false;
     }
   } else if (v[6] == std::floor(v[6]) && v[6] >= 0.0 && v[6] < 9.0e18) {
     seq = static_cast<int64_t>(v[6]);  // some firmware may print it as 12.0
   } else {
-    error = "odometry reply seq is not a non-negative integer: " + j[6].dump();
+    error = "odometry reply seq is not a non-negative integer: " + describe(j[6]);
     return false;
   }
   out.x = v[0];
