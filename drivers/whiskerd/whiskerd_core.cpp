@@ -166,6 +166,12 @@ WhiskerCore::WhiskerCore(const Params& params)
   }
 }
 
+const char* WhiskerCore::take_rejection_line() {
+  if (!rejection_pending_) return nullptr;
+  rejection_pending_ = false;
+  return rejection_line_.data();
+}
+
 void WhiskerCore::on_frame(uint32_t id, bool fd, std::span<const uint8_t> data, int64_t mono_us) {
   ++counters_[Counters::kFrames];
   const wp::Decoded d = wp::decode_frame(id, fd, data, params_.mode, params_.ids);
@@ -176,6 +182,11 @@ void WhiskerCore::on_frame(uint32_t id, bool fd, std::span<const uint8_t> data, 
         case wp::Reject::kWrongLength: ++counters_[Counters::kRejectedWrongLength]; break;
         case wp::Reject::kOutOfRange: ++counters_[Counters::kRejectedOutOfRange]; break;
         default: ++counters_[Counters::kRejectedWrongFrameType]; break;
+      }
+      if (++rejected_frames_ == next_rejection_to_log_) {
+        wp::format_reject(d, rejection_line_);
+        rejection_pending_ = true;
+        next_rejection_to_log_ *= 10;
       }
       break;
     case wp::FrameKind::kSample:

@@ -131,6 +131,12 @@ class WhiskerCore {
   int silent_board(int64_t mono_us) const;
   const char* reason() const { return reason_; }
 
+  // Rejected frames are counted (rejected_<reason>) and the 1st, 10th, 100th, ... of them is kept
+  // here as one line naming what was wrong, formatted without allocating, until the control loop
+  // takes it for the log: null when there is none. rejected_frames() counts them all.
+  const char* take_rejection_line();
+  int64_t rejected_frames() const { return rejected_frames_; }
+
   Counters& counters() { return counters_; }
   const wp::SampleAssembler& assembler() const { return assembler_; }
   const rcp::Controller& controller() const { return controller_; }
@@ -159,6 +165,10 @@ class WhiskerCore {
   int64_t retract_start_mono_ = 0;
   const char* reason_ = "waiting for every board";
   Counters counters_;
+  int64_t rejected_frames_ = 0;
+  int64_t next_rejection_to_log_ = 1;
+  bool rejection_pending_ = false;
+  std::array<char, 192> rejection_line_{};
 };
 
 // Couples the motor lines to the core, once per period: poll_fault() before step() (a fault or

@@ -210,6 +210,11 @@ void control_thread(const Params& p, std::unique_ptr<can::Socket> sock, gpio::Mo
         }
       }
 
+      if (const char* line = core.take_rejection_line()) {
+        rt_log(shared, "whiskerd: rejected frame: %s (%lld rejected so far; logged at the 1st, 10th, 100th, ...)",
+               line, static_cast<long long>(core.rejected_frames()));
+      }
+
       if (sock && sock->state() != bus_state) {
         rt_log(shared, "whiskerd: CAN %s %s -> %s", sock->interface().c_str(), can::bus_state_name(bus_state),
                can::bus_state_name(sock->state()));

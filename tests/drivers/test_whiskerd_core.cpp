@@ -75,6 +75,31 @@ TEST(WhiskerdCore, CountsRejectedFramesByReasonAndGapsPerBoard) {
   EXPECT_EQ(c[Counters::kGaps], 3 * wp::kNumBoards);
 }
 
+// Counters say how many; the log must say what was wrong: the 1st, 10th, 100th rejected frame is
+// kept as a line naming the reason and the id, taken once by the control loop.
+TEST(WhiskerdCore, RejectedFramesAreNamedForTheLogAtThe1st10th100th) {
+  Rig rig;
+  std::array<uint8_t, 32> buf{};
+  EXPECT_EQ(rig.core.take_rejection_line(), nullptr);
+  rig.core.on_frame(0x181, true, std::span(buf.data(), 24), 0);
+  const char* first = rig.core.take_rejection_line();
+  ASSERT_NE(first, nullptr);
+  EXPECT_STREQ(first, wp::reject_text(wp::decode_frame(0x181, true, std::span(buf.data(), 24), wp::BusMode::kFd, {}))
+                          .c_str());
+  EXPECT_NE(std::string(first).find("(24 bytes, expected 32), id 0x181"), std::string::npos) << first;
+  EXPECT_EQ(rig.core.take_rejection_line(), nullptr) << "taken once";
+  std::vector<int64_t> logged_at;
+  for (int i = 2; i <= 150; ++i) {
+    rig.core.on_frame(0x187, true, buf, 0);
+    if (const char* line = rig.core.take_rejection_line()) {
+      logged_at.push_back(rig.core.rejected_frames());
+      EXPECT_NE(std::string(line).find("id 0x187"), std::string::npos) << line;
+    }
+  }
+  EXPECT_EQ(logged_at, (std::vector<int64_t>{10, 100}));
+  EXPECT_EQ(rig.core.rejected_frames(), 150);
+}
+
 TEST(WhiskerdCore, ABoardsBootUpHeartbeatRestartsItsSequenceWithoutAPhantomGap) {
   // Board 2 reboots at seq 40000 (upper half of the u16 space, so its restart at 0 looks like a
   // forward step): its boot-up heartbeat keeps the 25535 samples it never sent out of gaps_board2.

@@ -101,6 +101,10 @@ heartbeats 20
 cat /tmp/status_new.txt
 check whiskerd_receives_on_the_recreated_interface \
   bash -c "grep -Eq '^can_rx_frames=([4-9][0-9]|[1-9][0-9]{2,})$' /tmp/status_new.txt"
+# A frame of the wrong length: counted, and the log names what was wrong (the 1st, 10th, 100th, ...).
+cansend vcan0 181##00011223344556677
+check whiskerd_logs_what_was_wrong_with_a_rejected_frame \
+  wait_for "$log" "rejected frame: .*(8 bytes, expected 32), id 0x181" 20
 check whiskerd_survives_its_interface_going_away kill -0 $wd
 kill -TERM $wd
 wait $wd

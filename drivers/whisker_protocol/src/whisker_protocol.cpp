@@ -77,16 +77,23 @@ const char* reject_name(Reject r) {
   return "?";
 }
 
-std::string reject_text(const Decoded& d) {
-  if (d.kind != FrameKind::kRejected) return "";
-  char text[192];
-  int n = std::snprintf(text, sizeof text, "%s", d.reason);
+void format_reject(const Decoded& d, std::span<char> out) {
+  if (out.empty()) return;
+  out[0] = '\0';
+  if (d.kind != FrameKind::kRejected) return;
+  const int size = static_cast<int>(out.size());
+  int n = std::snprintf(out.data(), out.size(), "%s", d.reason);
   auto add = [&](const char* fmt, auto... args) {
-    if (n >= 0 && n < static_cast<int>(sizeof text)) n += std::snprintf(text + n, sizeof text - n, fmt, args...);
+    if (n >= 0 && n < size) n += std::snprintf(out.data() + n, static_cast<std::size_t>(size - n), fmt, args...);
   };
   if (d.length >= 0) add(" (%d bytes, expected %d)", d.length, d.expected_length);
   add(", id 0x%03x", static_cast<unsigned>(d.id));
   if (d.whisker >= 0) add(", whisker %d", d.whisker);
+}
+
+std::string reject_text(const Decoded& d) {
+  char text[192];
+  format_reject(d, text);
   return text;
 }
 

@@ -120,6 +120,8 @@ struct Decoded {
 // The reason of a rejected frame as one line, e.g. "FD sample: wrong length (24 bytes, expected 40),
 // id 0x181"; "" for a frame that was not rejected. Allocates: not for the real-time path.
 std::string reject_text(const Decoded& d);
+// The same into `out` (always terminated, cut to fit), without allocating: for the real-time path.
+void format_reject(const Decoded& d, std::span<char> out);
 
 // Decodes any frame of the protocol. `fd` is whether the frame arrived as a CAN FD frame.
 Decoded decode_frame(uint32_t id, bool fd, std::span<const uint8_t> data, BusMode mode,
