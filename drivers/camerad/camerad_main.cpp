@@ -120,7 +120,6 @@ int main(int argc, char** argv) {
   int64_t closed_corrupt_frames = 0, closed_requeue_failures = 0;
   bool corrupt_logged = false;  // one log line per capture session, the counter says how many
   bool dequeue_error_logged = false;  // likewise
-  int64_t session_frames = 0;
   auto close_capture = [&] {
     closed_corrupt_frames += cap->corrupt_frames();
     closed_requeue_failures += cap->requeue_failures();
@@ -129,7 +128,7 @@ int main(int argc, char** argv) {
   int64_t interval_frames = 0;
   double interval_latency_max_us = 0, interval_latency_sum_us = 0;
   int64_t last_frame_us = 0;
-  int64_t last_sequence = -1;
+  int64_t last_sequence = -1;  // of the session's latest frame; -1: none yet this session
   int64_t frame_timeout_us = static_cast<int64_t>(p.frame_timeout_s * 1e6);
   // The longest silence for which DRIVER_STATUS still says OK (1 s, or three frame periods).
   int64_t healthy_gap_us = 1000000;
@@ -154,12 +153,11 @@ int main(int argc, char** argv) {
         last_sequence = -1;
         corrupt_logged = false;
         dequeue_error_logged = false;
-        session_frames = 0;
         // At least three frame periods of the negotiated rate (the driver may pick a slower one
         // than asked, or the configuration ask for less than a frame per frame_timeout_s).
-        frame_timeout_us = static_cast<int64_t>(
-            std::max(p.frame_timeout_s, cap->fps() > 0.0 ? 3.0 / cap->fps() : 0.0) * 1e6);
-        healthy_gap_us = static_cast<int64_t>(std::max(1.0, cap->fps() > 0.0 ? 3.0 / cap->fps() : 0.0) * 1e6);
+        const double three_periods_s = cap->fps() > 0.0 ? 3.0 / cap->fps() : 0.0;
+        frame_timeout_us = static_cast<int64_t>(std::max(p.frame_timeout_s, three_periods_s) * 1e6);
+        healthy_gap_us = static_cast<int64_t>(std::max(1.0, three_periods_s) * 1e6);
       } catch (const v4l2::CaptureError& e) {
         ++open_failures;
         if (e.what() != last_open_error) std::cerr << "camerad: " << e.what() << "; retrying\n";
@@ -185,7 +183,6 @@ int main(int argc, char** argv) {
         img.data.assign(f.data, f.data + f.size);
         publish(*bus, p.channel, img);  // a failed send is counted by the bus
         ++frames;
-        ++session_frames;
         ++interval_frames;
         const double latency = static_cast<double>(now_utime() - f.utime);
         interval_latency_sum_us += latency;
@@ -230,7 +227,8 @@ int main(int argc, char** argv) {
       st.driver = "camerad";
       // Open is not enough: OK only while frames arrive.
       const std::string problem =
-          cap ? v4l2::stream_problem(session_frames, t - last_frame_us, healthy_gap_us, cap->corrupt_frames()) : "";
+          cap ? v4l2::stream_problem(last_sequence >= 0, t - last_frame_us, healthy_gap_us, cap->corrupt_frames())
+              : "";
       st.state = cap && problem.empty() ? driver_status_t::STATE_OK : driver_status_t::STATE_DEGRADED;
       st.message = cap ? cap->device() + " " + std::to_string(cap->width()) + "x" + std::to_string(cap->height()) +
                              " " + v4l2::fourcc_name(cap->pixelformat()) + (problem.empty() ? "" : ": " + problem)

@@ -168,7 +168,7 @@ class WhiskerCore {
   int64_t rejected_frames_ = 0;
   int64_t next_rejection_to_log_ = 1;
   bool rejection_pending_ = false;
-  std::array<char, 192> rejection_line_{};
+  std::array<char, wp::kRejectTextBytes> rejection_line_{};
 };
 
 // Couples the motor lines to the core, once per period: poll_fault() before step() (a fault or

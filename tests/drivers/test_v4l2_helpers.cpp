@@ -162,12 +162,12 @@ TEST(V4l2Format, WhatTheDriverSettledOnIsCheckedBeforeStreaming) {
 
 TEST(V4l2Health, AnOpenCameraIsHealthyOnlyWhileFramesArrive) {
   constexpr int64_t kGap = 1000000;
-  EXPECT_EQ(stream_problem(10, 200000, kGap, 0), "");
-  EXPECT_EQ(stream_problem(10, 1000000, kGap, 0), "");
+  EXPECT_EQ(stream_problem(true, 200000, kGap, 0), "");
+  EXPECT_EQ(stream_problem(true, 1000000, kGap, 0), "");
   // Open but no frame yet is not OK, however short the wait: a camera that opens and sends nothing
   // (USB bandwidth) must not look healthy after every reopen.
-  EXPECT_EQ(stream_problem(0, 300000, kGap, 0), "open for 0.3 s, no frame yet");
-  EXPECT_EQ(stream_problem(10, 2500000, kGap, 0), "no frame for 2.5 s");
-  EXPECT_EQ(stream_problem(0, 1500000, kGap, 0), "open for 1.5 s, no frame yet");
-  EXPECT_EQ(stream_problem(0, 1500000, kGap, 7), "open for 1.5 s, only damaged frames (7)");
+  EXPECT_EQ(stream_problem(false, 300000, kGap, 0), "open for 0.3 s, no frame yet");
+  EXPECT_EQ(stream_problem(true, 2500000, kGap, 0), "no frame for 2.5 s");
+  EXPECT_EQ(stream_problem(false, 1500000, kGap, 0), "open for 1.5 s, no frame yet");
+  EXPECT_EQ(stream_problem(false, 1500000, kGap, 7), "open for 1.5 s, only damaged frames (7)");
 }

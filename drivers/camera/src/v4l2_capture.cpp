@@ -96,12 +96,12 @@ std::string format_problem(const NegotiatedFormat& f, const std::vector<uint32_t
   return "";
 }
 
-std::string stream_problem(int64_t session_frames, int64_t since_frame_us, int64_t max_gap_us,
+std::string stream_problem(bool had_frame, int64_t since_frame_us, int64_t max_gap_us,
                            int64_t session_corrupt) {
-  if (session_frames > 0 && since_frame_us <= max_gap_us) return "";
+  if (had_frame && since_frame_us <= max_gap_us) return "";
   char seconds[32];
   std::snprintf(seconds, sizeof(seconds), "%.1f s", static_cast<double>(since_frame_us) / 1e6);
-  if (session_frames > 0) return std::string("no frame for ") + seconds;
+  if (had_frame) return std::string("no frame for ") + seconds;
   if (session_corrupt > 0) {
     return std::string("open for ") + seconds + ", only damaged frames (" + std::to_string(session_corrupt) + ")";
   }

@@ -92,7 +92,7 @@ void format_reject(const Decoded& d, std::span<char> out) {
 }
 
 std::string reject_text(const Decoded& d) {
-  char text[192];
+  char text[kRejectTextBytes];
   format_reject(d, text);
   return text;
 }

@@ -59,11 +59,11 @@ struct NegotiatedFormat {
 std::string format_problem(const NegotiatedFormat& f, const std::vector<uint32_t>& wanted);
 
 // camerad's health while a capture session is open: OK only once a frame has arrived, and while
-// frames go on arriving (a camera that opens and sends nothing is not OK). `session_frames`
-// were published since the open, the last one `since_frame_us` ago (or the open, if none);
+// frames go on arriving (a camera that opens and sends nothing is not OK). `had_frame`: a frame was
+// published since the open, the last one `since_frame_us` ago (else the open was);
 // `max_gap_us` is the longest silence still healthy; `session_corrupt` buffers were skipped as
 // damaged. Returns "" when healthy, else what is wrong, for DRIVER_STATUS's message.
-std::string stream_problem(int64_t session_frames, int64_t since_frame_us, int64_t max_gap_us,
+std::string stream_problem(bool had_frame, int64_t since_frame_us, int64_t max_gap_us,
                            int64_t session_corrupt);
 
 // Gives every pending (dequeued) buffer back through `qbuf(index)` (true on success). A buffer that

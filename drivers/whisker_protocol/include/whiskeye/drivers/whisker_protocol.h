@@ -121,6 +121,8 @@ struct Decoded {
 // id 0x181"; "" for a frame that was not rejected. Allocates: not for the real-time path.
 std::string reject_text(const Decoded& d);
 // The same into `out` (always terminated, cut to fit), without allocating: for the real-time path.
+// kRejectTextBytes always fits the whole line.
+constexpr std::size_t kRejectTextBytes = 192;
 void format_reject(const Decoded& d, std::span<char> out);
 
 // Decodes any frame of the protocol. `fd` is whether the frame arrived as a CAN FD frame.
