@@ -1,6 +1,7 @@
 #include "slam_node.h"
 
 #include "whiskeye/common/robot_geometry.h"
+#include "whiskeye/common/se2.h"
 #include "whiskeye/common/utime.h"
 
 #include <whiskeye/template_match_t.hpp>
@@ -29,7 +30,6 @@ constexpr int kMaxSamplesPerCycle = 20000;  // 40 s at 500 Hz: far beyond any wh
 constexpr int64_t kMaxCycleUs = 60'000'000;  // likewise for its duration
 // Plausible readings (docs/lcm-channels.md): whisker angles are within a turn either way, calibrated
 // deflections within -1..1 (half again for calibration slack); odometry positions within 100 km.
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kMaxWhiskerAngle = kPi;
 constexpr double kMaxDeflection = 1.5;
 constexpr double kMaxOdometryPosition = 1e5;
