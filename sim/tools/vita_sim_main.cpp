@@ -7,6 +7,8 @@
 #include "whiskeye/sim/can_log.h"
 #include "whiskeye/sim/lcm_sink.h"
 #include "whiskeye/sim/simulator.h"
+#include "whiskeye/sim/world_generator.h"
+#include "whiskeye/slam/vita_slam.h"
 #include "whiskerd_core.h"
 
 #include <whiskeye/rcp/params.h>
@@ -22,6 +24,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <limits>
 #include <string>
@@ -149,6 +152,68 @@ void plot_views(const World& world, const RobotGeometry& robot, const std::vecto
   if (!cv::imwrite(path, out)) throw std::runtime_error(path + ": cannot write the PNG");
 }
 
+// "MIN,MAX" (or one number for both) of a generator option; GeneratorOptionError naming it.
+Range parse_range(const std::string& option, const std::string& text) {
+  const auto comma = text.find(',');
+  const std::string a = text.substr(0, comma);
+  const std::string b = comma == std::string::npos ? a : text.substr(comma + 1);
+  Range r;
+  try {
+    std::size_t ia = 0;
+    std::size_t ib = 0;
+    r.min = std::stod(a, &ia);
+    r.max = std::stod(b, &ib);
+    if (ia != a.size() || ib != b.size()) throw std::invalid_argument("trailing text");
+  } catch (const std::exception&) {
+    throw GeneratorOptionError(option + ": expected MIN,MAX (or one number), got '" + text + "'");
+  }
+  return r;
+}
+
+// --generate-world: draws a world, checks it and writes it. Returns the exit status.
+int generate(GeneratorOptions options, const std::map<std::string, std::string>& ranges, const RobotGeometry& robot,
+             const std::string& slam_config, const std::string& output_world, bool quiet) {
+  try {
+    for (const auto& [option, text] : ranges) {
+      if (text.empty()) continue;
+      const Range r = parse_range(option, text);
+      if (option == "--arena-side") options.side = r;
+      if (option == "--radius") options.radius = r;
+      if (option == "--speed") options.speed = r;
+      if (option == "--gen-laps") options.laps = r;
+      if (option == "--wall-landmarks") options.wall_landmarks = r;
+      if (option == "--tactile-landmarks") options.tactile_landmarks = r;
+    }
+    validate(options);
+  } catch (const GeneratorOptionError& e) {
+    std::cerr << "vita-sim: " << e.what() << "\n";
+    return 2;
+  }
+  if (output_world.empty()) {
+    std::cerr << "vita-sim: --generate-world needs --output-world FILE\n";
+    return 2;
+  }
+  AliasCheckParams check;
+  {
+    const ParamNode root = ParamNode::from_file(slam_config);
+    slam::SlamParams slam;
+    slam::load(root.section("slam"), slam);
+    check.visual = slam.visual;
+    check.match = slam.match;
+  }
+  const GeneratedWorld g = generate_world(options, robot, check);
+  std::ofstream out(output_world, std::ios::binary | std::ios::trunc);
+  out << g.yaml;
+  out.flush();
+  if (!out) throw std::runtime_error(output_world + ": cannot write the world");
+  if (!quiet) {
+    std::cerr << "vita-sim: wrote " << output_world << " (" << options.family << ", world seed " << options.world_seed
+              << ", draw " << g.attempts << "): " << g.report.place_pairs.size() << " look-alike pairs of places, "
+              << g.world.solids.size() << " tactile landmarks\n";
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -171,7 +236,31 @@ int main(int argc, char** argv) {
   std::string whiskerd_config = "config/whiskerd.yaml";
   std::string can_mode;
   std::string can_interface;
-  app.add_option("--world", world_path, "World YAML file (e.g. config/worlds/aliased_arena.yaml)")->required()->check(CLI::ExistingFile);
+  app.add_option("--world", world_path, "World YAML file (e.g. config/worlds/aliased_arena.yaml)")->check(CLI::ExistingFile);
+  bool generate_flag = false;
+  GeneratorOptions gen;
+  std::string output_world;
+  std::string slam_config = "config/slam.yaml";
+  std::map<std::string, std::string> gen_ranges{{"--arena-side", ""}, {"--radius", ""}, {"--speed", ""},
+                                                {"--gen-laps", ""}, {"--wall-landmarks", ""}, {"--tactile-landmarks", ""}};
+  app.add_flag("--generate-world", generate_flag,
+               "Draw a world (--world-seed, --family), check its aliasing and write it to --output-world; no simulation");
+  app.add_option("--world-seed", gen.world_seed, "Seed of the generated world")->capture_default_str();
+  app.add_option("--output-world", output_world, "YAML file the generated world is written to");
+  app.add_option("--family", gen.family, "Generated world family: aliased (the paper's premise) or stress (premise broken)")
+      ->capture_default_str();
+  app.add_flag("--faults", gen.faults,
+               "Generated world: add the standard sensor faults (4 dead whiskers, a board offline 30 s, a 10 s camera "
+               "blackout, a 20 % odometry slip for 10 s)");
+  app.add_option("--slam-config", slam_config, "slamd config whose visual template and match threshold the check uses")
+      ->capture_default_str();
+  app.add_option("--arena-side", gen_ranges["--arena-side"], "Generated world: arena side range MIN,MAX (m; 5,8)");
+  app.add_option("--radius", gen_ranges["--radius"], "Generated world: trajectory radius range MIN,MAX (m; 0.8,1.3)");
+  app.add_option("--speed", gen_ranges["--speed"], "Generated world: tangential speed range MIN,MAX (m/s; 0.07,0.15)");
+  app.add_option("--gen-laps", gen_ranges["--gen-laps"], "Generated world: laps range MIN,MAX (4,10)");
+  app.add_option("--wall-landmarks", gen_ranges["--wall-landmarks"], "Generated world: wall landmarks MIN,MAX (4,8)");
+  app.add_option("--tactile-landmarks", gen_ranges["--tactile-landmarks"],
+                 "Generated world: tactile landmarks MIN,MAX (3,6)");
   app.add_option("--output,-o", output, "LCM log to write");
   app.add_option("--candump", candump_path,
                  "Also (or only) write the whisker boards' CAN frames as a candump -l log, for canplayer");
@@ -200,13 +289,18 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   try {
-    World world = load_world_file(world_path);
     RobotGeometry robot = default_robot_geometry();
     {
       const ParamNode root = ParamNode::from_file(robot_path);
       load(root.section("robot"), robot);
       root.check_no_unknown_keys();
     }
+    if (generate_flag) return generate(gen, gen_ranges, robot, slam_config, output_world, quiet);
+    if (world_path.empty()) {
+      std::cerr << "vita-sim: --world FILE is required (or --generate-world)\n";
+      return 2;
+    }
+    World world = load_world_file(world_path);
     if (laps > 0) world.trajectory.laps = laps;
     if (!plot_path.empty()) {
       plot_world(world, robot, plot_path);
