@@ -49,13 +49,14 @@ void BM_ContactSweep24(benchmark::State& state) {
 BENCHMARK(BM_ContactSweep24)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 
 struct NullSink : SimSink {
-  void whisker_sample(const rcp::WhiskerSample&) override {}
+  void whisker_sample(const rcp::WhiskerSample&, const WhiskerHealth&) override {}
   void rcp_state(const rcp::ControlOutput&) override {}
   void whisk_cycle(const rcp::WhiskCycle&) override {}
   void contact_truth(const ContactTruth&) override {}
   void odometry(int64_t, int64_t, const OdometrySample&) override {}
   void ground_truth(int64_t, const Pose2&) override {}
   void camera(int64_t, int64_t, const std::vector<uint8_t>&, int, int) override {}
+  void fault(const FaultEvent&) override {}
 };
 
 // One lap of the default arena (62.8 s simulated) per iteration; range(0) = 1 writes the LCM log.

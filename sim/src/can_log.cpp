@@ -7,6 +7,9 @@
 
 namespace whiskeye::sim {
 
+static_assert(kNumBoards == wp::kNumBoards && kWhiskersPerBoard == wp::kWhiskersPerBoard,
+              "the simulator's board layout (world.h) is the protocol's");
+
 namespace {
 
 constexpr char kHex[] = "0123456789ABCDEF";
@@ -110,7 +113,16 @@ BoardTraffic::BoardTraffic(const BoardTrafficParams& params)
   }
 }
 
-void BoardTraffic::add(const rcp::WhiskerSample& s, std::vector<CanFrame>& out) {
+namespace {
+
+// A board is offline when the simulator marks its whiskers stale (it marks a whole board at once).
+bool board_offline(const WhiskerHealth& health, int board) {
+  return health.stale[static_cast<std::size_t>(board * wp::kWhiskersPerBoard)];
+}
+
+}  // namespace
+
+void BoardTraffic::add(const rcp::WhiskerSample& s, const WhiskerHealth& health, std::vector<CanFrame>& out) {
   if (!started_) {
     started_ = true;
     next_sample_utime_ = s.utime;
@@ -122,6 +134,7 @@ void BoardTraffic::add(const rcp::WhiskerSample& s, std::vector<CanFrame>& out) 
     const auto seq = static_cast<uint16_t>(params_.first_seq + samples_sent_);
     ++samples_sent_;
     for (int b = 0; b < wp::kNumBoards; ++b) {
+      if (board_offline(health, b)) continue;
       wp::BoardSample board;
       board.board = b;
       board.seq = seq;
@@ -129,7 +142,7 @@ void BoardTraffic::add(const rcp::WhiskerSample& s, std::vector<CanFrame>& out) 
         const int w = b * wp::kWhiskersPerBoard + k;
         wp::WhiskerRaw& raw = board.whiskers[k];
         raw = wp::uncalibrate(s.theta[w], s.deflection_x[w], s.deflection_y[w], params_.calibration[w]);
-        raw.fault = !s.valid[w];
+        raw.fault = health.fault[w] || !s.valid[w];
       }
       if (params_.mode == wp::BusMode::kFd) {
         CanFrame& f = out.emplace_back();
@@ -155,6 +168,7 @@ void BoardTraffic::add(const rcp::WhiskerSample& s, std::vector<CanFrame>& out) 
   if (s.utime >= next_heartbeat_utime_) {
     next_heartbeat_utime_ += heartbeat_period_us_;
     for (int b = 0; b < wp::kNumBoards; ++b) {
+      if (board_offline(health, b)) continue;
       CanFrame& f = out.emplace_back();
       f.utime = s.utime;
       f.id = wp::heartbeat_id(params_.ids, b);
@@ -167,9 +181,9 @@ void BoardTraffic::add(const rcp::WhiskerSample& s, std::vector<CanFrame>& out) 
 CandumpWriter::CandumpWriter(std::ostream& out, const BoardTrafficParams& params, std::string interface)
     : out_(out), traffic_(params), interface_(std::move(interface)) {}
 
-void CandumpWriter::whisker_sample(const rcp::WhiskerSample& sample) {
+void CandumpWriter::whisker_sample(const rcp::WhiskerSample& sample, const WhiskerHealth& health) {
   frames_.clear();
-  traffic_.add(sample, frames_);
+  traffic_.add(sample, health, frames_);
   for (const CanFrame& f : frames_) {
     out_ << format_candump_line(f, interface_) << '\n';
     ++frames_written_;

@@ -18,7 +18,7 @@ int16_t to_counts(double v, double scale) {
 
 }  // namespace
 
-whisker_sample_t to_lcm(const rcp::WhiskerSample& s, double saturation) {
+whisker_sample_t to_lcm(const rcp::WhiskerSample& s, const WhiskerHealth& health, double saturation) {
   whisker_sample_t m;
   m.utime = s.utime;
   m.seq = s.seq;
@@ -34,7 +34,8 @@ whisker_sample_t to_lcm(const rcp::WhiskerSample& s, double saturation) {
     if (std::max(std::abs(s.deflection_x[w]), std::abs(s.deflection_y[w])) >= saturation) {
       status |= whisker_sample_t::STATUS_SATURATED;
     }
-    if (!s.valid[w]) status |= whisker_sample_t::STATUS_FAULT;
+    if (health.stale[w]) status |= whisker_sample_t::STATUS_STALE;
+    if (health.fault[w] || (!s.valid[w] && !health.stale[w])) status |= whisker_sample_t::STATUS_FAULT;
     m.status.push_back(status);
   }
   return m;
@@ -79,6 +80,16 @@ whisk_cycle_t to_lcm(const rcp::WhiskCycle& c) {
   return m;
 }
 
+sim_fault_t to_lcm(const FaultEvent& e) {
+  sim_fault_t m;
+  m.utime = e.utime;
+  m.kind = static_cast<int8_t>(e.kind);
+  m.active = e.active;
+  m.index = e.index;
+  m.value = e.value;
+  return m;
+}
+
 LcmSink::LcmSink(Bus& bus, std::function<void(int64_t)> set_time, bool yuyv, double saturation)
     : bus_(bus), set_time_(std::move(set_time)), yuyv_(yuyv), saturation_(saturation) {}
 
@@ -89,8 +100,8 @@ void LcmSink::put(const std::string& channel, int64_t utime, const T& msg) {
   ++counts_[channel];
 }
 
-void LcmSink::whisker_sample(const rcp::WhiskerSample& sample) {
-  put("WHISKER_SAMPLE", sample.utime, to_lcm(sample, saturation_));
+void LcmSink::whisker_sample(const rcp::WhiskerSample& sample, const WhiskerHealth& health) {
+  put("WHISKER_SAMPLE", sample.utime, to_lcm(sample, health, saturation_));
 }
 
 void LcmSink::rcp_state(const rcp::ControlOutput& out) { put("RCP_STATE", out.utime, to_lcm(out)); }
@@ -151,5 +162,7 @@ void LcmSink::camera(int64_t utime, int64_t seq, const std::vector<uint8_t>& gre
   image_.size = static_cast<int32_t>(image_.data.size());
   put("CAMERA", utime, image_);
 }
+
+void LcmSink::fault(const FaultEvent& event) { put("SIM_FAULT", event.utime, to_lcm(event)); }
 
 }  // namespace whiskeye::sim

@@ -2,6 +2,7 @@
 #include "whiskeye/sim/simulator.h"
 
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace whiskeye::sim {
@@ -16,7 +17,32 @@ uint64_t derive_seed(uint64_t seed, uint64_t stream) {
   return z ^ (z >> 31);
 }
 
+int64_t to_us(double seconds) { return std::llround(seconds * 1e6); }
+
+FaultRecord interval_record(FaultKind kind, const FaultInterval& f, int index, double value) {
+  FaultRecord r;
+  r.kind = kind;
+  r.index = index;
+  r.value = value;
+  r.start_us = to_us(f.start);
+  r.end_us = to_us(f.start + f.duration);
+  return r;
+}
+
+bool active(const FaultRecord& r) { return r.began_utime >= 0 && r.ended_utime < 0; }
+
 }  // namespace
+
+const char* to_string(FaultKind kind) {
+  switch (kind) {
+    case FaultKind::DeadWhisker: return "dead_whiskers";
+    case FaultKind::BoardOffline: return "board_offline";
+    case FaultKind::CameraBlackout: return "camera_blackout";
+    case FaultKind::CameraFreeze: return "camera_freeze";
+    case FaultKind::OdometrySlip: return "odometry_slip";
+  }
+  return "unknown";
+}
 
 rcp::PlantParams plant_params_for(const RobotGeometry& robot, rcp::PlantParams base) {
   for (int w = 0; w < kNumWhiskers; ++w) base.whisker_length[w] = robot.whiskers[static_cast<std::size_t>(w)].length;
@@ -43,6 +69,23 @@ Simulator::Simulator(const World& world, const RobotGeometry& robot, const rcp::
   command_.fill(plant_.params().initial_theta);
   onsets_per_solid_.assign(world_.solids.size(), 0);
   controller_.enable();
+
+  const Faults& f = world_.faults;
+  for (int w : f.dead_whiskers) {
+    if (w < 0 || w >= kNumWhiskers) throw std::invalid_argument("dead whisker index out of range");
+    FaultRecord r;
+    r.kind = FaultKind::DeadWhisker;
+    r.index = w;
+    r.end_us = std::numeric_limits<int64_t>::max();
+    faults_.push_back(r);
+  }
+  for (const BoardOffline& b : f.board_offline) {
+    if (b.board < 0 || b.board >= kNumBoards) throw std::invalid_argument("offline board out of range");
+    faults_.push_back(interval_record(FaultKind::BoardOffline, b, b.board, 0.0));
+  }
+  for (const FaultInterval& i : f.camera_blackout) faults_.push_back(interval_record(FaultKind::CameraBlackout, i, -1, 0.0));
+  for (const FaultInterval& i : f.camera_freeze) faults_.push_back(interval_record(FaultKind::CameraFreeze, i, -1, 0.0));
+  for (const OdometrySlip& o : f.odometry_slip) faults_.push_back(interval_record(FaultKind::OdometrySlip, o, -1, o.scale));
 }
 
 Simulator::~Simulator() {
@@ -76,6 +119,90 @@ void Simulator::update_obstacles(const Pose2& T_world_head) {
   }
 }
 
+// Which faults are active this period. Their beginnings and ends are queued for the sink (they go
+// out after a completed cycle, which is stamped with the previous period), ends first: an interval
+// may end exactly where the next one of its sensor begins.
+void Simulator::update_faults(int64_t elapsed_us, int64_t utime) {
+  dead_.fill(false);
+  board_offline_.fill(false);
+  camera_blackout_ = false;
+  camera_freeze_ = false;
+  odometry_slip_ = 1.0;
+  fault_events_.clear();
+  for (const bool ending : {true, false}) {
+    for (FaultRecord& r : faults_) {
+      const bool was = active(r);
+      const bool now = elapsed_us >= r.start_us && elapsed_us < r.end_us;
+      if (ending && was && !now) {
+        r.ended_utime = utime;
+        fault_events_.push_back({utime, r.kind, false, r.index, r.value});
+      } else if (!ending && now && !was) {
+        r.began_utime = utime;
+        fault_events_.push_back({utime, r.kind, true, r.index, r.value});
+      }
+    }
+  }
+  for (FaultRecord& r : faults_) {
+    if (elapsed_us < r.start_us || elapsed_us >= r.end_us) continue;
+    switch (r.kind) {
+      case FaultKind::DeadWhisker:
+        dead_[r.index] = true;
+        ++r.affected;
+        break;
+      case FaultKind::BoardOffline:
+        board_offline_[static_cast<std::size_t>(r.index)] = true;
+        ++r.affected;
+        break;
+      case FaultKind::CameraBlackout: camera_blackout_ = true; break;
+      case FaultKind::CameraFreeze: camera_freeze_ = true; break;
+      case FaultKind::OdometrySlip: odometry_slip_ *= r.value; break;
+    }
+  }
+}
+
+// The plant's sample as whiskerd would hand it to the controller under the active faults: a dead
+// whisker reads no deflection and is invalid; an offline board's whiskers repeat their last values
+// and are invalid (stale). The controller and the cycle assembler then treat them as on the robot.
+rcp::WhiskerSample Simulator::sense(const rcp::WhiskerSample& plant_sample) {
+  rcp::WhiskerSample s = plant_sample;
+  for (int w = 0; w < kNumWhiskers; ++w) {
+    const bool stale = board_offline_[static_cast<std::size_t>(w / kWhiskersPerBoard)];
+    health_.fault[w] = dead_[w];
+    health_.stale[w] = stale;
+    if (dead_[w]) {
+      s.deflection_x[w] = 0.0;
+      s.deflection_y[w] = 0.0;
+    }
+    if (stale) {
+      s.theta[w] = last_sensed_.theta[w];
+      s.deflection_x[w] = last_sensed_.deflection_x[w];
+      s.deflection_y[w] = last_sensed_.deflection_y[w];
+    }
+    s.valid[w] = !dead_[w] && !stale;
+  }
+  last_sensed_ = s;
+  return s;
+}
+
+// A blacked-out camera delivers nothing (seq counts published frames, so it shows no gap); a frozen
+// one delivers the last frame it published before the freeze (or, frozen from its first frame on,
+// that frame) at its normal rate. Frames are rendered either way: the camera noise stream, hence
+// every later frame, is that of the same run without the fault.
+void Simulator::publish_camera(int64_t utime, std::vector<uint8_t> image, SimSink& sink) {
+  for (FaultRecord& r : faults_) {
+    const bool applies = r.kind == FaultKind::CameraBlackout || (r.kind == FaultKind::CameraFreeze && !camera_blackout_);
+    if (active(r) && applies) ++r.affected;
+  }
+  if (camera_blackout_) return;
+  if (camera_freeze_) {
+    if (held_image_.empty()) held_image_ = std::move(image);
+    sink.camera(utime, camera_seq_++, held_image_, renderer_.width(), renderer_.height());
+    return;
+  }
+  sink.camera(utime, camera_seq_++, image, renderer_.width(), renderer_.height());
+  held_image_ = std::move(image);
+}
+
 bool Simulator::step(SimSink& sink) {
   if (step_ >= total_steps_) return false;
   const int64_t elapsed_us = step_ * params_.period_us;
@@ -85,7 +212,8 @@ bool Simulator::step(SimSink& sink) {
   const Pose2 T_world_head = compose(T_world_base, robot_.T_base_head);
 
   if (step_ % params_.contact_update_divider == 0) update_obstacles(T_world_head);
-  const rcp::WhiskerSample sample = plant_.step(utime, command_);
+  update_faults(elapsed_us, utime);
+  const rcp::WhiskerSample sample = sense(plant_.step(utime, command_));
   rcp::ControlOutput out = controller_.step(sample);
   command_ = out.theta_command;
 
@@ -114,26 +242,32 @@ bool Simulator::step(SimSink& sink) {
     was_in_contact_[w] = state[w].in_contact;
   }
 
-  sink.whisker_sample(sample);
+  for (const FaultEvent& e : fault_events_) sink.fault(e);
+  sink.whisker_sample(sample, health_);
   sink.rcp_state(out);
   if (step_ % params_.odometry_divider == 0) {
     double vx;
     double vy;
     double omega;
     world_.trajectory.body_velocity(vx, vy, omega);
+    // A slip is a scale error on the measured linear velocity, like scale_v (a wheel that turns
+    // more or less than the base moves); the heading rate is measured as it is.
+    vx *= odometry_slip_;
+    vy *= odometry_slip_;
+    for (FaultRecord& r : faults_) r.affected += r.kind == FaultKind::OdometrySlip && active(r);
     const double dt = step_ == 0 ? 0.0 : static_cast<double>(params_.odometry_divider * params_.period_us) * 1e-6;
     sink.odometry(utime, odometry_seq_++, odometry_.step(vx, vy, omega, dt));
     sink.ground_truth(utime, T_world_base);
   }
   if (elapsed_us >= next_camera_us_) {
-    const std::vector<uint8_t> image = next_frame_.valid() ? next_frame_.get() : render_frame(elapsed_us);
+    std::vector<uint8_t> image = next_frame_.valid() ? next_frame_.get() : render_frame(elapsed_us);
     next_camera_us_ += camera_period_us_;
     if (params_.render_ahead && next_camera_us_ < total_steps_ * params_.period_us) {
       // Rendered at the control period that will publish it (the first at or after its due time).
       const int64_t at = (next_camera_us_ + params_.period_us - 1) / params_.period_us * params_.period_us;
       next_frame_ = std::async(std::launch::async, [this, at] { return render_frame(at); });
     }
-    sink.camera(utime, camera_seq_++, image, renderer_.width(), renderer_.height());
+    publish_camera(utime, std::move(image), sink);
   }
   ++step_;
   return true;

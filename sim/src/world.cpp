@@ -148,6 +148,72 @@ Solid load_solid(const ParamNode& n, const World& w) {
   return s;
 }
 
+// Fault times: far beyond any run a world file allows (kMaxLaps of the default arena last 7.3 days),
+// small enough that microseconds stay exact in an int64.
+constexpr double kMaxFaultSeconds = 1e6;
+
+template <typename Interval>
+Interval load_interval(const ParamNode& n) {
+  Interval f;
+  n.require("start", f.start);
+  n.require("duration", f.duration);
+  if (!(f.start >= 0.0 && f.start <= kMaxFaultSeconds)) bad(n, "start", "must be in [0, 1e6] s");
+  if (!(f.duration > 0.0 && f.duration <= kMaxFaultSeconds)) bad(n, "duration", "must be in (0, 1e6] s");
+  return f;
+}
+
+// Two intervals of one fault on one sensor would make its start and end ambiguous (which frame does
+// an overlapping freeze hold, which slip scale applies?): the loader refuses them.
+template <typename Interval, typename SameSensor>
+void refuse_overlaps(const std::vector<ParamNode>& nodes, const std::vector<Interval>& v, const std::string& key,
+                     SameSensor same) {
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    for (std::size_t j = 0; j < i; ++j) {
+      if (!same(v[i], v[j])) continue;
+      if (v[i].start < v[j].start + v[j].duration && v[j].start < v[i].start + v[i].duration) {
+        bad(nodes[i], "start", "overlaps " + key + "[" + std::to_string(j) + "] of the same sensor");
+      }
+    }
+  }
+}
+
+Faults load_faults(const ParamNode& node) {
+  Faults f;
+  node.get("dead_whiskers", f.dead_whiskers);
+  for (std::size_t i = 0; i < f.dead_whiskers.size(); ++i) {
+    const int w = f.dead_whiskers[i];
+    if (w < 0 || w >= kNumBoards * kWhiskersPerBoard) bad(node, "dead_whiskers", "has whisker " + std::to_string(w) + ": indices are 0..23");
+    for (std::size_t j = 0; j < i; ++j) {
+      if (f.dead_whiskers[j] == w) bad(node, "dead_whiskers", "repeats whisker " + std::to_string(w));
+    }
+  }
+  const std::vector<ParamNode> boards = node.list("board_offline");
+  for (const ParamNode& n : boards) {
+    BoardOffline b = load_interval<BoardOffline>(n);
+    n.require("board", b.board);
+    if (b.board < 0 || b.board >= kNumBoards) bad(n, "board", "must be a board 0..5");
+    f.board_offline.push_back(b);
+  }
+  refuse_overlaps(boards, f.board_offline, "board_offline",
+                  [](const BoardOffline& a, const BoardOffline& b) { return a.board == b.board; });
+  const auto any = [](const auto&, const auto&) { return true; };
+  const std::vector<ParamNode> blackouts = node.list("camera_blackout");
+  for (const ParamNode& n : blackouts) f.camera_blackout.push_back(load_interval<FaultInterval>(n));
+  refuse_overlaps(blackouts, f.camera_blackout, "camera_blackout", any);
+  const std::vector<ParamNode> freezes = node.list("camera_freeze");
+  for (const ParamNode& n : freezes) f.camera_freeze.push_back(load_interval<FaultInterval>(n));
+  refuse_overlaps(freezes, f.camera_freeze, "camera_freeze", any);
+  const std::vector<ParamNode> slips = node.list("odometry_slip");
+  for (const ParamNode& n : slips) {
+    OdometrySlip s = load_interval<OdometrySlip>(n);
+    n.require("scale", s.scale);
+    if (!(s.scale >= 0.1 && s.scale <= 10.0)) bad(n, "scale", "must be in [0.1, 10]");
+    f.odometry_slip.push_back(s);
+  }
+  refuse_overlaps(slips, f.odometry_slip, "odometry_slip", any);
+  return f;
+}
+
 }  // namespace
 
 void Solid::finalize() {
@@ -248,7 +314,7 @@ void load(const ParamNode& node, World& world) {
   traj.get("direction", direction);
   if (direction != "ccw" && direction != "cw") bad(traj, "direction", "must be ccw or cw");
   w.trajectory.counter_clockwise = direction == "ccw";
-  traj.get("laps", w.trajectory.laps, 1, 10000);
+  traj.get("laps", w.trajectory.laps, 1, kMaxLaps);
 
   const ParamNode cam = node.section("camera");
   cam.get("noise_sigma", w.camera.sigma, 0.0, 100.0);
@@ -265,6 +331,8 @@ void load(const ParamNode& node, World& world) {
   odo.get("bias_omega", w.odometry.bias_omega, -10.0, 10.0);
   odo.get("scale_v", w.odometry.scale_v, 0.5, 2.0);
   odo.get("start_at_truth", w.odometry.start_at_truth);
+
+  w.faults = load_faults(node.section("faults"));
   world = std::move(w);
 }
 

@@ -1,5 +1,6 @@
 // vita-sim: a simulated WhiskEye in a YAML world, written as an LCM log with the drivers' channels
-// (WHISKER_SAMPLE, RCP_STATE, WHISK_CYCLE, CAMERA, ODOMETRY) plus GROUND_TRUTH and SIM_CONTACT_TRUTH.
+// (WHISKER_SAMPLE, RCP_STATE, WHISK_CYCLE, CAMERA, ODOMETRY) plus GROUND_TRUTH, SIM_CONTACT_TRUTH and
+// SIM_FAULT (the world's injected sensor faults beginning and ending).
 // Also draws a world's top-down map (--plot-world), can save camera frames as PNG (--frames-dir), and
 // writes the whisker boards' CAN traffic for the same samples as a `candump -l` log (--candump) for
 // can-utils' canplayer, using whiskerd's config for the bus mode, ids and (inverted) calibration.
@@ -214,6 +215,37 @@ int generate(GeneratorOptions options, const std::map<std::string, std::string>&
   return 0;
 }
 
+// One line per injected fault: what, when (s since the start) and what it touched.
+std::string fault_summary(const FaultRecord& f, int64_t start_utime) {
+  char line[200];
+  const auto at = [&](int64_t utime) { return static_cast<double>(utime - start_utime) * 1e-6; };
+  std::string what = std::string("fault ") + to_string(f.kind);
+  if (f.kind == FaultKind::DeadWhisker) what += " whisker " + std::to_string(f.index);
+  if (f.kind == FaultKind::BoardOffline) what += " board " + std::to_string(f.index);
+  if (f.kind == FaultKind::OdometrySlip) {
+    std::snprintf(line, sizeof line, " x%g", f.value);
+    what += line;
+  }
+  if (f.began_utime < 0) return what + ": not reached (the run ended first)";
+  if (f.ended_utime >= 0) {
+    std::snprintf(line, sizeof line, ": %.3f s to %.3f s, ", at(f.began_utime), at(f.ended_utime));
+  } else if (f.kind == FaultKind::DeadWhisker) {
+    std::snprintf(line, sizeof line, ": the whole run, ");
+  } else {
+    std::snprintf(line, sizeof line, ": %.3f s to the end of the run, ", at(f.began_utime));
+  }
+  what += line;
+  const std::string n = std::to_string(f.affected);
+  switch (f.kind) {
+    case FaultKind::DeadWhisker: return what + n + " samples flagged STATUS_FAULT";
+    case FaultKind::BoardOffline: return what + n + " board samples stale (4 whiskers STATUS_STALE)";
+    case FaultKind::CameraBlackout: return what + n + " camera frames withheld";
+    case FaultKind::CameraFreeze: return what + n + " camera frames repeated";
+    case FaultKind::OdometrySlip: return what + n + " odometry samples scaled";
+  }
+  return what;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -229,7 +261,7 @@ int main(int argc, char** argv) {
   int frames_every = 1;
   uint64_t seed = 1;
   double duration = 0.0;
-  int laps = 0;
+  int64_t laps = 0;  // wide, so that an absurd count reaches the range check below
   int64_t start_utime = SimParams{}.start_utime;
   bool quiet = false;
   std::string candump_path;
@@ -275,8 +307,10 @@ int main(int argc, char** argv) {
   app.add_option("--rcp", rcp_path, "Whisking controller YAML (e.g. config/rcp.yaml; default: built-in defaults)")
       ->check(CLI::ExistingFile);
   app.add_option("--seed", seed, "Seed of every noise source (same seed -> byte-identical log)")->capture_default_str();
-  app.add_option("--duration", duration, "Simulated seconds (overrides --laps)")->check(CLI::PositiveNumber);
-  app.add_option("--laps", laps, "Revolutions (default: the world's trajectory.laps)")->check(CLI::PositiveNumber);
+  // Bounded below, after the world is loaded (--duration by the world's lap time).
+  app.add_option("--duration", duration, "Simulated seconds (overrides --laps; at most " + std::to_string(kMaxLaps) +
+                                             " laps' time)");
+  app.add_option("--laps", laps, "Revolutions, 1.." + std::to_string(kMaxLaps) + " (default: the world's trajectory.laps)");
   app.add_option("--start-utime", start_utime, "utime of the first sample")->capture_default_str();
   app.add_option("--plot-world", plot_path, "Write a top-down PNG of the world (alone: no simulation)");
   app.add_option("--plot-views", views_path, "Write noise-free camera views at --view-angles as one PNG (alone: no simulation)");
@@ -301,7 +335,18 @@ int main(int argc, char** argv) {
       return 2;
     }
     World world = load_world_file(world_path);
-    if (laps > 0) world.trajectory.laps = laps;
+    // The world file's bounds, so that no option runs longer than a world file could.
+    if (app.count("--laps") > 0 && !(laps >= 1 && laps <= kMaxLaps)) {
+      std::cerr << "vita-sim: --laps " << laps << " is out of range [1, " << kMaxLaps << "]\n";
+      return 2;
+    }
+    const double max_duration = kMaxLaps * world.trajectory.lap_time();
+    if (app.count("--duration") > 0 && !(duration > 0.0 && duration <= max_duration)) {
+      std::cerr << "vita-sim: --duration " << duration << " is out of range (0, " << max_duration << "] s (" << kMaxLaps
+                << " laps of this world)\n";
+      return 2;
+    }
+    if (laps > 0) world.trajectory.laps = static_cast<int>(laps);
     if (!plot_path.empty()) {
       plot_world(world, robot, plot_path);
       std::cerr << "vita-sim: wrote " << plot_path << "\n";
@@ -374,9 +419,9 @@ int main(int argc, char** argv) {
       std::string dir;
       int every;
       FrameTap(SimSink* n, CandumpWriter* c, std::string d, int e) : next(n), can(c), dir(std::move(d)), every(e) {}
-      void whisker_sample(const rcp::WhiskerSample& s) override {
-        if (next) next->whisker_sample(s);
-        if (can) can->whisker_sample(s);
+      void whisker_sample(const rcp::WhiskerSample& s, const WhiskerHealth& h) override {
+        if (next) next->whisker_sample(s, h);
+        if (can) can->whisker_sample(s, h);
       }
       void rcp_state(const rcp::ControlOutput& o) override {
         if (next) next->rcp_state(o);
@@ -392,6 +437,9 @@ int main(int argc, char** argv) {
       }
       void ground_truth(int64_t u, const Pose2& p) override {
         if (next) next->ground_truth(u, p);
+      }
+      void fault(const FaultEvent& e) override {
+        if (next) next->fault(e);
       }
       void camera(int64_t u, int64_t s, const std::vector<uint8_t>& g, int w, int h) override {
         if (next) next->camera(u, s, g, w, h);
@@ -441,6 +489,7 @@ int main(int argc, char** argv) {
     for (std::size_t i = 0; i < world.solids.size(); ++i) {
       std::cerr << "  contact onsets on " << world.solids[i].name << ": " << sim.onsets_per_solid()[i] << "\n";
     }
+    for (const FaultRecord& f : sim.faults()) std::cerr << "  " << fault_summary(f, params.start_utime) << "\n";
   } catch (const std::exception& e) {
     std::cerr << "vita-sim: " << e.what() << "\n";
     return 1;

@@ -77,7 +77,27 @@ TEST(Params, RejectsWrongTypeNamingKeyAndLine) {
 TEST(Params, RejectsOutOfRange) {
   EXPECT_THAT(error_of("rate_hz: 0\n"), HasSubstr("'rate_hz' = 0 is out of range [1, 1000]"));
   EXPECT_THAT(error_of("nested: {inner: 1.5}\n"), HasSubstr("'nested.inner' = 1.5 is out of range"));
-  EXPECT_THAT(error_of("rate_hz: .nan\n"), HasSubstr("'rate_hz' = nan is out of range"));
+}
+
+TEST(Params, RejectsNonFiniteNumbersNamingTheKeyEvenWithoutARange) {
+  EXPECT_THAT(error_of("rate_hz: .nan\n"), HasSubstr("'rate_hz' = nan is not a finite number"));
+  EXPECT_THAT(error_of("rate_hz: .inf\n"), HasSubstr("'rate_hz' = inf is not a finite number"));
+  EXPECT_THAT(error_of("rate_hz: -.inf\n"), HasSubstr("'rate_hz' = -inf is not a finite number"));
+  // gains has no range: only the finiteness check stands between .nan and the loaded struct.
+  EXPECT_THAT(error_of("gains: [1, .nan]\n"), HasSubstr("'gains' = [1, nan] is not a finite number"));
+  EXPECT_THAT(error_of("gains: [.inf]\n"), HasSubstr("'gains' = [inf] is not a finite number"));
+}
+
+TEST(Params, RejectsNonFiniteNumbersInNestedLists) {
+  const ParamNode n = ParamNode::from_string("points: [[0, 1], [2, .nan]]\n", "test.yaml");
+  std::vector<std::vector<double>> points;
+  try {
+    n.get("points", points);
+    FAIL() << "expected a ParamError";
+  } catch (const ParamError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("'points'"));
+    EXPECT_THAT(e.what(), HasSubstr("not a finite number"));
+  }
 }
 
 TEST(Params, RequireFailsWhenMissing) {

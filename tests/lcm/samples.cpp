@@ -9,6 +9,7 @@
 #include <whiskeye/odometry_t.hpp>
 #include <whiskeye/pose2d_t.hpp>
 #include <whiskeye/rcp_state_t.hpp>
+#include <whiskeye/sim_fault_t.hpp>
 #include <whiskeye/slam_status_t.hpp>
 #include <whiskeye/template_match_t.hpp>
 #include <whiskeye/vita_event_t.hpp>
@@ -250,6 +251,15 @@ std::vector<TypeSample> all_type_samples() {
     m.x = {0.1, 0.12};
     m.y = {0.05, -0.04};
     m.z = {0.0, -0.02};
+    out.push_back(make(m));
+  }
+  {
+    sim_fault_t m{};
+    m.utime = kT;
+    m.kind = sim_fault_t::KIND_ODOMETRY_SLIP;
+    m.active = true;
+    m.index = -1;
+    m.value = 1.2;
     out.push_back(make(m));
   }
   return out;

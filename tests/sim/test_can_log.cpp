@@ -37,7 +37,7 @@ std::vector<CanFrame> traffic(const BoardTrafficParams& p, int n, std::vector<rc
   for (int i = 0; i < n; ++i) {
     const rcp::WhiskerSample s = sample_at(i, rng);
     if (samples) samples->push_back(s);
-    t.add(s, frames);
+    t.add(s, WhiskerHealth{}, frames);
   }
   return frames;
 }
@@ -252,7 +252,7 @@ TEST(BoardTraffic, LargeDeflectionsSaturateAt2047AndInvalidWhiskersCarryTheFault
   s.theta[1] = 2.0;  // beyond the encoder's +-90 deg range
   s.valid[6] = false;
   std::vector<CanFrame> frames;
-  t.add(s, frames);
+  t.add(s, WhiskerHealth{}, frames);
   ASSERT_GE(frames.size(), 2u);
   const wp::Decoded b0 = wp::decode_frame(frames[0].id, true, frames[0].data, wp::BusMode::kFd);
   ASSERT_EQ(b0.kind, wp::FrameKind::kSample) << wp::reject_text(b0);
@@ -270,7 +270,7 @@ TEST(CandumpWriter, WritesOneLinePerFrameOnTheGivenInterface) {
   BoardTrafficParams p;
   CandumpWriter writer(out, p, "vcan3");
   std::mt19937 rng(1);
-  for (int i = 0; i < 60; ++i) writer.whisker_sample(sample_at(i, rng));
+  for (int i = 0; i < 60; ++i) writer.whisker_sample(sample_at(i, rng), WhiskerHealth{});
   EXPECT_EQ(writer.frames_written(), 60 * 6 + 6 * 2);
   EXPECT_EQ(writer.samples_sent(), 60);
   std::istringstream in(out.str());

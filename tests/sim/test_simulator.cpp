@@ -22,7 +22,7 @@ struct Recorder : SimSink {
     ++count[ch];
     times.push_back(t);
   }
-  void whisker_sample(const rcp::WhiskerSample& s) override {
+  void whisker_sample(const rcp::WhiskerSample& s, const WhiskerHealth&) override {
     tick("WHISKER_SAMPLE", s.utime);
     for (int w = 0; w < rcp::kNumWhiskers; ++w) max_deflection = std::max(max_deflection, std::hypot(s.deflection_x[w], s.deflection_y[w]));
   }
@@ -44,6 +44,7 @@ struct Recorder : SimSink {
     tick("CAMERA", u);
     EXPECT_EQ(g.size(), static_cast<std::size_t>(w * h));
   }
+  void fault(const FaultEvent& e) override { tick("SIM_FAULT", e.utime); }
 };
 
 World arena(double start_deg) {

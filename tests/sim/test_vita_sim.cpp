@@ -12,6 +12,7 @@
 #include <whiskeye/odometry_t.hpp>
 #include <whiskeye/pose2d_t.hpp>
 #include <whiskeye/rcp_state_t.hpp>
+#include <whiskeye/sim_fault_t.hpp>
 #include <whiskeye/whisk_cycle_t.hpp>
 #include <whiskeye/whisker_sample_t.hpp>
 
@@ -19,12 +20,14 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <map>
 #include <sstream>
+#include <tuple>
 
 namespace whiskeye::sim {
 namespace {
@@ -43,6 +46,18 @@ int vita_sim(const std::string& args) {
 }
 
 std::string arena() { return "--world " + test::source_path("config/worlds/aliased_arena.yaml"); }
+
+// Runs vita-sim with its stderr in `err`; returns the exit code.
+int vita_sim_stderr(const std::string& args, std::string& err) {
+  const std::string path = temp_path("stderr.txt");
+  const std::string cmd = std::string(VITA_SIM_EXE) + " --robot " + test::source_path("config/robot.yaml") + " " + args +
+                          " -q 2>" + path;
+  const int status = std::system(cmd.c_str());
+  std::ifstream in(path);
+  err.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  fs::remove(path);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
 
 std::string slurp(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -90,6 +105,7 @@ TEST(VitaSim, LogHasTheDriversChannelsAtTheirRatesStampedWithSampleTimesInOrder)
     if (e.channel == "SIM_CONTACT_TRUTH") msg_utime = utime_of<contact_truth_t>(e);
     if (e.channel == "ODOMETRY") msg_utime = utime_of<odometry_t>(e);
     if (e.channel == "GROUND_TRUTH") msg_utime = utime_of<pose2d_t>(e);
+    if (e.channel == "SIM_FAULT") msg_utime = utime_of<sim_fault_t>(e);
     if (e.channel == "CAMERA") {
       image_t img;
       ASSERT_TRUE(decode_message(std::span<const uint8_t>(e.data), img));
@@ -130,6 +146,121 @@ TEST(VitaSim, BadInputExitsNonZero) {
   fs::remove(bad);
 }
 
+TEST(VitaSim, LapsAndDurationBeyondTheWorldFilesBoundsExitWith2NamingTheOption) {
+  // An output vita-sim cannot create: were a bound missing, the run would fail at once (exit 1)
+  // instead of writing for days.
+  const std::string out = "/nonexistent/dir/bounds.lcmlog";
+  for (const char* args : {"--laps 1000000000", "--laps 10001", "--laps 0", "--laps -3"}) {
+    std::string err;
+    EXPECT_EQ(vita_sim_stderr(arena() + " " + args + " -o " + out, err), 2) << args;
+    EXPECT_EQ(err.rfind("vita-sim: --laps ", 0), 0u) << args << ": " << err;
+    EXPECT_NE(err.find("10000"), std::string::npos) << "names the bound: " << err;
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+  }
+  // The arena's lap is 62.8 s: 10000 laps are 628,319 s.
+  for (const char* args : {"--duration 628400", "--duration 1e300", "--duration inf", "--duration nan", "--duration 0",
+                           "--duration -1"}) {
+    std::string err;
+    EXPECT_EQ(vita_sim_stderr(arena() + " " + args + " -o " + out, err), 2) << args;
+    EXPECT_EQ(err.rfind("vita-sim: --duration ", 0), 0u) << args << ": " << err;
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+  }
+  // The bound itself is allowed (the duration overrides the laps, so this runs one second).
+  const std::string ok = temp_path("bounds.lcmlog");
+  std::string err;
+  EXPECT_EQ(vita_sim_stderr(arena() + " --laps 10000 --duration 1 -o " + ok, err), 0) << err;
+  fs::remove(ok);
+}
+
+// The arena with every kind of fault (a 3 s run).
+std::string faulty_world() {
+  const std::string path = temp_path("faulty_world.yaml");
+  std::ofstream(path) << std::ifstream(test::source_path("config/worlds/aliased_arena.yaml")).rdbuf()
+                      << "  faults:\n"
+                         "    dead_whiskers: [3, 17]\n"
+                         "    board_offline: [{board: 2, start: 0.5, duration: 1.0}]\n"
+                         "    camera_blackout: [{start: 1.0, duration: 0.5}]\n"
+                         "    camera_freeze: [{start: 2.0, duration: 0.5}]\n"
+                         "    odometry_slip: [{start: 1.2, duration: 10.0, scale: 1.2}]\n";
+  return path;
+}
+
+TEST(VitaSim, AFaultyWorldsLogRecordsEachFaultOnSimFaultAndIsByteIdenticalForTheSameSeed) {
+  const std::string world = faulty_world();
+  const std::string a = temp_path("fa.lcmlog");
+  const std::string b = temp_path("fb.lcmlog");
+  const std::string candump = temp_path("fa.candump");
+  const std::string cfg = " --whiskerd-config " + test::source_path("config/whiskerd.yaml");
+  std::string err;
+  ASSERT_EQ(vita_sim_stderr("--world " + world + " --duration 3 --seed 2 -o " + a + " --candump " + candump + cfg, err), 0)
+      << err;
+  ASSERT_EQ(vita_sim("--world " + world + " --duration 3 --seed 2 -o " + b), 0);
+  EXPECT_TRUE(slurp(a) == slurp(b));
+  // One summary line per fault.
+  for (const char* line : {"fault dead_whiskers whisker 3: the whole run, 1500 samples flagged STATUS_FAULT",
+                           "fault dead_whiskers whisker 17: the whole run",
+                           "fault board_offline board 2: 0.500 s to 1.500 s, 500 board samples stale",
+                           "fault camera_blackout: 1.000 s to 1.500 s, 3 camera frames withheld",
+                           "fault camera_freeze: 2.000 s to 2.500 s, 3 camera frames repeated",
+                           "fault odometry_slip x1.2: 1.200 s to the end of the run, 90 odometry samples scaled"}) {
+    EXPECT_NE(err.find(line), std::string::npos) << line << "\n" << err;
+  }
+  const int64_t t0 = SimParams{}.start_utime;
+  std::vector<sim_fault_t> faults;
+  int64_t last = 0;
+  int cameras = 0;
+  LogReader log(a);
+  LogEvent e;
+  while (log.next(e)) {
+    ASSERT_GE(e.utime, last);
+    last = e.utime;
+    if (e.channel == "SIM_FAULT") {
+      sim_fault_t m;
+      ASSERT_TRUE(decode_message(std::span<const uint8_t>(e.data), m));
+      EXPECT_EQ(m.utime, e.utime);
+      faults.push_back(m);
+    } else if (e.channel == "CAMERA") {
+      ++cameras;
+      EXPECT_FALSE(e.utime >= t0 + 1'000'000 && e.utime < t0 + 1'500'000) << "a frame in the blackout";
+    } else if (e.channel == "WHISKER_SAMPLE") {
+      whisker_sample_t m;
+      ASSERT_TRUE(decode_message(std::span<const uint8_t>(e.data), m));
+      const bool offline = m.utime >= t0 + 500'000 && m.utime < t0 + 1'500'000;
+      ASSERT_EQ(m.status[3] & whisker_sample_t::STATUS_FAULT, whisker_sample_t::STATUS_FAULT);
+      ASSERT_EQ(m.deflection_x[3], 0.0f);
+      for (int w = 8; w < 12; ++w) ASSERT_EQ((m.status[w] & whisker_sample_t::STATUS_STALE) != 0, offline) << m.utime;
+    }
+  }
+  EXPECT_EQ(cameras, 12);
+  const std::vector<std::tuple<int64_t, int, bool, int>> expected = {
+      {0, sim_fault_t::KIND_DEAD_WHISKER, true, 3},          {0, sim_fault_t::KIND_DEAD_WHISKER, true, 17},
+      {500'000, sim_fault_t::KIND_BOARD_OFFLINE, true, 2},    {1'000'000, sim_fault_t::KIND_CAMERA_BLACKOUT, true, -1},
+      {1'200'000, sim_fault_t::KIND_ODOMETRY_SLIP, true, -1}, {1'500'000, sim_fault_t::KIND_BOARD_OFFLINE, false, 2},
+      {1'500'000, sim_fault_t::KIND_CAMERA_BLACKOUT, false, -1}, {2'000'000, sim_fault_t::KIND_CAMERA_FREEZE, true, -1},
+      {2'500'000, sim_fault_t::KIND_CAMERA_FREEZE, false, -1},
+  };
+  ASSERT_EQ(faults.size(), expected.size());
+  for (std::size_t i = 0; i < faults.size(); ++i) {
+    EXPECT_EQ(faults[i].utime - t0, std::get<0>(expected[i])) << i;
+    EXPECT_EQ(faults[i].kind, std::get<1>(expected[i])) << i;
+    EXPECT_EQ(faults[i].active, std::get<2>(expected[i])) << i;
+    EXPECT_EQ(faults[i].index, std::get<3>(expected[i])) << i;
+    EXPECT_EQ(faults[i].value, faults[i].kind == sim_fault_t::KIND_ODOMETRY_SLIP ? 1.2 : 0.0) << i;
+  }
+  // The offline board's CAN traffic stops for the interval: no sample frames, no heartbeats.
+  std::ifstream in(candump);
+  std::string line, iface;
+  CanFrame f;
+  int board2 = 0;
+  while (std::getline(in, line)) {
+    ASSERT_TRUE(parse_candump_line(line, f, iface)) << line;
+    if (f.id != 0x183 && f.id != 0x703) continue;
+    ++board2;
+    EXPECT_FALSE(f.utime >= t0 + 500'000 && f.utime < t0 + 1'500'000) << line;
+  }
+  EXPECT_EQ(board2, 1000 + 20) << "2 s of FD samples at 500 Hz and of heartbeats at 10 Hz";
+  for (const auto& p : {world, a, b, candump}) fs::remove(p);
+}
 
 // The arena started where the robot passes box_north within 2 s: contacts, large deflections.
 std::string contact_world() {

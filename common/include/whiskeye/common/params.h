@@ -2,14 +2,17 @@
 //
 // Every module has one parameter struct with working defaults and a loader of the form
 //   void load(const ParamNode& node, MyParams& p) { node.get("rate_hz", p.rate_hz, 1.0, 1000.0); ... }
-// A key absent from the file keeps its default. A wrong type, a value out of range, or a key that no
-// loader asked for (a typo) is a ParamError whose message names the file and the full key path.
+// A key absent from the file keeps its default. A wrong type, a value out of range, a non-finite number
+// (.nan, .inf: no parameter means them, and they slip through range checks or into geometry), or a
+// key that no loader asked for (a typo) is a ParamError whose message names the file and the full
+// key path.
 // dump() lists every parameter asked for, with its value and whether it came from the file, so a
 // daemon can print exactly what it runs with.
 #pragma once
 
 #include <yaml-cpp/yaml.h>
 
+#include <cmath>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
@@ -65,6 +68,9 @@ class ParamNode {
 
   template <typename T>
   static std::string to_text(const T& value);
+  // True unless a floating-point number in `value` (a scalar or nested lists) is NaN or infinite.
+  template <typename T>
+  static bool all_finite(const T& value);
 
   std::shared_ptr<State> state_;
   YAML::Node node_;
@@ -96,6 +102,20 @@ std::string ParamNode::to_text(const T& value) {
 }
 
 template <typename T>
+bool ParamNode::all_finite(const T& value) {
+  if constexpr (std::is_floating_point_v<T>) {
+    return std::isfinite(value);
+  } else if constexpr (std::is_arithmetic_v<T> || std::is_same_v<T, std::string>) {
+    return true;
+  } else {
+    for (const auto& v : value) {
+      if (!all_finite(v)) return false;
+    }
+    return true;
+  }
+}
+
+template <typename T>
 void ParamNode::get(const std::string& key, T& value) const {
   const YAML::Node n = lookup(key);
   if (!n || n.IsNull()) {
@@ -107,6 +127,7 @@ void ParamNode::get(const std::string& key, T& value) const {
   } catch (const YAML::Exception&) {
     fail(key, "has the wrong type: " + describe(n));
   }
+  if (!all_finite(value)) fail(key, "= " + to_text(value) + " is not a finite number");
   mark_leaf(key, to_text(value), true);
 }
 

@@ -8,6 +8,7 @@
 #pragma once
 
 #include "whiskeye/drivers/whisker_protocol.h"
+#include "whiskeye/sim/simulator.h"
 
 #include <whiskeye/rcp/types.h>
 
@@ -53,11 +54,14 @@ struct BoardTrafficParams {
 // is sent when its utime reaches the next board period (counted from the first sample), so with the
 // simulator's 500 Hz every sample goes out in FD mode and every fifth in classic mode at 100 Hz.
 // Heartbeats follow the same rule at heartbeat_hz, after the sample frames of their instant.
+// A whisker marked faulty carries the whisker fault bit. A board whose whiskers are stale is offline
+// (its cable unplugged): it sends neither sample frames nor heartbeats, while it keeps sampling, so
+// its sequence counter jumps by the samples it missed when it is back (whiskerd counts a gap).
 class BoardTraffic {
  public:
   explicit BoardTraffic(const BoardTrafficParams& params);
   // Appends this sample's frames (possibly none) to `out`.
-  void add(const rcp::WhiskerSample& sample, std::vector<CanFrame>& out);
+  void add(const rcp::WhiskerSample& sample, const WhiskerHealth& health, std::vector<CanFrame>& out);
   int64_t samples_sent() const { return samples_sent_; }
 
  private:
@@ -74,7 +78,7 @@ class BoardTraffic {
 class CandumpWriter {
  public:
   CandumpWriter(std::ostream& out, const BoardTrafficParams& params, std::string interface);
-  void whisker_sample(const rcp::WhiskerSample& sample);
+  void whisker_sample(const rcp::WhiskerSample& sample, const WhiskerHealth& health);
   int64_t frames_written() const { return frames_written_; }
   int64_t samples_sent() const { return traffic_.samples_sent(); }
 

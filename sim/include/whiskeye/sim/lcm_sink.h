@@ -1,6 +1,6 @@
 // The simulator's outputs as the real drivers publish them: converts SimSink calls into the LCM
 // messages (WHISKER_SAMPLE, RCP_STATE, WHISK_CYCLE, ODOMETRY, CAMERA) plus the simulator-only
-// GROUND_TRUTH and SIM_CONTACT_TRUTH, and publishes them on a Bus stamped with the sample utime
+// GROUND_TRUTH, SIM_CONTACT_TRUTH and SIM_FAULT, and publishes them on a Bus stamped with the sample utime
 // (for a LogWriterBus: the log event time). Not part of the pure library (it knows LCM).
 #pragma once
 
@@ -9,6 +9,7 @@
 
 #include <whiskeye/image_t.hpp>
 #include <whiskeye/rcp_state_t.hpp>
+#include <whiskeye/sim_fault_t.hpp>
 #include <whiskeye/whisk_cycle_t.hpp>
 #include <whiskeye/whisker_sample_t.hpp>
 
@@ -22,22 +23,26 @@ namespace whiskeye::sim {
 constexpr double kRawHallPerUnit = 2000.0;    // raw_x/raw_y = round(deflection · 2000)
 constexpr double kRawThetaPerRad = 10000.0;   // raw_theta = round(θ · 10000), 0.1 mrad counts
 
-whisker_sample_t to_lcm(const rcp::WhiskerSample& s, double saturation);
+// status as whiskerd sets it: STALE for a stale whisker, FAULT for a faulty one (or any other
+// invalid one), SATURATED at the plant's clip.
+whisker_sample_t to_lcm(const rcp::WhiskerSample& s, const WhiskerHealth& health, double saturation);
 rcp_state_t to_lcm(const rcp::ControlOutput& out);
 whisk_cycle_t to_lcm(const rcp::WhiskCycle& c);
+sim_fault_t to_lcm(const FaultEvent& e);
 
 class LcmSink : public SimSink {
  public:
   // `set_time` stamps the following publications (LogWriterBus::set_time; may be empty).
   LcmSink(Bus& bus, std::function<void(int64_t)> set_time, bool yuyv, double saturation);
 
-  void whisker_sample(const rcp::WhiskerSample& sample) override;
+  void whisker_sample(const rcp::WhiskerSample& sample, const WhiskerHealth& health) override;
   void rcp_state(const rcp::ControlOutput& out) override;
   void whisk_cycle(const rcp::WhiskCycle& cycle) override;
   void contact_truth(const ContactTruth& truth) override;
   void odometry(int64_t utime, int64_t seq, const OdometrySample& odom) override;
   void ground_truth(int64_t utime, const Pose2& T_world_base) override;
   void camera(int64_t utime, int64_t seq, const std::vector<uint8_t>& grey, int width, int height) override;
+  void fault(const FaultEvent& event) override;
 
   // Messages published per channel.
   const std::map<std::string, int64_t>& counts() const { return counts_; }

@@ -2,8 +2,10 @@
 // control period the whisker/world geometry gives each whisker its obstacle (first-touch angle and
 // radial distance), the rcp_whisking plant produces θ and deflections, and the real RCP controller
 // commands the next period (closed loop); odometry and ground truth come at 50 Hz and camera frames
-// at the robot's frame rate. Outputs go to a SimSink as plain structs, in time order; vita-sim turns
-// them into LCM messages. Pure: time is the simulated utime, randomness is seeded, no I/O.
+// at the robot's frame rate. The world's sensor faults change what the sensors report (as the drivers
+// would report it) and are announced as they begin and end. Outputs go to a SimSink as plain
+// structs, in time order; vita-sim turns them into LCM messages. Pure: time is the simulated utime,
+// randomness is seeded, no I/O.
 #pragma once
 
 #include "whiskeye/common/robot_geometry.h"
@@ -15,6 +17,7 @@
 #include <whiskeye/rcp/controller.h>
 #include <whiskeye/rcp/plant.h>
 
+#include <array>
 #include <cstdint>
 #include <future>
 #include <map>
@@ -49,11 +52,47 @@ struct ContactTruth {
   std::vector<Point> points;
 };
 
+// Why a whisker's reading is not valid this period. whiskerd tells the cases apart in
+// WHISKER_SAMPLE.status and valid = false alone cannot, so the sink gets them beside the sample.
+struct WhiskerHealth {
+  rcp::PerWhisker<bool> stale{};  // its board sent nothing this period: the last value is repeated
+  rcp::PerWhisker<bool> fault{};  // the sensor failed: no deflection, reading invalid
+};
+
+// The injected sensor faults (World::faults). Values match sim_fault_t.KIND_*.
+enum class FaultKind : int8_t { DeadWhisker = 1, BoardOffline = 2, CameraBlackout = 3, CameraFreeze = 4, OdometrySlip = 5 };
+
+// The world file's key of a fault kind ("dead_whiskers", "board_offline", ...).
+const char* to_string(FaultKind kind);
+
+// A fault beginning or ending: ground truth for attributing what an evaluation sees.
+struct FaultEvent {
+  int64_t utime = 0;  // the first control period in (active) or after (!active) the fault
+  FaultKind kind = FaultKind::DeadWhisker;
+  bool active = true;
+  int index = -1;      // whisker (DeadWhisker) or board (BoardOffline), else -1
+  double value = 0.0;  // OdometrySlip: the scale, else 0
+};
+
+// One configured fault over the run, for a summary.
+struct FaultRecord {
+  FaultKind kind = FaultKind::DeadWhisker;
+  int index = -1;
+  double value = 0.0;
+  int64_t start_us = 0;  // since the start; active in [start_us, end_us)
+  int64_t end_us = 0;    // INT64_MAX: the whole run
+  int64_t began_utime = -1;  // -1: not (yet) begun / ended
+  int64_t ended_utime = -1;
+  // What it touched: whisker samples (DeadWhisker: the whisker's; BoardOffline: the board's, one
+  // per period), camera frames withheld or repeated, odometry samples scaled.
+  int64_t affected = 0;
+};
+
 // Receives the simulation's outputs. Calls come in non-decreasing time order.
 class SimSink {
  public:
   virtual ~SimSink() = default;
-  virtual void whisker_sample(const rcp::WhiskerSample& sample) = 0;
+  virtual void whisker_sample(const rcp::WhiskerSample& sample, const WhiskerHealth& health) = 0;
   virtual void rcp_state(const rcp::ControlOutput& out) = 0;
   virtual void whisk_cycle(const rcp::WhiskCycle& cycle) = 0;
   virtual void contact_truth(const ContactTruth& truth) = 0;
@@ -61,6 +100,8 @@ class SimSink {
   virtual void ground_truth(int64_t utime, const Pose2& T_world_base) = 0;
   // 8-bit grey, row-major.
   virtual void camera(int64_t utime, int64_t seq, const std::vector<uint8_t>& grey, int width, int height) = 0;
+  // Before the whisker sample of the period it names.
+  virtual void fault(const FaultEvent& event) = 0;
 };
 
 // Plant parameters consistent with the robot geometry: lengths from it, and the deflection gain that
@@ -85,12 +126,18 @@ class Simulator {
   int64_t cycles() const { return cycles_; }
   int64_t cycles_with_contact() const { return cycles_with_contact_; }
   const std::vector<int64_t>& onsets_per_solid() const { return onsets_per_solid_; }
+  // Every configured fault (dead whiskers, board_offline, camera_blackout, camera_freeze,
+  // odometry_slip, each in the world file's order) and what it did so far.
+  const std::vector<FaultRecord>& faults() const { return faults_; }
 
   const rcp::Controller& controller() const { return controller_; }
   const rcp::WhiskerPlant& plant() const { return plant_; }
 
  private:
   void update_obstacles(const Pose2& T_world_head);
+  void update_faults(int64_t elapsed_us, int64_t utime);
+  rcp::WhiskerSample sense(const rcp::WhiskerSample& plant_sample);
+  void publish_camera(int64_t utime, std::vector<uint8_t> image, SimSink& sink);
   std::vector<uint8_t> render_frame(int64_t elapsed_us);
 
   World world_;
@@ -115,6 +162,17 @@ class Simulator {
   std::vector<int64_t> onsets_per_solid_;
   std::map<int64_t, ContactTruth> truth_;  // by cycle, until the cycle completes
   std::future<std::vector<uint8_t>> next_frame_;  // the frame at next_camera_us_, when render_ahead
+  // Faults: the schedule, and what is active this period.
+  std::vector<FaultRecord> faults_;
+  std::vector<FaultEvent> fault_events_;  // beginnings and ends of this period, for the sink
+  rcp::PerWhisker<bool> dead_{};
+  std::array<bool, kNumBoards> board_offline_{};
+  bool camera_blackout_ = false;
+  bool camera_freeze_ = false;
+  double odometry_slip_ = 1.0;
+  WhiskerHealth health_;
+  rcp::WhiskerSample last_sensed_;   // what a stale board repeats
+  std::vector<uint8_t> held_image_;  // the last frame published: what a frozen camera repeats
 };
 
 }  // namespace whiskeye::sim

@@ -2,8 +2,9 @@
 // visual landmarks are vertical rectangles over floor segments; tactile landmarks are extruded 2-D
 // shapes (polygons or circles with a height range) within whisker reach; surfaces carry procedural
 // grey-level patterns; lighting has a base brightness and timed sudden changes; the trajectory is a
-// revolution around a centre. Loaded strictly from YAML (config/worlds/*.yaml, format in
-// docs/simulator.md). Pure data + geometry: no I/O besides the loader, no clocks.
+// revolution around a centre; optional sensor faults say which sensors fail when. Loaded strictly
+// from YAML (config/worlds/*.yaml, format in docs/simulator.md). Pure data + geometry: no I/O
+// besides the loader, no clocks.
 #pragma once
 
 #include "whiskeye/common/params.h"
@@ -168,6 +169,38 @@ struct OdometryNoise {
   bool start_at_truth = false;  // odometry frame = world frame (else it starts at the origin)
 };
 
+// Sensor faults the simulator injects (docs/simulator.md, "Sensor faults"). Times in s since the
+// simulation start; an interval is active in [start, start + duration).
+struct FaultInterval {
+  double start = 0.0;
+  double duration = 1.0;
+};
+
+// The whisker boards as docs/can-protocol.md wires them: board b carries whiskers 4b..4b+3. The pure
+// simulator does not link the drivers' protocol; can_log.cpp checks these equal wp's.
+inline constexpr int kNumBoards = 6;
+inline constexpr int kWhiskersPerBoard = 4;
+
+struct BoardOffline : FaultInterval {
+  int board = 0;  // 0..5: whiskers 4·board .. 4·board + 3
+};
+
+struct OdometrySlip : FaultInterval {
+  double scale = 1.0;  // multiplies the measured linear body velocities (vx, vy), not omega
+};
+
+struct Faults {
+  std::vector<int> dead_whiskers;  // whisker indices, dead for the whole run
+  std::vector<BoardOffline> board_offline;
+  std::vector<FaultInterval> camera_blackout;  // no CAMERA frames
+  std::vector<FaultInterval> camera_freeze;    // the last frame before the interval, repeated
+  std::vector<OdometrySlip> odometry_slip;
+};
+
+// The most revolutions a run may have, from the world file or vita-sim's --laps; vita-sim's
+// --duration is bounded by as many laps of the world's trajectory.
+inline constexpr int kMaxLaps = 10000;
+
 struct World {
   std::string name = "world";
   std::vector<Pattern> patterns;
@@ -180,6 +213,7 @@ struct World {
   Trajectory trajectory;
   CameraNoise camera;
   OdometryNoise odometry;
+  Faults faults;
 
   int pattern_index(const std::string& name) const;  // -1 if absent
 };
