@@ -456,31 +456,39 @@ AliasReport check_aliasing(const World& world, const RobotGeometry& robot, const
     return std::make_pair(from, to);
   };
   auto in_hull = [&](std::pair<int, int> h, int x) { return (x - h.first + n) % n <= (h.second - h.first + n) % n; };
+  // A group may be a long band (a point-symmetric stretch of arena: every view alike with the one
+  // opposite): it is cut into places at most max_place_m long, each with its look-alike partner.
+  const double place_deg = p.max_place_m / head_r * 180.0 / kPi;
   std::vector<bool> self_alike;
   std::vector<LookAlikePair> closest;
   for (const auto& cells : groups) {
     // Orient every cell so that its first view is on the same side as the group's first cell's.
-    std::vector<int> side_a, side_b;
+    std::map<int, std::vector<std::pair<int, int>>> segments;
     const int ref = cells.front().first;
     for (const auto& [ci, cj] : cells) {
       const bool flip = circular_gap_deg(v.angles_deg[static_cast<std::size_t>(cj)], v.angles_deg[static_cast<std::size_t>(ref)]) <
                         circular_gap_deg(v.angles_deg[static_cast<std::size_t>(ci)], v.angles_deg[static_cast<std::size_t>(ref)]);
-      side_a.push_back(flip ? cj : ci);
-      side_b.push_back(flip ? ci : cj);
+      const int ia = flip ? cj : ci, ib = flip ? ci : cj;
+      segments[static_cast<int>(v.angles_deg[static_cast<std::size_t>(ia)] / place_deg)].push_back({ia, ib});
     }
-    const auto ha = hull(side_a), hb = hull(side_b);
-    bool overlap = false;
-    for (int x : side_a) overlap = overlap || in_hull(hb, x);
-    for (int x : side_b) overlap = overlap || in_hull(ha, x);
-    self_alike.push_back(overlap);
-    report.places.push_back({v.angles_deg[static_cast<std::size_t>(ha.first)], v.angles_deg[static_cast<std::size_t>(ha.second)], {}});
-    report.places.push_back({v.angles_deg[static_cast<std::size_t>(hb.first)], v.angles_deg[static_cast<std::size_t>(hb.second)], {}});
-    LookAlikePair best{0, 0, 2.0};
-    for (const auto& [ci, cj] : cells) {
-      const double d = dist[static_cast<std::size_t>(ci * n + cj)];
-      if (d < best.distance) best = {v.angles_deg[static_cast<std::size_t>(ci)], v.angles_deg[static_cast<std::size_t>(cj)], d};
+    for (const auto& [bin, seg] : segments) {
+      std::vector<int> side_a, side_b;
+      LookAlikePair best{0, 0, 2.0};
+      for (const auto& [ia, ib] : seg) {
+        side_a.push_back(ia);
+        side_b.push_back(ib);
+        const double d = dist[static_cast<std::size_t>(ia * n + ib)];
+        if (d < best.distance) best = {v.angles_deg[static_cast<std::size_t>(ia)], v.angles_deg[static_cast<std::size_t>(ib)], d};
+      }
+      const auto ha = hull(side_a), hb = hull(side_b);
+      bool overlap = false;
+      for (int x : side_a) overlap = overlap || in_hull(hb, x);
+      for (int x : side_b) overlap = overlap || in_hull(ha, x);
+      self_alike.push_back(overlap);
+      report.places.push_back({v.angles_deg[static_cast<std::size_t>(ha.first)], v.angles_deg[static_cast<std::size_t>(ha.second)], {}});
+      report.places.push_back({v.angles_deg[static_cast<std::size_t>(hb.first)], v.angles_deg[static_cast<std::size_t>(hb.second)], {}});
+      closest.push_back(best);
     }
-    closest.push_back(best);
   }
 
   // Feel-alike classes: solids whose passages feel the same, grouped (first member names the class).
@@ -530,7 +538,7 @@ AliasReport check_aliasing(const World& world, const RobotGeometry& robot, const
     place.touched.assign(touched.begin(), touched.end());
   }
 
-  for (std::size_t g = 0; g < groups.size(); ++g) {
+  for (std::size_t g = 0; g < closest.size(); ++g) {
     const std::pair<int, int> key{static_cast<int>(2 * g), static_cast<int>(2 * g + 1)};
     if (self_alike[g]) {
       report.featureless.push_back(key);

@@ -72,6 +72,7 @@ struct AliasCheckParams {
   double margin = 1.5;
   double angle_step_deg = 2.0;      // views rendered every this many degrees of the path
   double min_separation_m = 0.6;    // along the head's path: closer places are the same place
+  double max_place_m = 1.0;         // a longer look-alike stretch is cut into places this long
   double feel_alike_tolerance_rad = 0.01;  // mean |Δ first-touch angle| of two alike landmarks
 };
 
