@@ -189,7 +189,10 @@ int run_replay(const Loaded& cfg, const Options& o) {
     out.set_time(ev.utime);
     in.set_time(ev.utime);
     channel.assign(ev.channel);
-    if (channel == "GROUND_TRUTH" || channel == "SIM_CONTACT_TRUTH") out.publish_raw(channel, ev.data);
+    // The simulator's truth, for vita-eval (slamd itself never reads it).
+    if (channel == "GROUND_TRUTH" || channel == "SIM_CONTACT_TRUTH" || channel == "SIM_FAULT") {
+      out.publish_raw(channel, ev.data);
+    }
     in.publish_shared(channel, ev.data, ev.owner);  // views into the mapped log, valid while it is
     // First event, or log time stepped back (a recording across a clock step): 1 s from now.
     if (next_status == INT64_MIN || ev.utime < next_status - kUtimePerSecond) next_status = ev.utime + kUtimePerSecond;

@@ -435,5 +435,26 @@ TEST_F(ScriptedExm, TheTraceGivesEveryCycleInTimeOrderWithItsReLocalisationAndIt
   EXPECT_FALSE(trace[4].gt.has_value());  // no ground truth at 5 s
 }
 
+TEST_F(ScriptedExm, TheTraceListsTheSimulatedFaultsActiveAtEachCycle) {
+  using E = EventType;
+  for (int t = 0; t <= 4; ++t) at(t, {static_cast<double>(t), 0.0, 0.0});
+  for (int t = 0; t <= 4; ++t) ev(t, E::kNewExperience, t - 1, t);
+  EvalInput input;
+  input.ground_truth = gt_samples_;
+  input.events = events_;
+  input.map = map_;
+  input.faults = {{0, "dead_whisker 3", true},
+                  {1 * kSecond, "board_offline 2", true},
+                  {3 * kSecond, "board_offline 2", false},  // ends: not active at 3 s
+                  {4 * kSecond, "camera_blackout", true}};
+  const std::vector<CycleTrace> trace = trace_cycles(input, run(10.0));
+  ASSERT_EQ(trace.size(), 5u);
+  EXPECT_EQ(trace[0].active_faults, (std::vector<std::string>{"dead_whisker 3"}));
+  EXPECT_EQ(trace[1].active_faults, (std::vector<std::string>{"board_offline 2", "dead_whisker 3"}));
+  EXPECT_EQ(trace[2].active_faults, (std::vector<std::string>{"board_offline 2", "dead_whisker 3"}));
+  EXPECT_EQ(trace[3].active_faults, (std::vector<std::string>{"dead_whisker 3"}));
+  EXPECT_EQ(trace[4].active_faults, (std::vector<std::string>{"camera_blackout", "dead_whisker 3"}));
+}
+
 }  // namespace
 }  // namespace whiskeye::eval

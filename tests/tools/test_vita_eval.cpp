@@ -6,6 +6,7 @@
 #include "whiskeye/common/se2.h"
 
 #include <whiskeye/pose2d_t.hpp>
+#include <whiskeye/sim_fault_t.hpp>
 #include <whiskeye/template_match_t.hpp>
 #include <whiskeye/vita_event_t.hpp>
 #include <whiskeye/vita_map_t.hpp>
@@ -70,6 +71,7 @@ struct Script {
   int8_t mode = vita_pose_t::MODE_VITA;
   bool relocalise = true;  // false: new experiences all through the second revolution instead
   int64_t pose_delay_us = 0;  // VITA_POSE stamped this much later (past the ground truth: no LEM)
+  bool board_fault = false;   // SIM_FAULT: board 2 offline from 10 s to 25 s
 };
 
 // Two revolutions. Experiences 0..19 are created once a second in the first; in the second the
@@ -121,6 +123,14 @@ void write_log(const std::string& path, const Script& script) {
       vp.experience_id = current;
       vp.mode = script.mode;
       publish(bus, "VITA_POSE", vp);
+    }
+    if (u % kSecond == 0 && script.board_fault && (u == 10 * kSecond || u == 25 * kSecond)) {
+      sim_fault_t f{};
+      f.utime = t;
+      f.kind = sim_fault_t::KIND_BOARD_OFFLINE;
+      f.active = u == 10 * kSecond;
+      f.index = 2;
+      publish(bus, "SIM_FAULT", f);
     }
     if (u % kSecond == 0) {
       const int64_t s = u / kSecond;
@@ -275,6 +285,40 @@ TEST_F(VitaEvalBinary, WritesAPerCycleTraceThatAgreesWithTheMetrics) {
   EXPECT_EQ(relocs_after_base, 19);  // ARCR 18/19 in the JSON
   EXPECT_EQ(correct_after_base, 18);
   EXPECT_EQ(wrong_at_30s, 1);
+}
+
+TEST_F(VitaEvalBinary, AttributesEachCycleToTheSimulatedFaultsActiveThen) {
+  Script script;
+  script.board_fault = true;
+  write_log(file("vita.lcmlog"), script);
+  ASSERT_EQ(run_vita_eval("--input " + file("vita.lcmlog") + " --trace " + file("trace") + " --json " + file("m.json"),
+                          file("stdout.txt")),
+            0)
+      << read_text(file("stdout.txt"));
+  EXPECT_NE(read_text(file("stdout.txt")).find("simulated faults (SIM_FAULT): board_offline 2;"), std::string::npos)
+      << read_text(file("stdout.txt"));
+  const nlohmann::json j = nlohmann::json::parse(read_text(file("m.json")));
+  ASSERT_EQ(j["runs"][0]["faults"].size(), 2u);
+  EXPECT_EQ(j["runs"][0]["faults"][0]["fault"], "board_offline 2");
+  EXPECT_EQ(j["runs"][0]["faults"][1]["active"], false);
+  std::istringstream csv(read_text(file("trace/vita_trace.csv")));
+  std::string line;
+  ASSERT_TRUE(std::getline(csv, line));
+  EXPECT_NE(line.find(",active_faults"), std::string::npos);
+  int with = 0, without = 0;
+  while (std::getline(csv, line)) {
+    const double t = std::stod(line.substr(line.find(',') + 1));
+    const bool listed = line.size() > 15 && line.substr(line.size() - 15) == "board_offline 2";
+    if (t >= 10.0 - 1e-6 && t < 25.0 - 1e-6) {
+      EXPECT_TRUE(listed) << line;
+      ++with;
+    } else {
+      EXPECT_FALSE(listed) << line;
+      ++without;
+    }
+  }
+  EXPECT_EQ(with, 14);  // cycles at 10..19 s and 21..24 s (the script has no event at 20 s)
+  EXPECT_GT(without, 20);
 }
 
 TEST_F(VitaEvalBinary, ADamagedLogIsEvaluatedFromWhatCanBeReadAndTheDamageReported) {

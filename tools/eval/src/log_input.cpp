@@ -4,16 +4,35 @@
 #include "whiskeye/common/bus.h"
 
 #include <whiskeye/pose2d_t.hpp>
+#include <whiskeye/sim_fault_t.hpp>
 #include <whiskeye/template_match_t.hpp>
 #include <whiskeye/vita_event_t.hpp>
 #include <whiskeye/vita_map_t.hpp>
 #include <whiskeye/vita_pose_t.hpp>
 
+#include <cstdio>
 #include <stdexcept>
+#include <string>
 
 namespace whiskeye::eval {
 
 namespace {
+
+// "board_offline 2", "odometry_slip x1.2", ...: what the trace lists while the fault is active.
+std::string fault_name(const sim_fault_t& f) {
+  switch (f.kind) {
+    case sim_fault_t::KIND_DEAD_WHISKER: return "dead_whisker " + std::to_string(f.index);
+    case sim_fault_t::KIND_BOARD_OFFLINE: return "board_offline " + std::to_string(f.index);
+    case sim_fault_t::KIND_CAMERA_BLACKOUT: return "camera_blackout";
+    case sim_fault_t::KIND_CAMERA_FREEZE: return "camera_freeze";
+    case sim_fault_t::KIND_ODOMETRY_SLIP: {
+      char buf[32];
+      std::snprintf(buf, sizeof buf, "odometry_slip x%g", f.value);
+      return buf;
+    }
+    default: return "fault_kind_" + std::to_string(f.kind);
+  }
+}
 
 std::string mode_name(int8_t mode) {
   switch (mode) {
@@ -69,6 +88,10 @@ LoadedRun load_run(const std::string& path) {
       if (!decode_counted(ev, m, run)) continue;
       run.input.matches.push_back({m.utime, m.cycle, m.template_id, m.is_new != 0, m.error, m.visual_error,
                                    m.pfh_error, m.sda_error, m.visual_shift, m.visual_used != 0, m.tactile_used != 0});
+    } else if (ev.channel == "SIM_FAULT") {
+      sim_fault_t m{};
+      if (!decode_counted(ev, m, run)) continue;
+      run.input.faults.push_back({m.utime, fault_name(m), m.active != 0});
     } else if (ev.channel == "GROUND_TRUTH") {
       pose2d_t m{};
       if (!decode_counted(ev, m, run)) continue;

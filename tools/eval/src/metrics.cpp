@@ -350,8 +350,19 @@ std::vector<CycleTrace> trace_cycles(const EvalInput& input, const ExmResult& ex
 
   std::vector<CycleTrace> out;
   out.reserve(events.size());
+  std::vector<FaultEvent> faults = input.faults;
+  std::stable_sort(faults.begin(), faults.end(), [](const FaultEvent& a, const FaultEvent& b) { return a.utime < b.utime; });
+  std::map<std::string, int> active;  // fault name -> how many times it is active now
+  std::size_t next_fault = 0;
   for (const ExperienceEvent& e : events) {
+    for (; next_fault < faults.size() && faults[next_fault].utime <= e.utime; ++next_fault) {
+      int& n = active[faults[next_fault].name];
+      n = std::max(0, n + (faults[next_fault].active ? 1 : -1));
+    }
     CycleTrace row;
+    for (const auto& [name, n] : active) {
+      if (n > 0) row.active_faults.push_back(name);
+    }
     row.event = e;
     row.t_s = utime_delta_seconds(gt.begin_utime(), e.utime);
     row.gt = gt.at(e.utime);

@@ -140,6 +140,13 @@ std::string format_table(const std::vector<RunReport>& runs, const std::vector<P
         << r.ground_truth_samples << " GROUND_TRUTH; final map " << r.map_experiences << " experiences, "
         << r.map_links << " links\n";
     for (const auto& [ch, n] : r.decode_errors) out << "  undecodable messages on " << ch << ": " << n << "\n";
+    if (!r.faults.empty()) {
+      out << "  simulated faults (SIM_FAULT):";
+      for (const FaultEvent& f : r.faults) {
+        if (f.active) out << " " << f.name << ";";
+      }
+      out << "\n";
+    }
     if (!r.log_damage.empty()) out << "  damaged log: " << r.log_damage << "\n";
     if (e.alignment.valid) {
       const Pose2& t = e.alignment.T_world_map;
@@ -189,6 +196,8 @@ nlohmann::json to_json(const std::vector<RunReport>& runs, const EvalParams& par
     const EvalResult& e = r.result;
     nlohmann::json decode = nlohmann::json::object();
     for (const auto& [ch, n] : r.decode_errors) decode[ch] = n;
+    nlohmann::json faults = nlohmann::json::array();
+    for (const FaultEvent& f : r.faults) faults.push_back({{"utime", f.utime}, {"fault", f.name}, {"active", f.active}});
     j["runs"].push_back({{"label", r.label},
                          {"input", r.path},
                          {"mode", r.mode},
@@ -199,6 +208,7 @@ nlohmann::json to_json(const std::vector<RunReport>& runs, const EvalParams& par
                            {"map_links", r.map_links},
                            {"ground_truth_samples", r.ground_truth_samples}}},
                          {"decode_errors", decode},
+                         {"faults", faults},
                          {"log_damage", r.log_damage.empty() ? nlohmann::json(nullptr) : nlohmann::json(r.log_damage)},
                          {"alignment", alignment_json(e.alignment)},
                          {"best_fit_alignment", alignment_json(e.best_fit)},
@@ -222,7 +232,8 @@ nlohmann::json to_json(const std::vector<RunReport>& runs, const EvalParams& par
 std::string format_trace_csv(const std::vector<CycleTrace>& rows) {
   std::ostringstream out;
   out << "cycle,t_s,event,from_id,to_id,gt_x,gt_y,gt_theta,target_error_m,target_error_deg,correct,after_base_set,"
-         "template_id,template_new,error,visual_error,pfh_error,sda_error,visual_shift,visual_used,tactile_used\n";
+         "template_id,template_new,error,visual_error,pfh_error,sda_error,visual_shift,visual_used,tactile_used,"
+         "active_faults\n";
   const auto g = [](double v) { return fmt("%.6g", v); };
   for (const CycleTrace& r : rows) {
     const ExperienceEvent& e = r.event;
@@ -248,6 +259,8 @@ std::string format_trace_csv(const std::vector<CycleTrace>& rows) {
     } else {
       out << ",,,,,,,,";
     }
+    out << ',';
+    for (std::size_t i = 0; i < r.active_faults.size(); ++i) out << (i ? ";" : "") << r.active_faults[i];
     out << '\n';
   }
   return out.str();

@@ -23,6 +23,7 @@ struct RunReport {
   std::size_t ground_truth_samples = 0;
   std::map<std::string, int64_t> decode_errors;
   std::string log_damage;  // empty: the log was read whole
+  std::vector<FaultEvent> faults;  // simulated faults beginning and ending (SIM_FAULT)
   EvalResult result;
 };
 

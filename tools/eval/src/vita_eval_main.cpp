@@ -99,6 +99,7 @@ int run(int argc, char** argv) {
     r.ground_truth_samples = run.input.ground_truth.size();
     r.decode_errors = run.decode_errors;
     r.log_damage = run.log_damage;
+    r.faults = run.input.faults;
     if (!r.log_damage.empty()) std::cerr << "vita-eval: " << r.log_damage << " (evaluated what could be read)\n";
     r.result = evaluate(run.input, params);
     for (const auto& [ch, n] : run.decode_errors) {

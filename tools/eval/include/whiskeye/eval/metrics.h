@@ -186,12 +186,21 @@ struct TemplateMatch {
   bool tactile_used = false;
 };
 
+// A simulated sensor fault beginning or ending (SIM_FAULT), named for attribution: "board_offline 2",
+// "camera_blackout", "odometry_slip x1.2", ...; only the per-cycle trace and the report use it.
+struct FaultEvent {
+  int64_t utime = 0;
+  std::string name;
+  bool active = true;  // begins (true) or ends (false)
+};
+
 struct EvalInput {
   std::vector<PoseSample> estimate;       // VITA_POSE
   std::vector<ExperienceEvent> events;    // VITA_EVENT
   ExperienceMap map;                      // last VITA_MAP
   std::vector<PoseSample> ground_truth;   // GROUND_TRUTH
   std::vector<TemplateMatch> matches;     // VITA_MATCH
+  std::vector<FaultEvent> faults;         // SIM_FAULT, in log order
 };
 
 struct EvalResult {
@@ -215,6 +224,7 @@ struct CycleTrace {
   std::optional<Pose2> gt;                       // ground truth at the event (none outside it)
   std::optional<Relocalisation> relocalisation;  // a counted re-localisation: its error, correctness
   std::optional<TemplateMatch> match;            // the cycle's VITA_MATCH (the same cycle number)
+  std::vector<std::string> active_faults;        // simulated faults active at the event (SIM_FAULT)
 };
 
 // `exm` is compute_exm()'s result for the same input (its re-localisations are joined by time and
