@@ -457,19 +457,23 @@ AliasReport check_aliasing(const World& world, const RobotGeometry& robot, const
   };
   auto in_hull = [&](std::pair<int, int> h, int x) { return (x - h.first + n) % n <= (h.second - h.first + n) % n; };
   // A group may be a long band (a point-symmetric stretch of arena: every view alike with the one
-  // opposite): it is cut into places at most max_place_m long, each with its look-alike partner.
+  // opposite), or one stretch alike with several: it is cut into places at most max_place_m long on
+  // both sides, each with its look-alike partner.
   const double place_deg = p.max_place_m / head_r * 180.0 / kPi;
   std::vector<bool> self_alike;
   std::vector<LookAlikePair> closest;
   for (const auto& cells : groups) {
     // Orient every cell so that its first view is on the same side as the group's first cell's.
-    std::map<int, std::vector<std::pair<int, int>>> segments;
+    std::map<std::pair<int, int>, std::vector<std::pair<int, int>>> segments;
     const int ref = cells.front().first;
     for (const auto& [ci, cj] : cells) {
       const bool flip = circular_gap_deg(v.angles_deg[static_cast<std::size_t>(cj)], v.angles_deg[static_cast<std::size_t>(ref)]) <
                         circular_gap_deg(v.angles_deg[static_cast<std::size_t>(ci)], v.angles_deg[static_cast<std::size_t>(ref)]);
       const int ia = flip ? cj : ci, ib = flip ? ci : cj;
-      segments[static_cast<int>(v.angles_deg[static_cast<std::size_t>(ia)] / place_deg)].push_back({ia, ib});
+      // Cut on both sides: one stretch can look like several others.
+      segments[{static_cast<int>(v.angles_deg[static_cast<std::size_t>(ia)] / place_deg),
+                static_cast<int>(v.angles_deg[static_cast<std::size_t>(ib)] / place_deg)}]
+          .push_back({ia, ib});
     }
     for (const auto& [bin, seg] : segments) {
       std::vector<int> side_a, side_b;
@@ -708,36 +712,56 @@ bool place_objects(Rng& rng, const GeneratorOptions& o, const RobotGeometry& rob
     d.objects.push_back({shape, circular_deg(angle), std::string(object_library()[static_cast<std::size_t>(shape)].name) + "_" + std::to_string(k++)});
   };
   // A point inside a place, clear of the other objects.
+  // A point of a place (widened as touched_in() widens it) clear of the other objects: every free
+  // degree is a candidate, one drawn at random.
   auto spot_in = [&](const AliasedPlace& p, double& angle) {
-    const double span = circular_deg(p.to_deg - p.from_deg);
-    for (int tries = 0; tries < 20; ++tries) {
-      const double a = p.from_deg + rng.uniform(0.0, span);
-      if (far_from_objects(d, a, spacing_deg)) {
-        angle = a;
-        return true;
+    const double widen_here = 0.5 * d.speed / head_radius(d, robot) * 180.0 / kPi;
+    const double from = p.from_deg - widen_here;
+    const double span = circular_deg(p.to_deg - p.from_deg) + 2 * widen_here;
+    std::vector<double> free;
+    for (double a = 0.0; a <= span; a += 1.0) {
+      if (far_from_objects(d, from + a, spacing_deg)) free.push_back(from + a);
+    }
+    if (free.empty()) return false;
+    angle = free[static_cast<std::size_t>(rng.integer(0, static_cast<int>(free.size()) - 1))];
+    return true;
+  };
+  // Tell every look-alike pair apart, greedily: an object goes into the place that is in most of
+  // the pairs not yet told apart, with a shape none of its partners there has.
+  for (int guard = 0; guard <= max_objects; ++guard) {
+    std::map<int, int> untold_count;
+    std::map<int, std::set<int>> partner_shapes;
+    for (const auto& [a, b] : layout.place_pairs) {
+      const std::set<int> ta = touched_in(layout.places[static_cast<std::size_t>(a)], widen);
+      const std::set<int> tb = touched_in(layout.places[static_cast<std::size_t>(b)], widen);
+      if (ta != tb) continue;
+      ++untold_count[a];
+      ++untold_count[b];
+      partner_shapes[a].insert(tb.begin(), tb.end());
+      partner_shapes[b].insert(ta.begin(), ta.end());
+    }
+    if (untold_count.empty()) break;
+    if (static_cast<int>(d.objects.size()) >= max_objects) return false;
+    // Places by how many untold pairs they are in (ties in random order); the first with room.
+    std::vector<std::pair<int, int>> order;  // (-count, place)
+    for (const auto& [place, count] : untold_count) order.push_back({-count, place});
+    rng.shuffle(order);
+    std::stable_sort(order.begin(), order.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+    int best = -1;
+    double angle = 0.0;
+    for (const auto& [neg, place] : order) {
+      if (spot_in(layout.places[static_cast<std::size_t>(place)], angle)) {
+        best = place;
+        break;
       }
     }
-    return false;
-  };
-  // Tell every look-alike pair apart.
-  for (const auto& [a, b] : layout.place_pairs) {
-    const AliasedPlace& pa = layout.places[static_cast<std::size_t>(a)];
-    const AliasedPlace& pb = layout.places[static_cast<std::size_t>(b)];
-    if (touched_in(pa, widen) != touched_in(pb, widen)) continue;
-    const bool first = rng.chance(0.5);
-    const AliasedPlace& at = first ? pa : pb;
-    const AliasedPlace& other = first ? pb : pa;
-    double angle = 0.0;
-    if (!spot_in(at, angle)) return false;
-    const std::set<int> there = touched_in(other, widen);
+    if (best < 0) return false;
     std::vector<int> shapes;
-    for (int s = 0; s < nshapes; ++s) {
-      if (!there.count(s)) shapes.push_back(s);
+    for (int sh = 0; sh < nshapes; ++sh) {
+      if (!partner_shapes[best].count(sh)) shapes.push_back(sh);
     }
+    if (shapes.empty()) return false;
     add(shapes[static_cast<std::size_t>(rng.integer(0, static_cast<int>(shapes.size()) - 1))], angle);
-    if (static_cast<int>(d.objects.size()) > max_objects) {
-      return false;
-    }
   }
   auto premise_kept = [&]() {
     for (const auto& [a, b] : layout.place_pairs) {
@@ -866,7 +890,7 @@ GeneratedWorld generate_world(const GeneratorOptions& o, const RobotGeometry& ro
     }
     const Views views = render_views(bare, robot, check);
     bool placed = false;
-    for (int p = 0; p < 5 && !placed; ++p) placed = place_objects(rng, o, robot, layout, views, check, d);
+    for (int p = 0; p < 30 && !placed; ++p) placed = place_objects(rng, o, robot, layout, views, check, d);
     if (!placed) {
       reject("no placement of tactile landmarks tells every look-alike pair apart");
       continue;
