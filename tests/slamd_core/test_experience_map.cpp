@@ -66,9 +66,15 @@ TEST(ExperienceMap, RelaxationKeepsAConsistentMapUnchanged) {
   EXPECT_NEAR(std::abs(m.experiences()[2].pose.theta), kPi, 1e-9);
 }
 
+// The classic RatSLAM rule: the pose cells decide (the odometry-consistency gate off).
+ExperienceMapParams pose_cell_rule(ExperienceMapParams p = {}) {
+  p.drift_per_m = 1000.0;
+  return p;
+}
+
 TEST(ExperienceMap, ActionRuleCreatesLinksAndRelocalises) {
   const PoseCells cells{PoseCellParams{}};
-  ExperienceMap m;
+  ExperienceMap m(pose_cell_rule());
   // Cycle 1: template 0 at pc (10, 10, 0) → first experience.
   Event e = m.on_cycle(0, 0, -1, false, 10, 10, 0, cells, 1000);
   EXPECT_EQ(e.type, EventType::NewExperience);
@@ -117,7 +123,7 @@ TEST(ExperienceMap, ViewTurnedBeyondMaxViewShiftIsANewExperienceOfTheSameTemplat
   ExperienceMapParams p;
   p.max_view_shift = 2;
   p.distinct_places = 0;  // every template counts as aliased: max_view_shift applies throughout
-  ExperienceMap m(p);
+  ExperienceMap m(pose_cell_rule(p));
   m.on_cycle(0, 0, -1, false, 10, 10, 0, cells, 1000);  // experience 0, template 0, shift 0
   m.integrate(0.5, 0.0, 0.0, 1.0);
   m.on_cycle(1, 1, -1, false, 15, 10, 0, cells, 2000);  // experience 1
@@ -160,7 +166,7 @@ TEST(ExperienceMap, ADistinctiveTemplateReLocalisesFromAWiderViewShiftThanAnAlia
   p.max_view_shift = 2;
   p.max_view_shift_distinct = 4;
   p.distinct_places = 1;
-  ExperienceMap m(p);
+  ExperienceMap m(pose_cell_rule(p));
   // Template 0 at one place (distinctive), template 1 at two places (aliased), template 2 elsewhere.
   m.on_cycle(0, 0, -1, false, 10, 10, 0, cells, 1000);  // experience 0, template 0
   m.integrate(0.5, 0.0, 0.0, 1.0);
@@ -195,12 +201,119 @@ TEST(ExperienceMap, ADistinctiveTemplateReLocalisesFromAWiderViewShiftThanAnAlia
   EXPECT_EQ(e.to_id, 1);
 }
 
+// ---- the odometry-consistency gate and the local refinement (docs/slam-core.md) ----
+
+// Experiences 0..n-1 along x, `spacing` apart, template i at experience i, the pose cells' packet
+// at the origin throughout (they are not what decides here).
+ExperienceMap line_of_experiences(const ExperienceMapParams& p, int n, double spacing, const PoseCells& cells) {
+  ExperienceMap m(p);
+  for (int i = 0; i < n; ++i) {
+    if (i > 0) m.integrate(spacing, 0.0, 0.0, 1.0);
+    m.on_cycle(i, i, -1, false, 0, 0, 0, cells, 1000 * (i + 1));
+  }
+  return m;
+}
+
+TEST(ExperienceMap, ALookAlikePlaceFartherThanOdometryCanHaveDriftedIsNotClosedOnto) {
+  const PoseCells cells{PoseCellParams{}};
+  ExperienceMapParams p;
+  p.drift_base = 0.25;
+  p.drift_per_m = 0.1;
+  // Experience 0 at the origin, then 2 m away in 0.5 m steps (the pose cells see no difference:
+  // a 2.1 m wrap-around grid puts a place 2.1 m away next to this one).
+  ExperienceMap m = line_of_experiences(p, 5, 0.5, cells);
+  ASSERT_EQ(m.current_id(), 4);
+  m.integrate(0.1, 0.0, 0.0, 1.0);
+  // 2.1 m from experience 0 after 2.1 m of travel: the budget is 0.25 + 0.21 m.
+  EXPECT_NEAR(m.drift_budget(), 0.46, 1e-12);
+  const Event e = m.on_cycle(0, 0, -1, false, 0, 0, 0, cells, 9000);
+  EXPECT_EQ(e.type, EventType::NewExperience);
+  EXPECT_EQ(m.experiences()[5].template_id, 0);
+  // The RatSLAM rule (pose cells alone) closes that loop.
+  ExperienceMap r = line_of_experiences(pose_cell_rule(p), 5, 0.5, cells);
+  r.integrate(0.1, 0.0, 0.0, 1.0);
+  EXPECT_EQ(r.on_cycle(0, 0, -1, false, 0, 0, 0, cells, 9000).type, EventType::Relocalise);
+}
+
+TEST(ExperienceMap, TheDriftBudgetGrowsWithTheDistanceTravelledAndRestartsAtAReLocalisation) {
+  const PoseCells cells{PoseCellParams{}};
+  ExperienceMapParams p;
+  p.drift_base = 0.25;
+  p.drift_per_m = 0.1;
+  ExperienceMap m = line_of_experiences(p, 2, 0.5, cells);
+  // Around a 10 m loop that odometry closes 0.6 m off: 0.25 + 0.1 · 10.5 m ≥ 0.6 m, closed.
+  for (int i = 0; i < 100; ++i) m.integrate(0.1, 0.0, kPi / 50.0, 1.0);  // a circle of r = 1.59 m
+  m.integrate(0.0, 0.6, 0.0, 1.0);                                     // plus 0.6 m of drift
+  EXPECT_GT(m.drift_budget(), 0.6);
+  // Template 0 (experience 0, 0.5 m behind the start, 0.78 m from here).
+  const Event e = m.on_cycle(0, 0, -1, false, 0, 0, 0, cells, 9000);
+  EXPECT_EQ(e.type, EventType::Relocalise);
+  EXPECT_EQ(e.to_id, 0);
+  EXPECT_DOUBLE_EQ(m.travel_since_relocalisation(), 0.0);
+  EXPECT_DOUBLE_EQ(m.drift_budget(), 0.25);
+}
+
+TEST(ExperienceMap, ReLocalisesOntoTheNearestOfTheTemplatesExperiencesInTheMap) {
+  const PoseCells cells{PoseCellParams{}};
+  ExperienceMapParams p;
+  p.drift_per_m = 1.0;
+  ExperienceMap m(p);
+  m.on_cycle(0, 0, -1, false, 0, 0, 0, cells, 1000);  // experience 0, template 0, at x = 0
+  m.integrate(0.5, 0.0, 0.0, 1.0);
+  m.on_cycle(1, 1, -1, false, 0, 0, 0, cells, 2000);  // experience 1, template 1, at 0.5
+  m.integrate(0.5, 0.0, 0.0, 1.0);
+  m.on_cycle(0, 0, -1, false, 0, 0, 0, cells, 3000);  // template 0 again at 1.0: budget 0.25 + 1 → ...
+  ASSERT_EQ(m.current_id(), 0);                        // ... closed onto experience 0 (1 m back)
+  m.integrate(1.0, 0.0, 0.0, 1.0);
+  m.on_cycle(2, 2, -1, false, 0, 0, 0, cells, 4000);   // experience 2 at 1.0 (from experience 0)
+  m.integrate(0.1, 0.0, 0.0, 1.0);
+  // Template 1 is at experience 1 only; template 0 at experience 0. Add a second experience of
+  // template 0 next to here, by the view-shift rule (another pose of the same place).
+  m.on_cycle(0, 0, -1, false, 0, 0, 0, cells, 5000, 5);
+  ASSERT_EQ(m.size(), 4);
+  EXPECT_NEAR(m.experiences()[3].pose.x, 1.1, 1e-9);
+  m.integrate(0.05, 0.0, 0.0, 1.0);
+  m.on_cycle(2, 2, -1, false, 0, 0, 0, cells, 6000);  // back onto experience 2 (0.15 m away)
+  ASSERT_EQ(m.current_id(), 2);
+  m.integrate(0.12, 0.0, 0.0, 1.0);                   // at 1.12: experience 3 is 2 cm away, 0 is 1.12 m
+  const Event e = m.on_cycle(0, 0, -1, false, 0, 0, 0, cells, 7000, 4);
+  EXPECT_EQ(e.type, EventType::Relocalise);
+  EXPECT_EQ(e.to_id, 3);
+}
+
+TEST(ExperienceMap, ThePoseCellsChooseWhileTheRobotRecognisesPlacesAndTheMapAfterALongStretch) {
+  const PoseCells cells{PoseCellParams{}};
+  ExperienceMapParams p;
+  p.drift_base = 0.5;
+  p.drift_per_m = 0.1;
+  p.packet_trust_m = 1.0;
+  // Experience 0 at the origin (pose cells at (10, 10)), experience 1 at 0.3 m (cells (13, 10)).
+  ExperienceMap m(p);
+  m.on_cycle(0, 0, -1, false, 10, 10, 0, cells, 1000);
+  m.integrate(0.3, 0.0, 0.0, 1.0);
+  m.on_cycle(1, 1, -1, false, 13, 10, 0, cells, 2000);
+  // Template 0 again 0.3 m on, with the packet 5 cells from experience 0's: within the map's budget,
+  // but the robot has travelled less than packet_trust_m, so the packet decides: a new experience.
+  m.integrate(0.3, 0.0, 0.0, 1.0);
+  Event e = m.on_cycle(0, 0, -1, false, 15, 10, 0, cells, 3000);
+  EXPECT_EQ(e.type, EventType::NewExperience);
+  // The same after 2 m without recognising anything (the packet may have drifted away): the map
+  // decides, and experience 0 is within its budget (0.5 + 0.2 m).
+  for (int i = 0; i < 4; ++i) m.integrate(0.5, 0.0, 0.0, 1.0);
+  m.integrate(-2.6, 0.05, 0.0, 1.0);  // back near the origin, 2.6 m more travelled
+  e = m.on_cycle(0, 0, -1, false, 15, 10, 0, cells, 4000);
+  EXPECT_EQ(e.type, EventType::Relocalise);
+  EXPECT_EQ(e.to_id, 0);
+}
+
 TEST(ExperienceMap, ReadsVersionOneCheckpointsWithoutViewShifts) {
   const PoseCells cells{PoseCellParams{}};
   ExperienceMap m;
   m.on_cycle(0, 0, 0, true, 10, 10, 0, cells, 1);
-  std::vector<uint8_t> v2;
-  m.serialise(v2);
+  std::vector<uint8_t> v3;
+  m.serialise(v3);
+  // Version 2 is version 3 without the travelled distance at the end (0 here: nothing travelled).
+  const std::vector<uint8_t> v2(v3.begin(), v3.end() - 8);
   // Version 1 is version 2 without the i32 view shift after the dense flag: 8 bytes of count, then
   // 7 f64, i64, 3 i32, u8 for the one experience.
   std::vector<uint8_t> v1 = v2;
@@ -214,7 +327,12 @@ TEST(ExperienceMap, ReadsVersionOneCheckpointsWithoutViewShifts) {
   EXPECT_EQ(r.experiences()[0].view_shift, 0);
   std::vector<uint8_t> again;
   r.serialise(again);
-  EXPECT_EQ(again, v2);
+  EXPECT_EQ(again, v3);
+  ExperienceMap r2;
+  pos = 0;
+  r2.deserialise(v2, pos, 2, 1);
+  EXPECT_EQ(pos, v2.size());
+  EXPECT_DOUBLE_EQ(r2.travel_since_relocalisation(), 0.0);
 }
 
 TEST(ExperienceMap, SerialisationRoundTripsExactly) {
@@ -228,12 +346,14 @@ TEST(ExperienceMap, SerialisationRoundTripsExactly) {
   m.serialise(a);
   ExperienceMap r;
   size_t pos = 0;
-  r.deserialise(a, pos, 2, 2);
+  r.deserialise(a, pos, 3, 2);
   EXPECT_EQ(pos, a.size());
   r.serialise(b);
   EXPECT_EQ(a, b);
   EXPECT_EQ(r.current_id(), 1);
   EXPECT_EQ(r.offset(), m.offset());
+  EXPECT_GT(m.travel_since_relocalisation(), 0.3);
+  EXPECT_EQ(r.travel_since_relocalisation(), m.travel_since_relocalisation());
   // A template id beyond the store (it sized an index by it: 6 GB for 2^28), a heading that is not a
   // unit vector (its NaN spread through relaxation), a non-finite position: refused by name.
   auto patched = [&](std::size_t at, auto value) {

@@ -56,6 +56,20 @@ TEST(PoseCells, StartsAsOnePacketAtTheCentre) {
   EXPECT_GT(pc.packet_fraction(), 0.95);
 }
 
+TEST(PoseCells, RelocateMovesTheWholeActivityToOnePacketThere) {
+  PoseCells pc = settled();
+  pc.step(0.1, 0.03, 0.0, 0.5);  // leaves sub-cell remainders behind
+  pc.inject(3, 4, 5, 0.3);       // and a second, competing packet
+  pc.relocate(17.2, 2.4, 30.0);
+  const Best b = best(pc);
+  EXPECT_NEAR(b.x, 17.0, 1e-3);
+  EXPECT_NEAR(b.y, 2.0, 1e-3);
+  EXPECT_NEAR(wrapped(b.t - 30.0, 36), 0.0, 1e-3);
+  EXPECT_GT(pc.packet_fraction(), 0.95);
+  // Motion after it starts from there, remainders cleared.
+  expect_moves(pc, 0.1, 0.0, 5.0, 0.1);
+}
+
 TEST(PoseCells, ForwardMotionMovesThePacketAlongTheHeading) { expect_moves(settled(), 0.1, 0.0, 5.0, 0.1); }
 TEST(PoseCells, SidewaysMotionMovesThePacketToTheLeft) { expect_moves(settled(), 0.0, 0.1, 5.0, 0.1); }
 TEST(PoseCells, BackwardsAndRightMotionMovesThePacketBothWays) { expect_moves(settled(), -0.08, -0.06, 5.0, 0.1); }

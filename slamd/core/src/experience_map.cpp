@@ -18,6 +18,9 @@ void load(const ParamNode& n, ExperienceMapParams& p) {
   n.get("max_view_shift", p.max_view_shift, 0, 1000);
   n.get("max_view_shift_distinct", p.max_view_shift_distinct, 0, 1000);
   n.get("distinct_places", p.distinct_places, 0, 1000000);
+  n.get("drift_base", p.drift_base, 0.0, 1000.0);
+  n.get("drift_per_m", p.drift_per_m, 0.0, 1000.0);
+  n.get("packet_trust_m", p.packet_trust_m, 0.0, 1e6);
 }
 
 ExperienceMap::ExperienceMap(const ExperienceMapParams& params) : params_(params) {}
@@ -41,6 +44,7 @@ Pose2 ExperienceMap::current_pose() const {
 
 void ExperienceMap::integrate(double vx, double vy, double omega, double dt) {
   offset_ = integrate_body_velocity(offset_, vx, vy, omega, dt);
+  travel_ += std::hypot(vx, vy) * dt;
 }
 
 int ExperienceMap::add_experience(const Pose2& pose, const Experience& meta) {
@@ -210,17 +214,32 @@ Event ExperienceMap::on_cycle(int template_id, int visual_template_id, int tacti
     double dmin = 0.0;
     const int max_shift = static_cast<int>(candidates->size()) <= params_.distinct_places ? params_.max_view_shift_distinct
                                                                                         : params_.max_view_shift;
+    // With the odometry-consistency gate on, only experiences within the drift budget in the map
+    // count. While the robot recognised a place recently (travel ≤ packet_trust_m) the pose cells
+    // choose among them, as in RatSLAM: the packet is where the views put it and resolves
+    // neighbouring experiences better than the relaxed map. After a longer stretch without any,
+    // the packet may have drifted away with the odometry: the nearest in the map is taken (and
+    // VitaSlam moves the packet there). Frozen (localisation only): the pose cells, whatever the
+    // distance or the view shift.
+    const bool gate = !frozen_ && params_.drift_per_m < 100.0;
+    const bool by_map = gate && travel_ > params_.packet_trust_m;
+    const Pose2 here = current_pose();
+    const double budget = drift_budget();
     for (int id : *candidates) {
       const Experience& e = meta_[static_cast<size_t>(id)];
       if (!frozen_ && std::abs(view_shift - e.view_shift) > max_shift) continue;
-      const double d = cells.distance(e.pc_x, e.pc_y, e.pc_theta, pc_x, pc_y, pc_theta);
+      const auto i = static_cast<size_t>(id);
+      const double dm = std::hypot(x_[i] - here.x, y_[i] - here.y);
+      if (gate && dm > budget) continue;
+      const double d = by_map ? dm : cells.distance(e.pc_x, e.pc_y, e.pc_theta, pc_x, pc_y, pc_theta);
       if (nearest < 0 || d < dmin) {
         nearest = id;
         dmin = d;
       }
     }
+    const double limit = by_map ? budget : params_.delta_pc_threshold;
     // No candidate left by the view-shift rule (never when frozen, which ignores it), or none near.
-    if (nearest < 0 || (dmin > params_.delta_pc_threshold && !frozen_)) {
+    if (nearest < 0 || (dmin > limit && !frozen_)) {
       create();
     } else if (nearest != current_) {
       const int from = current_;
@@ -232,7 +251,10 @@ Event ExperienceMap::on_cycle(int template_id, int visual_template_id, int tacti
         if (!linked) add_link(from, nearest, offset_, utime);
       }
       set_current(nearest);
+      travel_ = 0.0;
       ev = {EventType::Relocalise, from, nearest};
+    } else {
+      travel_ = 0.0;  // recognised where it already is: as good as a re-localisation
     }
   }
   if (!frozen_) relax(params_.loops);
@@ -270,6 +292,7 @@ void ExperienceMap::serialise(std::vector<uint8_t>& out) const {
   bin::put<double>(out, offset_.x);
   bin::put<double>(out, offset_.y);
   bin::put<double>(out, offset_.theta);
+  bin::put<double>(out, travel_);
 }
 
 void ExperienceMap::deserialise(const std::vector<uint8_t>& in, size_t& pos, uint32_t format_version,
@@ -330,6 +353,12 @@ void ExperienceMap::deserialise(const std::vector<uint8_t>& in, size_t& pos, uin
   m.offset_.x = bin::get<double>(in, pos);
   m.offset_.y = bin::get<double>(in, pos);
   m.offset_.theta = bin::get<double>(in, pos);
+  // Version 3: the distance travelled since the last re-localisation (the drift budget's); older
+  // checkpoints restart it at 0 (a tight budget until the robot has moved).
+  if (format_version >= 3) {
+    m.travel_ = bin::get<double>(in, pos);
+    if (!std::isfinite(m.travel_) || m.travel_ < 0.0) throw std::runtime_error("checkpoint: bad travelled distance");
+  }
   if (!finite({m.offset_.x, m.offset_.y, m.offset_.theta})) throw std::runtime_error("checkpoint: offset is not finite");
   m.poses_dirty_ = true;
   *this = std::move(m);

@@ -319,6 +319,18 @@ void PoseCells::inject(double x, double y, double theta, double energy) {
   t_mask_valid_ = false;
 }
 
+void PoseCells::relocate(double x, double y, double theta) {
+  std::fill(p_.begin(), p_.end(), 0.0f);
+  std::fill(res_x_.begin(), res_x_.end(), 0.0);
+  std::fill(res_y_.begin(), res_y_.end(), 0.0);
+  p_[idx(wrap(static_cast<int>(std::lround(theta)), nt_), wrap(static_cast<int>(std::lround(y)), n_),
+         wrap(static_cast<int>(std::lround(x)), n_))] = 1.0f;
+  best_valid_ = false;
+  support_dirty_ = true;
+  t_mask_valid_ = false;
+  dynamics();
+}
+
 void PoseCells::argmax(int& x, int& y, int& t) const {
   const size_t m = static_cast<size_t>(std::max_element(p_.begin(), p_.end()) - p_.begin());
   x = static_cast<int>(m % static_cast<size_t>(n_));

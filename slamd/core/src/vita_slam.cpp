@@ -14,7 +14,7 @@ namespace whiskeye::slam {
 namespace {
 
 constexpr char kMagic[8] = {'V', 'I', 'T', 'A', 'S', 'L', 'A', 'M'};
-constexpr uint32_t kVersion = 2;  // 2: experiences carry their view shift
+constexpr uint32_t kVersion = 3;  // 2: experiences carry their view shift; 3: the map its travelled distance
 constexpr uint32_t kOldestReadable = 1;
 
 uint32_t fnv1a(const uint8_t* data, size_t n) {
@@ -34,6 +34,13 @@ VitaSlam::VitaSlam(const SlamParams& params, const RobotGeometry& geometry)
       store_(params.visual.template_width, params.visual.template_height),
       cells_(params.pose_cells),
       map_(params.experience_map) {}
+
+// The match threshold for the terms in use: a visual-only ε and a three-term ε differ in scale.
+double VitaSlam::tau_of(const Terms& terms) const {
+  return terms.visual && terms.tactile ? params_.match.threshold_vita
+         : terms.visual               ? params_.match.threshold_visual
+                                      : params_.match.threshold_tactile;
+}
 
 CycleResult VitaSlam::process_cycle(const CycleInput& in) {
   CycleResult out;
@@ -134,9 +141,7 @@ CycleResult VitaSlam::process_cycle(const CycleInput& in) {
   m.tactile_used = terms.tactile;
   if (terms.visual || terms.tactile) {
     const BestMatch b = store_.match(q, terms, params_.match);
-    const double tau = terms.visual && terms.tactile ? params_.match.threshold_vita
-                       : terms.visual               ? params_.match.threshold_visual
-                                                    : params_.match.threshold_tactile;
+    const double tau = tau_of(terms);
     if (b.id >= 0) {
       m.error = b.error;
       m.visual_error = b.visual;
@@ -166,6 +171,15 @@ CycleResult VitaSlam::process_cycle(const CycleInput& in) {
   out.event = map_.on_cycle(tid, tid >= 0 && store_.has_visual(tid) ? tid : -1,
                             tid >= 0 && store_.has_tactile(tid) ? tid : -1, out.dense, pcx, pcy, pct, cells_, in.utime,
                             m.visual_used && !m.is_new ? m.visual_shift : 0);
+  // A re-localisation the map accepted beyond the packet's reach (the pose cells drifted with the
+  // odometry): the packet follows the map, so that what is recognised next is looked for there.
+  if (out.event.type == EventType::Relocalise && out.event.to_id >= 0) {
+    const Experience& e = map_.experiences()[static_cast<size_t>(out.event.to_id)];
+    if (cells_.distance(e.pc_x, e.pc_y, e.pc_theta, pcx, pcy, pct) > params_.experience_map.delta_pc_threshold) {
+      cells_.relocate(e.pc_x, e.pc_y, e.pc_theta);
+      cells_.best(pcx, pcy, pct);
+    }
+  }
   out.experience_id = map_.current_id();
   out.pose = map_.current_pose();
   out.pc_x = pcx;

@@ -37,6 +37,22 @@ struct ExperienceMapParams {
   // it keeps the strict max_view_shift; a distinctive one may re-localise from a little farther.
   int max_view_shift_distinct = 4;
   int distinct_places = 2;
+  // Odometry consistency (docs/slam-core.md, "Robust re-localisation"): a re-localisation may move
+  // the pose estimate only as far as odometry can have drifted since the last one,
+  //   budget = drift_base + drift_per_m · (distance travelled since the last re-localisation),
+  // measured in the map (metres), so a look-alike place farther away — or one that the pose
+  // cells' wrap-around puts nearby — is not closed onto. drift_per_m ≥ 100 turns the gate off:
+  // then the pose cells alone decide, as in RatSLAM (the nearest in pose-cell space within
+  // delta_pc_threshold).
+  // Shipped off (drift_per_m 1000): with it on, the default arena's fusion closes a few loops onto
+  // the neighbouring experience (ARCR 0.985-0.99 instead of 1.0) and vision stops being fooled;
+  // docs/results.md, "The world suite", has both sets of figures.
+  double drift_base = 0.25;     // m
+  double drift_per_m = 1000.0;  // m per m travelled; 0.15 turns the gate on
+  // Within the budget, the pose cells choose (nearest in pose-cell space within
+  // delta_pc_threshold) while the robot has re-localised within this distance travelled; after a
+  // longer stretch without any, the nearest in the map (the packet may have drifted away).
+  double packet_trust_m = 1.0;
 };
 void load(const ParamNode& node, ExperienceMapParams& p);
 
@@ -69,6 +85,9 @@ class ExperienceMap {
   int size() const { return static_cast<int>(meta_.size()); }
   // Odometry since the current experience (or since the origin before the first one).
   const Pose2& offset() const { return offset_; }
+  // Distance travelled (m) since the last re-localisation (or the start), and the budget it gives.
+  double travel_since_relocalisation() const { return travel_; }
+  double drift_budget() const { return params_.drift_base + params_.drift_per_m * travel_; }
   // current experience ∘ offset: the dead-reckoned pose of the base.
   Pose2 current_pose() const;
 
@@ -113,6 +132,7 @@ class ExperienceMap {
   std::vector<double> ax_, ay_, as_;  // scratch: per-loop sums of position errors and sin(heading error)
   int current_ = -1;
   Pose2 offset_;
+  double travel_ = 0.0;  // m since the last re-localisation
   bool frozen_ = false;
 };
 

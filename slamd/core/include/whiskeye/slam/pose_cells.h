@@ -53,6 +53,11 @@ class PoseCells {
   void settle();
   // Adds energy at the cell nearest to (x, y, θ) in cells.
   void inject(double x, double y, double theta, double energy);
+  // Moves the whole activity to one packet at the cell nearest to (x, y, θ) (a re-localisation the
+  // experience map accepted beyond the packet's reach: the packet follows the map instead of
+  // spawning experiences where it drifted to). Sub-cell remainders restart at 0; the network then
+  // settles once, so best() is the packet's centre.
+  void relocate(double x, double y, double theta);
   // Best estimate in cells: argmax, then circular means of the marginals in a box around it.
   // Cached until the network next changes (slamd asks for it at every odometry sample).
   void best(double& x, double& y, double& theta) const;

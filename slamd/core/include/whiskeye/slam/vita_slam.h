@@ -100,6 +100,8 @@ class VitaSlam {
   static VitaSlam deserialise(std::span<const uint8_t> data, const SlamParams& params, const RobotGeometry& geometry);
 
  private:
+  double tau_of(const Terms& terms) const;
+
   SlamParams params_;
   RobotGeometry geometry_;
   TemplateStore store_;
