@@ -16,19 +16,6 @@ namespace {
 
 AliasCheckParams check_params() { return AliasCheckParams{}; }  // slamd's compiled-in defaults = config/slam.yaml
 
-World arena_with(const std::string& from, const std::string& to) {
-  std::ifstream in(test::source_path("config/worlds/aliased_arena.yaml"));
-  std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  if (!from.empty()) {
-    const auto at = text.find(from);
-    EXPECT_NE(at, std::string::npos) << from;
-    text.replace(at, from.size(), to);
-  }
-  const ParamNode root = ParamNode::from_string(text, "<arena>");
-  World w;
-  load(root.section("world"), w);
-  return w;
-}
 
 bool has_pair_near(const AliasReport& r, double a_deg, double b_deg, double tol_deg) {
   auto near = [&](double x, double y) {
@@ -49,7 +36,7 @@ bool has_pair_near(const AliasReport& r, double a_deg, double b_deg, double tol_
 }
 
 TEST(AliasCheck, FindsTheHandMadeArenasLookAlikeStripesAndItsTwoIdenticalBoxes) {
-  const AliasReport r = check_aliasing(arena_with("", ""), default_robot_geometry(), check_params());
+  const AliasReport r = check_aliasing(test::arena_with("", ""), default_robot_geometry(), check_params());
   // Stripes A hang at 90° and 270°: the views there look alike (docs/simulator.md).
   EXPECT_TRUE(has_pair_near(r, 90.0, 270.0, 4.0));
   // The two corrugated boxes feel alike and stand where the views differ (0° checker, 90° stripes).
@@ -65,7 +52,7 @@ TEST(AliasCheck, FindsTheHandMadeArenasLookAlikeStripesAndItsTwoIdenticalBoxes) 
 
 TEST(AliasCheck, ALookAlikePairWithTheSameTouchIsNotToldApart) {
   // The post at 270° replaced by a corrugated box like the one at 90°: stripes + box at both places.
-  const World twin = arena_with("    - name: post_south\n      shape: circle\n      pose: [0.0, -1.41, 0.0]\n      radius: 0.06\n",
+  const World twin = test::arena_with("    - name: post_south\n      shape: circle\n      pose: [0.0, -1.41, 0.0]\n      radius: 0.06\n",
                                 "    - name: box_south\n      shape: polygon\n      pose: [0.0, -1.35, -90.0]\n"
                                 "      points: [[0.10, -0.08], [0.10, 0.08], [0.0, 0.08], [0.015, 0.06], [0.0, 0.04], "
                                 "[0.015, 0.02], [0.0, 0.0], [0.015, -0.02], [0.0, -0.04], [0.015, -0.06], [0.0, -0.08]]\n");

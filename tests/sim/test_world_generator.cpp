@@ -42,19 +42,6 @@ const GeneratedWorld& aliased(uint64_t seed) {
   return it->second;
 }
 
-World arena_with(const std::string& from, const std::string& to) {
-  std::ifstream in(test::source_path("config/worlds/aliased_arena.yaml"));
-  std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  if (!from.empty()) {
-    const auto at = text.find(from);
-    EXPECT_NE(at, std::string::npos) << from;
-    text.replace(at, from.size(), to);
-  }
-  const ParamNode root = ParamNode::from_string(text, "<arena>");
-  World w;
-  load(root.section("world"), w);
-  return w;
-}
 
 TEST(WorldGenerator, SameSeedGivesTheSameWorldAndAnotherSeedAnother) {
   EXPECT_EQ(generate(1).yaml, aliased(1).yaml);
@@ -62,7 +49,7 @@ TEST(WorldGenerator, SameSeedGivesTheSameWorldAndAnotherSeedAnother) {
 }
 
 TEST(WorldGenerator, AliasedWorldsAreDrawnWithinTheDocumentedRangesAndKeepThePremise) {
-  const World def = arena_with("", "");
+  const World def = test::arena_with("", "");
   for (uint64_t seed : {1, 2}) {
     SCOPED_TRACE("world seed " + std::to_string(seed));
     const GeneratedWorld& g = aliased(seed);
