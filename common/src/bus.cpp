@@ -122,11 +122,12 @@ int LcmBus::fileno() { return lcm_->getFileno(); }
 struct LogReader::Mapping {
   const uint8_t* bytes = nullptr;
   std::size_t size = 0;
+  bool mapped = true;  // false: bytes in memory the caller owns
   Mapping() = default;
   Mapping(const Mapping&) = delete;
   Mapping& operator=(const Mapping&) = delete;
   ~Mapping() {
-    if (bytes != nullptr) ::munmap(const_cast<uint8_t*>(bytes), size);
+    if (mapped && bytes != nullptr) ::munmap(const_cast<uint8_t*>(bytes), size);
   }
 };
 
@@ -200,6 +201,14 @@ LogReader::LogReader(const std::string& path) : path_(path) {
     ::madvise(p, map->size, MADV_SEQUENTIAL);
   }
   ::close(fd);  // the mapping keeps the file
+  map_ = std::move(map);
+}
+
+LogReader::LogReader(std::span<const uint8_t> bytes, std::string name) : path_(std::move(name)) {
+  auto map = std::make_shared<Mapping>();
+  map->bytes = bytes.data();
+  map->size = bytes.size();
+  map->mapped = false;
   map_ = std::move(map);
 }
 

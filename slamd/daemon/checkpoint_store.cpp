@@ -23,7 +23,7 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr char kMagic[8] = {'W', 'K', 'S', 'L', 'A', 'M', 'C', 'P'};
-constexpr std::size_t kHeaderSize = 32;
+constexpr std::size_t kHeaderSize = kCheckpointHeaderSize;
 
 template <typename T>
 void put(std::vector<uint8_t>& out, T value) {
@@ -100,6 +100,50 @@ uint64_t file_number(const std::string& name) {
 
 }  // namespace
 
+CheckpointHeader parse_checkpoint_header(std::span<const uint8_t> header, uint64_t file_size, const std::string& path) {
+  if (header.size() < kHeaderSize || file_size < kHeaderSize) {
+    fail(path, "truncated header (" + std::to_string(std::min<uint64_t>(file_size, header.size())) + " bytes)");
+  }
+  if (std::memcmp(header.data(), kMagic, sizeof kMagic) != 0) fail(path, "not a slamd checkpoint (bad magic)");
+  CheckpointHeader h;
+  h.version = get<uint32_t>(header.data() + 8);
+  if (h.version != kCheckpointFormatVersion) {
+    fail(path,
+         "unsupported checkpoint format version " + std::to_string(h.version) + " (this slamd reads " +
+             std::to_string(kCheckpointFormatVersion) + ")",
+         CheckpointError::Kind::kUnusable);
+  }
+  h.crc = get<uint32_t>(header.data() + 12);
+  h.sequence = get<uint64_t>(header.data() + 16);
+  h.payload_size = get<uint64_t>(header.data() + 24);
+  if (h.payload_size != file_size - kHeaderSize) {
+    fail(path, "payload size " + std::to_string(file_size - kHeaderSize) + " differs from the header's " +
+                   std::to_string(h.payload_size) + " (truncated or appended)");
+  }
+  return h;
+}
+
+void check_checkpoint_payload(const CheckpointHeader& h, std::span<const uint8_t> /*header*/,
+                              std::span<const uint8_t> payload, const std::string& path) {
+  if (crc_of(payload) != h.crc) fail(path, "checksum mismatch (corrupt data)");
+}
+
+Checkpoint parse_checkpoint(std::span<const uint8_t> file, const std::string& path) {
+  const CheckpointHeader h = parse_checkpoint_header(file.first(std::min(file.size(), kHeaderSize)), file.size(), path);
+  const auto payload = file.subspan(kHeaderSize);
+  check_checkpoint_payload(h, file.first(kHeaderSize), payload, path);
+  return Checkpoint{path, h.sequence, std::vector<uint8_t>(payload.begin(), payload.end())};
+}
+
+std::vector<uint8_t> checkpoint_header(uint64_t sequence, std::span<const uint8_t> payload) {
+  std::vector<uint8_t> header(kMagic, kMagic + sizeof kMagic);
+  put<uint32_t>(header, kCheckpointFormatVersion);
+  put<uint32_t>(header, crc_of(payload));
+  put<uint64_t>(header, sequence);
+  put<uint64_t>(header, payload.size());
+  return header;
+}
+
 Checkpoint read_checkpoint(const std::string& path) {
   struct stat st {};
   if (::stat(path.c_str(), &st) != 0) {
@@ -110,40 +154,25 @@ Checkpoint read_checkpoint(const std::string& path) {
   if (!in) fail(path, std::string("cannot open: ") + std::strerror(errno), CheckpointError::Kind::kUnusable);
   const uint64_t file_size = static_cast<uint64_t>(st.st_size);
   std::array<uint8_t, kHeaderSize> header{};
-  in.read(reinterpret_cast<char*>(header.data()), static_cast<std::streamsize>(std::min<uint64_t>(file_size, kHeaderSize)));
+  const auto header_bytes = static_cast<std::size_t>(std::min<uint64_t>(file_size, kHeaderSize));
+  in.read(reinterpret_cast<char*>(header.data()), static_cast<std::streamsize>(header_bytes));
   if (in.bad()) fail(path, "read error", CheckpointError::Kind::kUnusable);
-  if (file_size < kHeaderSize) fail(path, "truncated header (" + std::to_string(file_size) + " bytes)");
-  if (std::memcmp(header.data(), kMagic, sizeof kMagic) != 0) fail(path, "not a slamd checkpoint (bad magic)");
-  const uint32_t version = get<uint32_t>(header.data() + 8);
-  if (version != kCheckpointFormatVersion) {
-    fail(path,
-         "unsupported checkpoint format version " + std::to_string(version) + " (this slamd reads " +
-             std::to_string(kCheckpointFormatVersion) + ")",
-         CheckpointError::Kind::kUnusable);
-  }
-  const uint32_t crc = get<uint32_t>(header.data() + 12);
+  // The payload is read only once the header agrees with the file's size: nothing is allocated for
+  // a stray huge file.
+  const CheckpointHeader h = parse_checkpoint_header(std::span<const uint8_t>(header.data(), header_bytes), file_size, path);
   Checkpoint cp;
   cp.path = path;
-  cp.sequence = get<uint64_t>(header.data() + 16);
-  const uint64_t size = get<uint64_t>(header.data() + 24);
-  if (size != file_size - kHeaderSize) {
-    fail(path, "payload size " + std::to_string(file_size - kHeaderSize) + " differs from the header's " +
-                   std::to_string(size) + " (truncated or appended)");
-  }
-  cp.payload.resize(size);
-  in.read(reinterpret_cast<char*>(cp.payload.data()), static_cast<std::streamsize>(size));
+  cp.sequence = h.sequence;
+  cp.payload.resize(h.payload_size);
+  in.read(reinterpret_cast<char*>(cp.payload.data()), static_cast<std::streamsize>(h.payload_size));
   if (in.bad()) fail(path, "read error", CheckpointError::Kind::kUnusable);  // the disk, not the file
-  if (static_cast<uint64_t>(in.gcount()) != size) fail(path, "shorter than its size while being read");
-  if (crc_of(cp.payload) != crc) fail(path, "checksum mismatch (corrupt data)");
+  if (static_cast<uint64_t>(in.gcount()) != h.payload_size) fail(path, "shorter than its size while being read");
+  check_checkpoint_payload(h, header, cp.payload, path);
   return cp;
 }
 
 void write_checkpoint_file(const std::string& path, uint64_t sequence, std::span<const uint8_t> payload) {
-  std::vector<uint8_t> header(kMagic, kMagic + sizeof kMagic);
-  put<uint32_t>(header, kCheckpointFormatVersion);
-  put<uint32_t>(header, crc_of(payload));
-  put<uint64_t>(header, sequence);
-  put<uint64_t>(header, payload.size());
+  const std::vector<uint8_t> header = checkpoint_header(sequence, payload);
 
   const fs::path final_path(path);
   const fs::path dir = final_path.has_parent_path() ? final_path.parent_path() : fs::path(".");

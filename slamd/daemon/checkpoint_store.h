@@ -46,6 +46,26 @@ struct Checkpoint {
   std::vector<uint8_t> payload;
 };
 
+constexpr std::size_t kCheckpointHeaderSize = 32;
+
+struct CheckpointHeader {
+  uint32_t version = 0;
+  uint32_t crc = 0;
+  uint64_t sequence = 0;
+  uint64_t payload_size = 0;
+};
+
+// The pure half of reading a checkpoint (no I/O; `path` only names it in errors), which
+// read_checkpoint() and the fuzz target share. parse_checkpoint_header() checks a header against the
+// size of its file (CheckpointError on bad magic, version or size), check_checkpoint_payload() the
+// payload against its header (checksum); parse_checkpoint() does both on a whole file in memory.
+CheckpointHeader parse_checkpoint_header(std::span<const uint8_t> header, uint64_t file_size, const std::string& path);
+void check_checkpoint_payload(const CheckpointHeader& h, std::span<const uint8_t> header,
+                              std::span<const uint8_t> payload, const std::string& path);
+Checkpoint parse_checkpoint(std::span<const uint8_t> file, const std::string& path);
+// The header of a checkpoint of `payload` (what write_checkpoint_file() puts before it).
+std::vector<uint8_t> checkpoint_header(uint64_t sequence, std::span<const uint8_t> payload);
+
 // Reads and validates one checkpoint file; CheckpointError "<path>: <reason>" when it is unusable.
 // Only a regular file is read, and its payload only once the header agrees with the file's size, so
 // a wrong path (/dev/zero, a FIFO, a huge stray file) is refused before anything is allocated.

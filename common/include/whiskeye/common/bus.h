@@ -197,6 +197,9 @@ class LogReader {
   // cannot be read, resynchronising on the next event's sync word as LCM's own reader does, and
   // damage() says what was skipped, where first.
   explicit LogReader(const std::string& path);
+  // Reads a log held in memory (`name` stands for the file in messages); `bytes` must outlive the
+  // reader and every view's owner. For tests and the fuzz targets.
+  LogReader(std::span<const uint8_t> bytes, std::string name);
   ~LogReader();
   LogReader(const LogReader&) = delete;
   LogReader& operator=(const LogReader&) = delete;
