@@ -189,6 +189,19 @@ std::string whisk_cycle_size_error(std::span<const uint8_t> data) {
   return {};
 }
 
+std::string whisk_cycle_contract_error(std::span<const uint8_t> data) {
+  constexpr std::size_t kCountsAt = 8 + 4 * 8;
+  if (data.size() < kCountsAt + 8) return "WHISK_CYCLE: shorter than its fixed fields";
+  const int32_t whiskers = read_be_i32(data.data() + kCountsAt);
+  const int32_t samples = read_be_i32(data.data() + kCountsAt + 4);
+  // The same words as check_whisk_cycle(), which sees the decoded message.
+  if (whiskers != kNumWhiskers) return "WHISK_CYCLE: num_whiskers " + std::to_string(whiskers) + " (expected 24)";
+  if (samples <= 0 || samples > kMaxSamplesPerCycle) {
+    return "WHISK_CYCLE: num_samples " + std::to_string(samples) + " out of range";
+  }
+  return "";
+}
+
 slam::WhiskCycleInput to_core(const whisk_cycle_t& m) {
   slam::WhiskCycleInput in;
   in.cycle = m.cycle;
@@ -216,11 +229,16 @@ SlamNode::SlamNode(Bus& in, Bus& out, std::unique_ptr<slam::VitaSlam> slam, cons
   in.subscribe_raw("CAMERA", [this](std::span<const uint8_t> data, const MessageInfo& info) { on_camera(data, info); });
   subscribe<odometry_t>(in, "ODOMETRY", [this](const odometry_t& m) { on_odometry(m); }, decode_errors_);
   // The generated decoder sizes its arrays from the message's counts before it checks them against
-  // the message's length (a negative count throws, a huge one allocates gigabytes): check them first.
+  // the message's length (a negative count throws, a huge one allocates gigabytes): check them first,
+  // against the length, then against the contract.
   in.subscribe_raw("WHISK_CYCLE", [this](std::span<const uint8_t> data, const MessageInfo& info) {
     whisk_cycle_t msg;
     std::string reason = whisk_cycle_size_error(data);
-    if (reason.empty()) decode_message(data, msg, &reason);  // sets the reason when it fails
+    if (reason.empty()) {
+      // Decodable, but counts outside the contract: rejected before the decoder allocates for them.
+      if (std::string bad = whisk_cycle_contract_error(data); !bad.empty()) return reject(kWhisk, bad);
+      decode_message(data, msg, &reason);  // sets the reason when it fails
+    }
     if (!reason.empty()) return decode_errors_.record(info.channel, reason);
     on_whisk_cycle(msg);
   });
