@@ -37,8 +37,7 @@ T get(const uint8_t* p) {
   return v;
 }
 
-uint32_t crc_of(std::span<const uint8_t> data) {
-  uLong crc = crc32(0L, Z_NULL, 0);
+uint32_t crc_of(std::span<const uint8_t> data, uLong crc = crc32(0L, Z_NULL, 0)) {
   // zlib takes uInt lengths: feed in chunks.
   std::size_t pos = 0;
   while (pos < data.size()) {
@@ -47,6 +46,14 @@ uint32_t crc_of(std::span<const uint8_t> data) {
     pos += n;
   }
   return static_cast<uint32_t>(crc);
+}
+
+// Format 2 and later: the CRC covers the header (all of it but the CRC field, bytes 12..15) and the
+// payload, so a flipped version, sequence or size is damage like a flipped payload byte.
+uint32_t crc_of_file(std::span<const uint8_t> header, std::span<const uint8_t> payload) {
+  uint32_t crc = crc_of(header.first(12));
+  crc = crc_of(header.subspan(16, 16), crc);
+  return crc_of(payload, crc);
 }
 
 [[noreturn]] void fail(const std::string& path, const std::string& what,
@@ -106,13 +113,9 @@ CheckpointHeader parse_checkpoint_header(std::span<const uint8_t> header, uint64
   }
   if (std::memcmp(header.data(), kMagic, sizeof kMagic) != 0) fail(path, "not a slamd checkpoint (bad magic)");
   CheckpointHeader h;
+  // The version is checked with the checksum (check_checkpoint_payload): only then is an unknown one
+  // known to be what a newer slamd wrote and not a flipped bit.
   h.version = get<uint32_t>(header.data() + 8);
-  if (h.version != kCheckpointFormatVersion) {
-    fail(path,
-         "unsupported checkpoint format version " + std::to_string(h.version) + " (this slamd reads " +
-             std::to_string(kCheckpointFormatVersion) + ")",
-         CheckpointError::Kind::kUnusable);
-  }
   h.crc = get<uint32_t>(header.data() + 12);
   h.sequence = get<uint64_t>(header.data() + 16);
   h.payload_size = get<uint64_t>(header.data() + 24);
@@ -123,9 +126,23 @@ CheckpointHeader parse_checkpoint_header(std::span<const uint8_t> header, uint64
   return h;
 }
 
-void check_checkpoint_payload(const CheckpointHeader& h, std::span<const uint8_t> /*header*/,
+void check_checkpoint_payload(const CheckpointHeader& h, std::span<const uint8_t> header,
                               std::span<const uint8_t> payload, const std::string& path) {
-  if (crc_of(payload) != h.crc) fail(path, "checksum mismatch (corrupt data)");
+  if (header.size() < kHeaderSize) fail(path, "truncated header (" + std::to_string(header.size()) + " bytes)");
+  if (h.version == 1) {
+    // Format 1 (before the header was covered): the payload's CRC only.
+    if (crc_of(payload) != h.crc) fail(path, "checksum mismatch (corrupt data)");
+    return;
+  }
+  if (crc_of_file(header, payload) != h.crc) fail(path, "checksum mismatch (corrupt header or data)");
+  // Intact: a version this slamd does not know was written by a newer one (every format from 2 on
+  // keeps the magic, the version and this CRC where they are).
+  if (h.version != kCheckpointFormatVersion) {
+    fail(path,
+         "unsupported checkpoint format version " + std::to_string(h.version) + " (this slamd reads 1 and " +
+             std::to_string(kCheckpointFormatVersion) + ")",
+         CheckpointError::Kind::kUnusable);
+  }
 }
 
 Checkpoint parse_checkpoint(std::span<const uint8_t> file, const std::string& path) {
@@ -135,12 +152,14 @@ Checkpoint parse_checkpoint(std::span<const uint8_t> file, const std::string& pa
   return Checkpoint{path, h.sequence, std::vector<uint8_t>(payload.begin(), payload.end())};
 }
 
-std::vector<uint8_t> checkpoint_header(uint64_t sequence, std::span<const uint8_t> payload) {
+std::vector<uint8_t> checkpoint_header(uint64_t sequence, std::span<const uint8_t> payload, uint32_t version) {
   std::vector<uint8_t> header(kMagic, kMagic + sizeof kMagic);
-  put<uint32_t>(header, kCheckpointFormatVersion);
-  put<uint32_t>(header, crc_of(payload));
+  put<uint32_t>(header, version);
+  put<uint32_t>(header, 0);  // the CRC, below
   put<uint64_t>(header, sequence);
   put<uint64_t>(header, payload.size());
+  const uint32_t crc = version == 1 ? crc_of(payload) : crc_of_file(header, payload);
+  for (std::size_t i = 0; i < 4; ++i) header[12 + i] = static_cast<uint8_t>(crc >> (8 * i));
   return header;
 }
 

@@ -3,7 +3,8 @@
 // File format (little-endian):
 //   offset 0  char[8]  magic "WKSLAMCP"
 //          8  uint32   format version (kCheckpointFormatVersion)
-//         12  uint32   CRC-32 (zlib) of the payload
+//         12  uint32   CRC-32 (zlib) of the header's other 28 bytes (0..11, 16..31) and the payload;
+//                      in format 1 of the payload only (still read)
 //         16  uint64   sequence (the map's whisk cycle count, over all sessions, the state is after)
 //         24  uint64   payload size in bytes
 //         32  payload  (VitaSlam::serialise(), which carries its own version)
@@ -26,7 +27,11 @@
 
 namespace whiskeye::slamd {
 
-constexpr uint32_t kCheckpointFormatVersion = 1;
+// 2: the CRC covers the header too (a flipped version or sequence was taken at its word). Every later
+// format must keep magic, version and this CRC where they are: an unknown version whose CRC holds is
+// a newer slamd's file (kUnusable: slamd stops and names it); one whose CRC fails is damage (kCorrupt:
+// the previous checkpoint is used).
+constexpr uint32_t kCheckpointFormatVersion = 2;
 
 class CheckpointError : public std::runtime_error {
  public:
@@ -63,8 +68,10 @@ CheckpointHeader parse_checkpoint_header(std::span<const uint8_t> header, uint64
 void check_checkpoint_payload(const CheckpointHeader& h, std::span<const uint8_t> header,
                               std::span<const uint8_t> payload, const std::string& path);
 Checkpoint parse_checkpoint(std::span<const uint8_t> file, const std::string& path);
-// The header of a checkpoint of `payload` (what write_checkpoint_file() puts before it).
-std::vector<uint8_t> checkpoint_header(uint64_t sequence, std::span<const uint8_t> payload);
+// The header of a checkpoint of `payload` (what write_checkpoint_file() puts before it); another
+// `version` for tests (1: the old format).
+std::vector<uint8_t> checkpoint_header(uint64_t sequence, std::span<const uint8_t> payload,
+                                       uint32_t version = kCheckpointFormatVersion);
 
 // Reads and validates one checkpoint file; CheckpointError "<path>: <reason>" when it is unusable.
 // Only a regular file is read, and its payload only once the header agrees with the file's size, so

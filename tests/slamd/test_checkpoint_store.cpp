@@ -33,6 +33,13 @@ class CheckpointStoreTest : public ::testing::Test {
     f.seekp(offset);
     f.write(&c, 1);
   }
+  // A checkpoint file written by hand: `version` 1 is the old format, 3 a newer slamd's.
+  static void write_raw(const std::string& path, uint64_t sequence, const std::vector<uint8_t>& p, uint32_t version) {
+    std::vector<uint8_t> bytes = checkpoint_header(sequence, p, version);
+    bytes.insert(bytes.end(), p.begin(), p.end());
+    std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()),
+                                                static_cast<std::streamsize>(bytes.size()));
+  }
   fs::path dir_;
 };
 
@@ -99,13 +106,14 @@ TEST_F(CheckpointStoreTest, RejectsTruncatedBadMagicAndFutureVersion) {
   } catch (const CheckpointError& e) {
     EXPECT_THAT(e.what(), HasSubstr("bad magic"));
   }
-  const std::string p3 = store.write(9, payload(64, 9));
-  corrupt_byte(p3, 8);  // version
+  const std::string p3 = (dir_ / "checkpoint-000000000009.vslam").string();
+  write_raw(p3, 9, payload(64, 9), 3);  // intact, from a newer slamd
   try {
     read_checkpoint(p3);
     FAIL();
   } catch (const CheckpointError& e) {
-    EXPECT_THAT(e.what(), HasSubstr("unsupported checkpoint format version"));
+    EXPECT_EQ(e.kind(), CheckpointError::Kind::kUnusable);
+    EXPECT_THAT(e.what(), HasSubstr("unsupported checkpoint format version 3"));
   }
   std::ofstream(dir_ / "checkpoint-000000000010.vslam") << "short";
   try {
@@ -114,6 +122,38 @@ TEST_F(CheckpointStoreTest, RejectsTruncatedBadMagicAndFutureVersion) {
   } catch (const CheckpointError& e) {
     EXPECT_THAT(e.what(), HasSubstr("truncated header"));
   }
+}
+
+// One flipped bit in the version field stopped slamd ("unsupported checkpoint format version 17")
+// although older good checkpoints were there; a flipped sequence was taken silently. The checksum
+// now covers the header: both are damage, and the previous checkpoint is used.
+TEST_F(CheckpointStoreTest, AFlippedBitInTheHeaderIsDamageAndThePreviousCheckpointIsUsed) {
+  CheckpointStore store(dir_.string(), 3);
+  store.write(1, payload(300, 1));
+  const std::string middle = store.write(2, payload(300, 2));
+  const std::string newest = store.write(3, payload(300, 3));
+  corrupt_byte(newest, 8);   // version
+  corrupt_byte(middle, 17);  // sequence
+  std::vector<std::string> problems;
+  const auto cp = store.load_newest(&problems);
+  ASSERT_TRUE(cp);
+  EXPECT_EQ(cp->sequence, 1u);
+  EXPECT_EQ(cp->payload, payload(300, 1));
+  ASSERT_EQ(problems.size(), 2u);
+  EXPECT_THAT(problems[0], HasSubstr(newest + ": checksum mismatch (corrupt header or data)"));
+  EXPECT_THAT(problems[1], HasSubstr(middle + ": checksum mismatch"));
+  EXPECT_TRUE(fs::exists(newest + ".corrupt"));
+}
+
+TEST_F(CheckpointStoreTest, AFormatOneCheckpointIsStillRead) {
+  fs::create_directories(dir_);
+  const std::string path = (dir_ / "checkpoint-000000000004.vslam").string();
+  write_raw(path, 44, payload(100, 4), 1);
+  const Checkpoint cp = read_checkpoint(path);
+  EXPECT_EQ(cp.sequence, 44u);
+  EXPECT_EQ(cp.payload, payload(100, 4));
+  corrupt_byte(path, 60);
+  EXPECT_THROW(read_checkpoint(path), CheckpointError);
 }
 
 TEST_F(CheckpointStoreTest, TheLastWrittenIsTheNewestAcrossRestartsWhateverItsSequence) {
@@ -164,7 +204,7 @@ TEST_F(CheckpointStoreTest, AnIntactButUnusableNewestIsNamedAndKeptNotSkipped) {
     EXPECT_THAT(e.what(), HasSubstr(newest + ": written in another mode"));
   }
   EXPECT_TRUE(fs::exists(newest)) << "not renamed: it is not corrupt";
-  corrupt_byte(newest, 8);  // a format version this slamd does not read
+  write_raw(newest, 2, payload(64, 2), 3);  // intact, in a format version this slamd does not read
   try {
     store.load_newest(&problems);
     FAIL();
