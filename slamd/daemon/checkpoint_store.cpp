@@ -152,6 +152,11 @@ Checkpoint parse_checkpoint(std::span<const uint8_t> file, const std::string& pa
   return Checkpoint{path, h.sequence, std::vector<uint8_t>(payload.begin(), payload.end())};
 }
 
+uint32_t checkpoint_crc(std::span<const uint8_t> header, std::span<const uint8_t> payload) {
+  if (header.size() < kHeaderSize) return 0;
+  return get<uint32_t>(header.data() + 8) == 1 ? crc_of(payload) : crc_of_file(header, payload);
+}
+
 std::vector<uint8_t> checkpoint_header(uint64_t sequence, std::span<const uint8_t> payload, uint32_t version) {
   std::vector<uint8_t> header(kMagic, kMagic + sizeof kMagic);
   put<uint32_t>(header, version);

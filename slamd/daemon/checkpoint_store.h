@@ -68,6 +68,9 @@ CheckpointHeader parse_checkpoint_header(std::span<const uint8_t> header, uint64
 void check_checkpoint_payload(const CheckpointHeader& h, std::span<const uint8_t> header,
                               std::span<const uint8_t> payload, const std::string& path);
 Checkpoint parse_checkpoint(std::span<const uint8_t> file, const std::string& path);
+// The CRC that `header` (32 bytes) should hold for `payload`, by the header's version (for the fuzz
+// target, which makes it match so that mutations reach the parsers).
+uint32_t checkpoint_crc(std::span<const uint8_t> header, std::span<const uint8_t> payload);
 // The header of a checkpoint of `payload` (what write_checkpoint_file() puts before it); another
 // `version` for tests (1: the old format).
 std::vector<uint8_t> checkpoint_header(uint64_t sequence, std::span<const uint8_t> payload,
