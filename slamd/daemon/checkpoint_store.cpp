@@ -89,20 +89,46 @@ std::string file_name(uint64_t number) {
   return name;
 }
 
-// Larger numbers are not ours (a hand-named file): counting from one would wrap the next number.
-constexpr uint64_t kMaxFileNumber = 999'999'999'999'999;
+// The largest number a file may carry: one more must still be a number (the next file's).
+constexpr uint64_t kMaxFileNumber = UINT64_MAX - 1;
 
-// n of "checkpoint-<n>.vslam[.corrupt]", or 0.
-uint64_t file_number(const std::string& name) {
+// n of "checkpoint-<n>.vslam[.corrupt]" (1..kMaxFileNumber), or 0; `out_of_range` says that the name
+// is one but its number is beyond kMaxFileNumber.
+uint64_t file_number(const std::string& name, bool* out_of_range = nullptr) {
+  if (out_of_range) *out_of_range = false;
   if (name.rfind(kPrefix, 0) != 0) return 0;
   const char* first = name.data() + sizeof kPrefix - 1;
   const char* last = name.data() + name.size();
   uint64_t n = 0;
   const auto [end, ec] = std::from_chars(first, last, n);
-  if (ec != std::errc() || end == first || std::string_view(end, static_cast<std::size_t>(last - end)).rfind(".vslam", 0) != 0) {
+  if (end == first || std::string_view(end, static_cast<std::size_t>(last - end)).rfind(".vslam", 0) != 0) return 0;
+  if (ec == std::errc::result_out_of_range || (ec == std::errc() && n > kMaxFileNumber)) {
+    if (out_of_range) *out_of_range = true;
     return 0;
   }
-  return n <= kMaxFileNumber ? n : 0;
+  return ec == std::errc() ? n : 0;
+}
+
+bool is_corrupt_name(const std::string& name) {
+  constexpr std::string_view kSuffix = ".vslam.corrupt";
+  return name.size() > kSuffix.size() && name.compare(name.size() - kSuffix.size(), kSuffix.size(), kSuffix) == 0;
+}
+
+bool is_checkpoint_name(const std::string& name) {
+  constexpr std::string_view kSuffix = ".vslam";
+  return name.size() > kSuffix.size() && name.compare(name.size() - kSuffix.size(), kSuffix.size(), kSuffix) == 0;
+}
+
+const char* kind_of(fs::file_type type) {
+  switch (type) {
+    case fs::file_type::directory: return "a directory";
+    case fs::file_type::symlink: return "a symbolic link";
+    case fs::file_type::fifo: return "a FIFO";
+    case fs::file_type::socket: return "a socket";
+    case fs::file_type::block:
+    case fs::file_type::character: return "a device";
+    default: return "not a regular file";
+  }
 }
 
 }  // namespace
@@ -252,42 +278,67 @@ CheckpointStore::CheckpointStore(std::string directory, int keep) : directory_(s
   }
 }
 
+CheckpointStore::Scan CheckpointStore::scan() const {
+  Scan scan;
+  std::vector<std::pair<uint64_t, std::string>> files, corrupt;
+  for (const auto& entry : fs::directory_iterator(directory_)) {
+    const std::string name = entry.path().filename().string();
+    const bool checkpoint = is_checkpoint_name(name);
+    if (!checkpoint && !is_corrupt_name(name)) continue;
+    bool out_of_range = false;
+    const uint64_t n = file_number(name, &out_of_range);
+    if (out_of_range && checkpoint) {
+      scan.skipped.push_back(entry.path().string() + ": numbered beyond what slamd can count on from (" +
+                             std::to_string(kMaxFileNumber) + "); rename it to resume from it");
+      continue;
+    }
+    if (n == 0) continue;
+    std::error_code ec;
+    const fs::file_type type = entry.symlink_status(ec).type();  // a symlink is not followed
+    if (type != fs::file_type::regular) {
+      if (checkpoint) scan.skipped.push_back(entry.path().string() + ": " + kind_of(type) + ", not a checkpoint file");
+      continue;
+    }
+    (checkpoint ? files : corrupt).emplace_back(n, entry.path().string());
+  }
+  // By number, not by name: a file renamed by hand ("checkpoint-5.vslam") or a number of more than
+  // twelve digits would sort out of order, and rotation would delete the newest.
+  std::sort(files.begin(), files.end());
+  std::sort(corrupt.begin(), corrupt.end());
+  for (auto& f : files) scan.files.push_back(std::move(f.second));
+  for (auto& f : corrupt) scan.corrupt.push_back(std::move(f.second));
+  return scan;
+}
+
 CheckpointStore::~CheckpointStore() {
   if (lock_fd_ >= 0) ::close(lock_fd_);  // releases the lock
 }
 
-std::vector<std::string> CheckpointStore::list() const {
-  std::vector<std::string> files;
-  for (const auto& entry : fs::directory_iterator(directory_)) {
-    const std::string name = entry.path().filename().string();
-    if (entry.is_regular_file() && file_number(name) > 0 && entry.path().extension() == ".vslam") {
-      files.push_back(entry.path().string());
-    }
-  }
-  // By number, not by name: a file renamed by hand ("checkpoint-5.vslam") or a number of more than
-  // twelve digits would sort out of order, and rotation would delete the newest.
-  std::sort(files.begin(), files.end(), [](const std::string& a, const std::string& b) {
-    return file_number(fs::path(a).filename().string()) < file_number(fs::path(b).filename().string());
-  });
-  return files;
-}
+std::vector<std::string> CheckpointStore::list() const { return scan().files; }
 
 std::string CheckpointStore::write(uint64_t sequence, std::span<const uint8_t> payload) {
   const std::string path = (fs::path(directory_) / file_name(next_number_)).string();
   write_checkpoint_file(path, sequence, payload);
   ++next_number_;  // after success: a failed write leaves no file, and its number is reused
-  auto files = list();
-  while (static_cast<int>(files.size()) > keep_) {
-    std::error_code ec;
-    fs::remove(files.front(), ec);
-    files.erase(files.begin());
+  // The newest `keep` checkpoints stay, and as many of the files set aside as corrupt (kept for
+  // inspection, but not for ever: each start after a crash in a write could add one).
+  Scan files = scan();
+  for (auto* list : {&files.files, &files.corrupt}) {
+    for (std::size_t i = 0; i + static_cast<std::size_t>(keep_) < list->size(); ++i) {
+      std::error_code ec;
+      fs::remove((*list)[i], ec);
+    }
   }
   return path;
 }
 
 std::optional<Checkpoint> CheckpointStore::load_newest(std::vector<std::string>* problems,
                                                         const std::function<void(const Checkpoint&)>& use) {
-  auto files = list();
+  const Scan found = scan();
+  // Entries named like checkpoints that are not (a directory, a FIFO, a symlink, a number beyond
+  // counting): never read, but named, so that the newest one being skipped is not silent.
+  if (problems) problems->insert(problems->end(), found.skipped.begin(), found.skipped.end());
+  const auto& files = found.files;
   for (auto it = files.rbegin(); it != files.rend(); ++it) {
     Checkpoint cp;
     try {

@@ -95,7 +95,7 @@ class CheckpointStore {
   CheckpointStore& operator=(const CheckpointStore&) = delete;
 
   // Writes the next checkpoint-<n>.vslam (header sequence = `sequence`) and prunes all but the
-  // newest `keep`. Returns its path.
+  // newest `keep`, and all but the newest `keep` of the files renamed *.corrupt. Returns its path.
   std::string write(uint64_t sequence, std::span<const uint8_t> payload);
 
   // The newest checkpoint that validates and that `use` (if given) accepts; `use` throws to refuse
@@ -103,16 +103,26 @@ class CheckpointStore {
   // (kept for inspection, out of the rotation) and the next older one is tried. A file that is
   // intact but unusable here (a newer format, refused by `use`, unreadable) throws CheckpointError
   // kUnusable naming it: falling back past it, or starting a new map whose checkpoints would rotate
-  // it out, could lose that map.
+  // it out, could lose that map. Entries named like checkpoints that cannot be one (a directory, a
+  // FIFO, a symlink — never followed —, a number beyond 2^64 - 2) are left alone and each named in
+  // `problems`.
   std::optional<Checkpoint> load_newest(std::vector<std::string>* problems,
                                         const std::function<void(const Checkpoint&)>& use = {});
 
-  // Checkpoint files present, oldest first.
+  // Checkpoint files present (regular files named checkpoint-<n>.vslam, n any number up to 2^64 - 2),
+  // oldest first.
   std::vector<std::string> list() const;
   const std::string& directory() const { return directory_; }
   const std::vector<std::string>& removed_temp_files() const { return removed_temp_files_; }
 
  private:
+  struct Scan {
+    std::vector<std::string> files;    // checkpoints, oldest first
+    std::vector<std::string> corrupt;  // *.vslam.corrupt, oldest first
+    std::vector<std::string> skipped;  // "<path>: why it is not a checkpoint file"
+  };
+  Scan scan() const;
+
   std::string directory_;
   int lock_fd_ = -1;  // the directory, flock'ed while this store lives
   int keep_;

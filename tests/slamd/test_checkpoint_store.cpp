@@ -7,6 +7,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include <sys/stat.h>
+
 namespace whiskeye::slamd {
 namespace {
 
@@ -275,14 +277,79 @@ TEST_F(CheckpointStoreTest, OnlyARegularFileIsReadAndNotBeyondWhatItsHeaderSays)
   }
 }
 
-TEST_F(CheckpointStoreTest, AHandNamedFileWithAHugeNumberIsNotCountedFrom) {
+TEST_F(CheckpointStoreTest, AFileNumberedBeyondCountingIsNamedAndNotCountedFrom) {
   fs::create_directories(dir_);
   write_checkpoint_file((dir_ / "checkpoint-18446744073709551615.vslam").string(), 9, payload(10, 9));
+  write_checkpoint_file((dir_ / "checkpoint-99999999999999999999999.vslam").string(), 9, payload(10, 9));
   CheckpointStore store(dir_.string(), 1);
+  std::vector<std::string> problems;
+  EXPECT_FALSE(store.load_newest(&problems));
+  ASSERT_EQ(problems.size(), 2u) << "each is named, not skipped silently";
+  for (const auto& p : problems) EXPECT_THAT(p, HasSubstr("numbered beyond what slamd can count on from"));
   const std::string path = store.write(1, payload(10, 1));
   EXPECT_EQ(fs::path(path).filename(), "checkpoint-000000000001.vslam") << "the next number did not wrap";
   EXPECT_EQ(store.list(), std::vector<std::string>{path}) << "the file just written is kept";
   EXPECT_TRUE(fs::exists(dir_ / "checkpoint-18446744073709551615.vslam")) << "not ours: left alone";
+}
+
+// A file numbered beyond 10^15 was invisible: never pruned, and the next start resumed an older
+// state beside it (silent loss). Any number slamd can count on from is a checkpoint like the others.
+TEST_F(CheckpointStoreTest, AFileNumberedBeyondTenToTheFifteenIsResumedCountedFromAndPruned) {
+  fs::create_directories(dir_);
+  const std::string big = (dir_ / "checkpoint-1000000000000005.vslam").string();
+  write_checkpoint_file((dir_ / "checkpoint-000000000007.vslam").string(), 7, payload(10, 7));
+  write_checkpoint_file(big, 8, payload(10, 8));
+  CheckpointStore store(dir_.string(), 2);
+  std::vector<std::string> problems;
+  const auto cp = store.load_newest(&problems);
+  ASSERT_TRUE(cp);
+  EXPECT_EQ(cp->path, big);
+  EXPECT_EQ(cp->sequence, 8u);
+  EXPECT_TRUE(problems.empty());
+  const std::string next = store.write(9, payload(10, 9));
+  EXPECT_EQ(fs::path(next).filename(), "checkpoint-1000000000000006.vslam");
+  EXPECT_EQ(store.list(), (std::vector<std::string>{big, next})) << "the older file was pruned";
+  store.write(10, payload(10, 10));
+  EXPECT_FALSE(fs::exists(big)) << "pruned in its turn";
+}
+
+TEST_F(CheckpointStoreTest, ANewestCheckpointThatIsNotARegularFileIsNamedAndSkipped) {
+  fs::create_directories(dir_);
+  write_checkpoint_file((dir_ / "checkpoint-000000000001.vslam").string(), 1, payload(10, 1));
+  fs::create_directory(dir_ / "checkpoint-000000000002.vslam");
+  ASSERT_EQ(::mkfifo((dir_ / "checkpoint-000000000003.vslam").c_str(), 0600), 0);
+  write_checkpoint_file((dir_ / "elsewhere.vslam").string(), 4, payload(10, 4));
+  fs::create_symlink(dir_ / "elsewhere.vslam", dir_ / "checkpoint-000000000004.vslam");
+  CheckpointStore store(dir_.string(), 3);
+  std::vector<std::string> problems;
+  const auto cp = store.load_newest(&problems);
+  ASSERT_TRUE(cp);
+  EXPECT_EQ(cp->sequence, 1u);
+  ASSERT_EQ(problems.size(), 3u);
+  const std::string all = problems[0] + "\n" + problems[1] + "\n" + problems[2];
+  EXPECT_THAT(all, HasSubstr("checkpoint-000000000002.vslam: a directory, not a checkpoint file"));
+  EXPECT_THAT(all, HasSubstr("checkpoint-000000000003.vslam: a FIFO, not a checkpoint file"));
+  EXPECT_THAT(all, HasSubstr("checkpoint-000000000004.vslam: a symbolic link, not a checkpoint file"));
+  const std::string next = store.write(5, payload(10, 5));
+  EXPECT_EQ(fs::path(next).filename(), "checkpoint-000000000005.vslam") << "counted on past them";
+  store.write(6, payload(10, 6));
+  store.write(7, payload(10, 7));
+  EXPECT_TRUE(fs::is_directory(dir_ / "checkpoint-000000000002.vslam")) << "not ours to remove";
+  EXPECT_TRUE(fs::exists(dir_ / "elsewhere.vslam")) << "a link is never followed";
+}
+
+TEST_F(CheckpointStoreTest, FilesSetAsideAsCorruptArePrunedLikeCheckpoints) {
+  fs::create_directories(dir_);
+  for (int n = 1; n <= 4; ++n) {
+    std::ofstream(dir_ / ("checkpoint-00000000000" + std::to_string(n) + ".vslam.corrupt")) << "damaged";
+  }
+  CheckpointStore store(dir_.string(), 2);
+  store.write(1, payload(10, 1));
+  int corrupt = 0;
+  for (const auto& e : fs::directory_iterator(dir_)) corrupt += e.path().extension() == ".corrupt";
+  EXPECT_EQ(corrupt, 2);
+  EXPECT_TRUE(fs::exists(dir_ / "checkpoint-000000000004.vslam.corrupt")) << "the newest are kept";
+  EXPECT_TRUE(fs::exists(dir_ / "checkpoint-000000000003.vslam.corrupt"));
 }
 
 TEST_F(CheckpointStoreTest, NothingValidMeansNoCheckpoint) {
