@@ -152,8 +152,7 @@ int run_replay(const Loaded& cfg, const Options& o) {
   LogReader reader(o.replay_in);
   LogWriterBus out(o.replay_out);
   MemoryBus in;
-  DecodeErrors errors;
-  errors.set_callback([](const std::string& ch, const std::string& why) { log_line(ch + ": " + why); });
+  DecodeErrors errors;  // logged by the node, rate-limited
   // --localise writes no checkpoints: it needs no state directory (nor its lock).
   std::optional<slamd::CheckpointStore> store;
   if (!o.state_dir.empty() && !o.localise) store.emplace(o.state_dir, o.checkpoint_keep);
@@ -235,8 +234,7 @@ int run_live(const Loaded& cfg, const Options& o) {
   std::optional<slamd::CheckpointStore> store;
   if (!o.localise) store.emplace(state_dir, o.checkpoint_keep);
   LcmBus bus(o.lcm_url);
-  DecodeErrors errors;
-  errors.set_callback([](const std::string& ch, const std::string& why) { log_line(ch + ": " + why); });
+  DecodeErrors errors;  // logged by the node, rate-limited
   slamd::SlamNode node(bus, bus, make_slam(cfg, o, store ? &*store : nullptr), cfg.node, errors);
   node.set_logger(log_line);
   node.set_latency_clock(monotonic_us);

@@ -1,5 +1,6 @@
 #include "slam_node.h"
 
+#include "whiskeye/common/clock.h"
 #include "whiskeye/common/robot_geometry.h"
 #include "whiskeye/common/se2.h"
 #include "whiskeye/common/utime.h"
@@ -224,7 +225,16 @@ slam::WhiskCycleInput to_core(const whisk_cycle_t& m) {
 
 SlamNode::SlamNode(Bus& in, Bus& out, std::unique_ptr<slam::VitaSlam> slam, const NodeParams& params,
                    DecodeErrors& decode_errors)
-    : out_(out), slam_(std::move(slam)), params_(params), decode_errors_(decode_errors), sync_(params.sync) {
+    : out_(out),
+      slam_(std::move(slam)),
+      params_(params),
+      decode_errors_(decode_errors),
+      sync_(params.sync),
+      log_clock_([] { return monotonic_us(); }) {
+  // 2,000 undecodable messages were 2,000 lines: the first per channel, then one per 10 s with a count.
+  decode_errors_.set_callback([this](const std::string& channel, const std::string& reason) {
+    warn("decode " + channel, channel + ": " + reason);
+  });
   // Camera frames are the bulk of the input: decoded as views (no pixel copy), see on_camera().
   in.subscribe_raw("CAMERA", [this](std::span<const uint8_t> data, const MessageInfo& info) { on_camera(data, info); });
   subscribe<odometry_t>(in, "ODOMETRY", [this](const odometry_t& m) { on_odometry(m); }, decode_errors_);
@@ -250,10 +260,20 @@ void SlamNode::reject(Input input, const std::string& what) {
 }
 
 void SlamNode::log_burst(Input input, const std::string& line) {
-  // Per input, so a broken sender is logged once per burst and then every 100th even while the other
-  // inputs are fine, and cannot flood the journal.
-  if (logger_ && (rejects_in_burst_[input] % 100) == 0) logger_(line);
-  ++rejects_in_burst_[input];
+  // Per input, so a broken sender is logged at the start of each burst even while the other inputs
+  // are fine, and then rate-limited, so a flood of bad messages cannot flood the journal.
+  const std::string key = "input " + std::to_string(static_cast<int>(input));
+  if (rejects_in_burst_[input]++ == 0) {
+    const std::string first = throttle_.force(key, line, log_clock_());  // starts the key's period
+    if (logger_) logger_(first);
+    return;
+  }
+  warn(key, line);
+}
+
+void SlamNode::warn(const std::string& key, const std::string& line) {
+  if (!logger_) return;
+  if (auto admitted = throttle_.admit(key, line, log_clock_())) logger_(*admitted);
 }
 
 void SlamNode::on_camera(std::span<const uint8_t> data, const MessageInfo& info) {

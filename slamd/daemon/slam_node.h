@@ -12,6 +12,7 @@
 #include "cycle_sync.h"
 
 #include "whiskeye/common/bus.h"
+#include "whiskeye/common/log_throttle.h"
 #include "whiskeye/common/params.h"
 #include "whiskeye/common/se2.h"
 #include "whiskeye/slam/vita_slam.h"
@@ -65,7 +66,11 @@ class SlamNode {
            DecodeErrors& decode_errors);
 
   void set_cycle_hook(CycleHook hook) { cycle_hook_ = std::move(hook); }
+  // Log lines, among them each message that does not decode (the node takes DecodeErrors' callback).
+  // Repeated warnings are rate-limited (LogThrottle, 10 s per kind, with the count suppressed) on
+  // `clock` (default: the monotonic clock).
   void set_logger(Logger logger) { logger_ = std::move(logger); }
+  void set_log_clock(std::function<int64_t()> monotonic_us) { log_clock_ = std::move(monotonic_us); }
   // Wall-clock latency measurement of each cycle (live). Off: latencies stay 0 (deterministic output).
   void set_latency_clock(std::function<int64_t()> monotonic_us) { clock_ = std::move(monotonic_us); }
 
@@ -93,8 +98,11 @@ class SlamNode {
   enum Input { kCamera, kOdometry, kWhisk, kFrameInCycle, kWhiskInCycle, kInputs };
   // Counts a rejected message (validation_errors) and logs it as log_burst() does.
   void reject(Input input, const std::string& what);
-  // Logs the first line of a burst on that input and then every 100th, until accepted(input).
+  // Logs the first line of a burst on that input (a burst ends at accepted(input)); the rest of the
+  // burst goes through the throttle: at most one line per 10 s, saying how many were held back.
   void log_burst(Input input, const std::string& line);
+  // A repeated warning of kind `key`, through the throttle.
+  void warn(const std::string& key, const std::string& line);
   void accepted(Input input) { rejects_in_burst_[input] = 0; }
 
   Bus& out_;
@@ -104,6 +112,8 @@ class SlamNode {
   CycleSynchroniser sync_;
   CycleHook cycle_hook_;
   Logger logger_;
+  std::function<int64_t()> log_clock_;
+  LogThrottle throttle_;
   std::function<int64_t()> clock_;
   NodeCounters counters_;
 

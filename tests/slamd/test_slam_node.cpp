@@ -501,6 +501,37 @@ TEST_F(SlamNodeTest, RejectsBadMessagesCountsThemAndCarriesOn) {
   EXPECT_EQ(later.validation_errors, 4) << "the counters stay";
 }
 
+// 2,000 undecodable messages gave 2,000 stderr lines in 2 s: the journal on an eMMC is not free.
+TEST_F(SlamNodeTest, RepeatedWarningsAreRateLimitedWithACountOfWhatWasSuppressed) {
+  std::vector<std::string> lines;
+  int64_t now = 0;
+  node_->set_logger([&](const std::string& l) { lines.push_back(l); });
+  node_->set_log_clock([&] { return now; });
+  const std::vector<uint8_t> garbage{0xde, 0xad, 0xbe, 0xef};
+  for (int i = 0; i < 2000; ++i, now += 1000) in_.publish_raw("WHISK_CYCLE", garbage);
+  EXPECT_EQ(errors_.total(), 2000) << "every one counted";
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_NE(lines[0].find("WHISK_CYCLE: cannot decode 4 bytes"), std::string::npos) << lines[0];
+  now += 10 * kS;
+  in_.publish_raw("WHISK_CYCLE", garbage);
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_NE(lines[1].find("; 1999 more like it suppressed in the last 12 s"), std::string::npos) << lines[1];
+
+  // Rejected messages likewise: the first of a burst, then one per 10 s (it was every 100th).
+  lines.clear();
+  odometry_t nan_odo{};
+  nan_odo.utime = kT0;
+  nan_odo.vx = std::nan("");
+  for (int i = 0; i < 2000; ++i, now += 1000) publish(in_, "ODOMETRY", nan_odo);
+  EXPECT_EQ(node_->counters().validation_errors, 2000);
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_NE(lines[0].find("rejected ODOMETRY: non-finite value"), std::string::npos) << lines[0];
+  now += 10 * kS;
+  publish(in_, "ODOMETRY", nan_odo);
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_NE(lines[1].find("(2001 rejected so far); 1999 more like it suppressed"), std::string::npos) << lines[1];
+}
+
 TEST_F(SlamNodeTest, MissingCameraDegradesToTouchAndIsCounted) {
   stream({0, 0, 0});
   node_->flush();
