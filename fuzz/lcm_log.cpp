@@ -21,5 +21,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const auto& damage = reader.damage();
   if (damage.damaged() != !damage.summary().empty()) std::abort();
   if (payload + damage.skipped_bytes > size) std::abort();
+  if (damage.wild_times > 0 && damage.first_problem.empty()) std::abort();
   return 0;
 }

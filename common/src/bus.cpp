@@ -258,6 +258,42 @@ bool LogReader::next(EventView& event) {
   const auto channel_len = static_cast<std::size_t>(read_be_i32(h + 20));
   const auto data_len = static_cast<std::size_t>(read_be_i32(h + 24));
   event.utime = read_be_i64(h + 12);
+  // A time far from both neighbours while they agree with each other is a flipped bit: not a clock
+  // step (the events after a step agree with it) nor a lone message in a pause (its neighbours do
+  // not agree). The first and the last event have one neighbour: only a day off is damage there (the
+  // first: from the next two, which agree). The events ahead are only looked at, not consumed.
+  const auto distance = [](int64_t a, int64_t b) {
+    return a > b ? static_cast<uint64_t>(a) - static_cast<uint64_t>(b) : static_cast<uint64_t>(b) - static_cast<uint64_t>(a);
+  };
+  const auto far = [&](int64_t a, int64_t b, int64_t limit) { return distance(a, b) > static_cast<uint64_t>(limit); };
+  const bool has_next = pos_ + total < size && check_event(base, size, pos_ + total, nullptr).size != 0;
+  const int64_t next_utime = has_next ? read_be_i64(base + pos_ + total + 12) : 0;
+  bool wild = false;
+  if (have_last_utime_ && has_next) {
+    wild = !far(last_utime_, next_utime, kMaxTimeJumpUs) && far(event.utime, last_utime_, kMaxTimeJumpUs) &&
+           far(event.utime, next_utime, kMaxTimeJumpUs);
+  } else if (have_last_utime_) {
+    wild = far(event.utime, last_utime_, kMaxEdgeTimeJumpUs);
+  } else if (has_next) {
+    // The first event: the next one stands for its time only if the one after it agrees.
+    const std::size_t next_at = pos_ + total;
+    const std::size_t next_total = check_event(base, size, next_at, nullptr).size;
+    const bool has_second = next_at + next_total < size && check_event(base, size, next_at + next_total, nullptr).size != 0;
+    wild = has_second && !far(next_utime, read_be_i64(base + next_at + next_total + 12), kMaxTimeJumpUs) &&
+           far(event.utime, next_utime, kMaxEdgeTimeJumpUs);
+  }
+  if (wild) {
+    const int64_t replacement = have_last_utime_ ? last_utime_ : next_utime;
+    if (damage_.first_problem.empty()) {
+      damage_.first_problem = path_ + ": corrupt LCM log: event time " + std::to_string(event.utime) + " us at byte " +
+                              std::to_string(pos_) + " is out of line with the events around it (taken as " +
+                              std::to_string(replacement) + " us)";
+    }
+    ++damage_.wild_times;
+    event.utime = replacement;
+  }
+  last_utime_ = event.utime;
+  have_last_utime_ = true;
   event.channel = std::string_view(reinterpret_cast<const char*>(h + kLogHeaderSize), channel_len);
   event.data = std::span<const uint8_t>(h + kLogHeaderSize + channel_len, data_len);
   if (event.owner != map_) event.owner = map_;
@@ -268,9 +304,12 @@ bool LogReader::next(EventView& event) {
 std::string LogReader::Damage::summary() const {
   if (!damaged()) return "";
   std::string s = first_problem;
-  s += "; " + std::to_string(skipped_bytes) + " bytes skipped in " + std::to_string(damaged_places) +
-       (damaged_places == 1 ? " place" : " places");
+  if (damaged_places > 0) {
+    s += "; " + std::to_string(skipped_bytes) + " bytes skipped in " + std::to_string(damaged_places) +
+         (damaged_places == 1 ? " place" : " places");
+  }
   if (truncated_tail) s += ", the last event cut off";
+  if (wild_times > 0) s += "; " + std::to_string(wild_times) + " event time(s) out of line with their neighbours replaced";
   return s;
 }
 

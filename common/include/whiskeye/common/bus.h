@@ -189,7 +189,12 @@ struct LogEvent {
 // Reads an LCM log (as written by lcm-logger) directly, in file order. The file is memory-mapped:
 // events are views into the mapping, and pages of payloads nobody reads are never loaded. Every
 // event header is checked (sync word, lengths within the file); damage is skipped and reported by
-// damage(), never a silent early end.
+// damage(), never a silent early end. An event time out of line with both neighbours while they
+// agree with each other (more than kMaxTimeJumpUs from each: a flipped bit) is damage too: the event
+// is delivered with the time of the one before (the first event: of the one after) and counted, so
+// one wild time does not become months of data time. A clock step is not (the events after it agree
+// with it), nor a lone message in a pause (its neighbours do not agree); the first and last events,
+// with one neighbour, count as wild only more than kMaxEdgeTimeJumpUs from it.
 class LogReader {
  public:
   // Throws std::runtime_error naming the file if it cannot be opened. A damaged log (a corrupt
@@ -197,6 +202,10 @@ class LogReader {
   // cannot be read, resynchronising on the next event's sync word as LCM's own reader does, and
   // damage() says what was skipped, where first.
   explicit LogReader(const std::string& path);
+  // How far an event's time may lie from both neighbours before it is taken as damage (slamd's
+  // max_jump_s default).
+  static constexpr int64_t kMaxTimeJumpUs = 10'000'000;
+  static constexpr int64_t kMaxEdgeTimeJumpUs = 86'400'000'000;  // a day
   // Reads a log held in memory (`name` stands for the file in messages); `bytes` must outlive the
   // reader and every view's owner. For tests and the fuzz targets.
   LogReader(std::span<const uint8_t> bytes, std::string name);
@@ -221,7 +230,8 @@ class LogReader {
     std::size_t skipped_bytes = 0;
     int damaged_places = 0;
     bool truncated_tail = false;  // the log ends inside an event
-    bool damaged() const { return damaged_places > 0; }
+    int64_t wild_times = 0;       // events whose time was out of line with both neighbours, replaced
+    bool damaged() const { return damaged_places > 0 || wild_times > 0; }
     std::string summary() const;  // one line for the user; empty if undamaged
   };
   const Damage& damage() const { return damage_; }
@@ -231,6 +241,8 @@ class LogReader {
   std::string path_;
   std::shared_ptr<const Mapping> map_;
   std::size_t pos_ = 0;
+  int64_t last_utime_ = 0;
+  bool have_last_utime_ = false;
   Damage damage_;
 };
 
