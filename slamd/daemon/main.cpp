@@ -8,6 +8,7 @@
 
 #include "whiskeye/common/bus.h"
 #include "whiskeye/common/clock.h"
+#include "whiskeye/common/log_throttle.h"
 #include "whiskeye/common/params.h"
 #include "whiskeye/common/robot_geometry.h"
 #include "whiskeye/common/service.h"
@@ -160,13 +161,17 @@ int run_replay(const Loaded& cfg, const Options& o) {
   node.set_logger(log_line);
   if (o.timing) node.set_latency_clock(monotonic_us);
   int64_t checkpointed_cycles = -1;
+  LogThrottle throttle;
   const auto checkpoint = [&] {
     try {
       store->write(static_cast<uint64_t>(node.slam().stats().cycles), node.slam().serialise());
       checkpointed_cycles = node.counters().cycles;
       return true;
     } catch (const std::exception& e) {
-      log_line(std::string("checkpoint failed: ") + e.what());  // as live: the replay goes on
+      // As live: the replay goes on, and the log is rate-limited.
+      if (auto line = throttle.admit("checkpoint", std::string("checkpoint failed: ") + e.what(), monotonic_us())) {
+        log_line(*line);
+      }
       return false;
     }
   };
@@ -270,10 +275,7 @@ int run_live(const Loaded& cfg, const Options& o) {
     const int64_t now = monotonic_us();
     if (now >= next_tick) {
       auto st = node.status(now_utime(), now);
-      const auto written = writer.counters();
-      st.checkpoints_written = written.written;
-      st.checkpoint_errors = written.errors;
-      st.checkpoints_superseded = written.superseded;
+      slamd::report_checkpoints(st, writer.counters());  // DEGRADED while they fail
       st.lcm_publish_errors = bus.publish_errors();
       publish(bus, "SLAM_STATUS", st);
       next_tick = now + 1'000'000;
