@@ -2,7 +2,13 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include <algorithm>
 #include <cerrno>
+#include <charconv>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <cstdio>
 #include <cstring>
 #include <fcntl.h>
@@ -73,6 +79,55 @@ void MemoryBus::subscribe_raw(const std::string& channel, RawHandler handler) {
   }
   sub->handler = std::move(handler);
   subs_.push_back(std::move(sub));
+}
+
+// ---- UDP receive drops ----
+
+int64_t udp_receive_drops(std::string_view text, const std::vector<uint64_t>& inodes) {
+  int64_t drops = 0;
+  std::size_t at = text.find('\n');  // after the header line
+  while (at != std::string_view::npos && at + 1 < text.size()) {
+    const std::size_t end = text.find('\n', at + 1);
+    const std::string_view line = text.substr(at + 1, end == std::string_view::npos ? std::string_view::npos : end - at - 1);
+    at = end;
+    // sl local rem st tx:rx tr:when retrnsmt uid timeout inode ref pointer drops
+    std::vector<std::string_view> fields;
+    std::size_t i = 0;
+    while (i < line.size()) {
+      while (i < line.size() && line[i] == ' ') ++i;
+      const std::size_t start = i;
+      while (i < line.size() && line[i] != ' ') ++i;
+      if (i > start) fields.push_back(line.substr(start, i - start));
+    }
+    if (fields.size() < 13) continue;
+    uint64_t inode = 0;
+    int64_t d = 0;
+    std::from_chars(fields[9].data(), fields[9].data() + fields[9].size(), inode);
+    std::from_chars(fields[12].data(), fields[12].data() + fields[12].size(), d);
+    if (std::find(inodes.begin(), inodes.end(), inode) != inodes.end()) drops += d;
+  }
+  return drops;
+}
+
+int64_t udp_receive_drops() {
+  std::vector<uint64_t> inodes;
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator("/proc/self/fd", ec)) {
+    std::error_code link_ec;
+    const std::string target = std::filesystem::read_symlink(entry.path(), link_ec).string();
+    if (!link_ec && target.rfind("socket:[", 0) == 0) inodes.push_back(std::strtoull(target.c_str() + 8, nullptr, 10));
+  }
+  if (ec) return -1;
+  int64_t drops = 0;
+  bool read_any = false;
+  for (const char* table : {"/proc/self/net/udp", "/proc/self/net/udp6"}) {
+    std::ifstream in(table);
+    if (!in) continue;
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    drops += udp_receive_drops(text, inodes);
+    read_any = true;
+  }
+  return read_any ? drops : -1;
 }
 
 // ---- LcmBus ----

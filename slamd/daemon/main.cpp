@@ -265,6 +265,8 @@ int run_live(const Loaded& cfg, const Options& o) {
   log_line("running in " + slam::to_string(cfg.slam.mode) + " mode, " +
            (store ? "state in " + state_dir : "localising in " + o.map_file + ", no checkpoints"));
   int64_t next_tick = monotonic_us();
+  int64_t receive_drops = 0;
+  LogThrottle throttle;
   int exit_code = 0;
   while (!g_stop) {
     if (bus.handle_timeout(100) < 0 && !g_stop) {  // a signal interrupting the wait is not a failure
@@ -277,6 +279,19 @@ int run_live(const Loaded& cfg, const Options& o) {
       auto st = node.status(now_utime(), now);
       slamd::report_checkpoints(st, writer.counters());  // DEGRADED while they fail
       st.lcm_publish_errors = bus.publish_errors();
+      // What LCM drops it does not count; the kernel's receive-buffer overflows it can tell.
+      if (const int64_t drops = udp_receive_drops(); drops >= 0) {
+        if (drops > receive_drops) {
+          if (auto line = throttle.admit("lcm drops",
+                                         "LCM: " + std::to_string(drops) + " datagram(s) dropped by the kernel so far "
+                                         "(receive buffer full: raise recv_buf_size in the LCM URL and net.core.rmem_max)",
+                                         now)) {
+            log_line(*line);
+          }
+        }
+        receive_drops = drops;
+        st.lcm_receive_drops = drops;
+      }
       publish(bus, "SLAM_STATUS", st);
       next_tick = now + 1'000'000;
     }

@@ -8,6 +8,11 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
 #include <iterator>
 #include <map>
 #include <tuple>
@@ -288,6 +293,42 @@ TEST(LogFiles, AClockStepAndALoneMessageInAPauseAreNotDamage) {
   // One message in the middle of a 60 s pause.
   read_times("bus_pause", 4, {{2, kT0 + 30'000'000}, {3, kT0 + 60'000'000}}, &damage);
   EXPECT_FALSE(damage.damaged()) << damage.summary();
+}
+
+TEST(UdpReceiveDrops, ReadsTheDropsColumnOfTheGivenSockets) {
+  const std::string table =
+      "   sl  local_address rem_address   st tx_queue rx_queue tr tm->when retrnsmt   uid  timeout inode ref pointer drops\n"
+      "  1: 00000000:1DF3 00000000:0000 07 00000000:00000000 00:00000000 00000000     0        0 4242 2 0000000000000000 17\n"
+      "  2: 0100007F:A1B2 00000000:0000 07 00000000:00000000 00:00000000 00000000     0        0 555 2 0000000000000000 9\n"
+      "  3: 0100007F:A1B3 00000000:0000 07 00000000:00000000 00:00000000 00000000     0        0 777 2 0000000000000000 5\n";
+  EXPECT_EQ(udp_receive_drops(table, {4242, 777}), 22);
+  EXPECT_EQ(udp_receive_drops(table, {}), 0);
+  EXPECT_EQ(udp_receive_drops("garbage", {1}), 0);
+}
+
+// LCM 1.3.1 counts nothing it loses; datagrams the kernel drops on a full receive buffer are what a
+// daemon can see (docs/lcm-channels.md). A socket nobody reads, flooded: its drops are counted.
+TEST(UdpReceiveDrops, CountsWhatTheKernelDroppedOnThisProcesssSockets) {
+  const int64_t before = udp_receive_drops();
+  ASSERT_GE(before, 0) << "/proc/self/net/udp unreadable";
+  const int rx = ::socket(AF_INET, SOCK_DGRAM, 0);
+  const int tx = ::socket(AF_INET, SOCK_DGRAM, 0);
+  const int small = 4096;
+  ::setsockopt(rx, SOL_SOCKET, SO_RCVBUF, &small, sizeof small);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(::bind(rx, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+  socklen_t len = sizeof a;
+  ::getsockname(rx, reinterpret_cast<sockaddr*>(&a), &len);
+  const std::vector<char> datagram(1000, 'x');
+  for (int i = 0; i < 200; ++i) {
+    ::sendto(tx, datagram.data(), datagram.size(), 0, reinterpret_cast<sockaddr*>(&a), sizeof a);
+  }
+  const int64_t after = udp_receive_drops();
+  ::close(rx);
+  ::close(tx);
+  EXPECT_GE(after - before, 150) << "200 datagrams of 1 kB into a 4 kB buffer";
 }
 
 TEST(LogFiles, EmptyLogHasNoEvents) {

@@ -152,6 +152,14 @@ class MemoryBus : public Bus {
 // True when `channel` is a plain name, not a regex (so exact comparison gives the same answer).
 bool is_plain_channel_name(const std::string& channel);
 
+// Datagrams the kernel dropped on this process's UDP sockets because their receive buffer was full
+// (the `drops` column of /proc/self/net/udp and udp6, for the sockets among /proc/self/fd), or -1 if
+// that cannot be read. LCM itself counts nothing it drops (lcm 1.3.1 has no statistics; a message
+// missing fragments is dropped silently): this is the part of its losses the kernel can tell.
+int64_t udp_receive_drops();
+// The same from the text of /proc/net/udp, for the sockets whose inode is in `inodes`.
+int64_t udp_receive_drops(std::string_view proc_net_udp, const std::vector<uint64_t>& inodes);
+
 // LCM over a URL ("" = $LCM_DEFAULT_URL or LCM's default). Throws std::runtime_error if LCM cannot
 // start (e.g. no multicast route for udpm://).
 class LcmBus : public Bus {
