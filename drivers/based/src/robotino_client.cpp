@@ -41,6 +41,7 @@ class DeadlineWatchdog {
     {
       std::lock_guard lock(mutex_);
       deadline_ = deadline;
+      ++generation_;
       armed_ = true;
       fired_ = false;
     }
@@ -48,26 +49,27 @@ class DeadlineWatchdog {
   }
   // True if the deadline passed (and the socket was shut down) before disarm().
   bool disarm() {
-    std::lock_guard lock(mutex_);
-    armed_ = false;
-    return fired_;
+    bool fired = false;
+    {
+      std::lock_guard lock(mutex_);
+      armed_ = false;
+      fired = fired_;
+    }
+    wake_.notify_one();
+    return fired;
   }
 
  private:
   void run() {
     std::unique_lock lock(mutex_);
-    while (!quit_) {
-      if (!armed_) {
-        wake_.wait(lock);
-        continue;
-      }
-      if (wake_.wait_until(lock, deadline_) == std::cv_status::timeout && armed_ && !fired_ &&
-          std::chrono::steady_clock::now() >= deadline_) {
-        fired_ = true;
-        client_.stop();
-      } else if (fired_) {
-        wake_.wait(lock);  // until disarmed and armed again
-      }
+    for (;;) {
+      wake_.wait(lock, [this] { return quit_ || (armed_ && !fired_); });
+      if (quit_) return;
+      const uint64_t request = generation_;
+      // Woken early when the request ends (disarm), another one starts, or the client goes.
+      if (wake_.wait_until(lock, deadline_, [&] { return quit_ || !armed_ || generation_ != request; })) continue;
+      fired_ = true;
+      client_.stop();  // the one httplib call safe during another thread's request
     }
   }
 
@@ -75,6 +77,7 @@ class DeadlineWatchdog {
   std::mutex mutex_;
   std::condition_variable wake_;
   std::chrono::steady_clock::time_point deadline_;
+  uint64_t generation_ = 0;  // which request the deadline belongs to
   bool armed_ = false;
   bool fired_ = false;
   bool quit_ = false;
