@@ -13,6 +13,8 @@ pkg_check_modules(GPIODCXX REQUIRED IMPORTED_TARGET libgpiodcxx)
 find_package(Threads REQUIRED)
 find_package(Eigen3 3.3 REQUIRED NO_MODULE)
 find_package(OpenCVParts REQUIRED)  # OpenCV::core, OpenCV::imgproc, OpenCV::imgcodecs
+# libjpeg directly for slamd's MJPEG frames, to see its warnings (a damaged frame) that OpenCV hides.
+find_package(JPEG REQUIRED)  # libjpeg-dev (libjpeg62-turbo)
 find_package(yaml-cpp REQUIRED)
 find_package(CLI11 REQUIRED)
 find_package(nlohmann_json 3 REQUIRED)  # vita-eval JSON output (nlohmann-json3-dev)

@@ -2,7 +2,13 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include <algorithm>
 #include <cerrno>
+#include <charconv>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <cstdio>
 #include <cstring>
 #include <fcntl.h>
@@ -75,6 +81,55 @@ void MemoryBus::subscribe_raw(const std::string& channel, RawHandler handler) {
   subs_.push_back(std::move(sub));
 }
 
+// ---- UDP receive drops ----
+
+int64_t udp_receive_drops(std::string_view text, const std::vector<uint64_t>& inodes) {
+  int64_t drops = 0;
+  std::size_t at = text.find('\n');  // after the header line
+  while (at != std::string_view::npos && at + 1 < text.size()) {
+    const std::size_t end = text.find('\n', at + 1);
+    const std::string_view line = text.substr(at + 1, end == std::string_view::npos ? std::string_view::npos : end - at - 1);
+    at = end;
+    // sl local rem st tx:rx tr:when retrnsmt uid timeout inode ref pointer drops
+    std::vector<std::string_view> fields;
+    std::size_t i = 0;
+    while (i < line.size()) {
+      while (i < line.size() && line[i] == ' ') ++i;
+      const std::size_t start = i;
+      while (i < line.size() && line[i] != ' ') ++i;
+      if (i > start) fields.push_back(line.substr(start, i - start));
+    }
+    if (fields.size() < 13) continue;
+    uint64_t inode = 0;
+    int64_t d = 0;
+    std::from_chars(fields[9].data(), fields[9].data() + fields[9].size(), inode);
+    std::from_chars(fields[12].data(), fields[12].data() + fields[12].size(), d);
+    if (std::find(inodes.begin(), inodes.end(), inode) != inodes.end()) drops += d;
+  }
+  return drops;
+}
+
+int64_t udp_receive_drops() {
+  std::vector<uint64_t> inodes;
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator("/proc/self/fd", ec)) {
+    std::error_code link_ec;
+    const std::string target = std::filesystem::read_symlink(entry.path(), link_ec).string();
+    if (!link_ec && target.rfind("socket:[", 0) == 0) inodes.push_back(std::strtoull(target.c_str() + 8, nullptr, 10));
+  }
+  if (ec) return -1;
+  int64_t drops = 0;
+  bool read_any = false;
+  for (const char* table : {"/proc/self/net/udp", "/proc/self/net/udp6"}) {
+    std::ifstream in(table);
+    if (!in) continue;
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    drops += udp_receive_drops(text, inodes);
+    read_any = true;
+  }
+  return read_any ? drops : -1;
+}
+
 // ---- LcmBus ----
 
 struct LcmBus::Adapter {
@@ -122,11 +177,12 @@ int LcmBus::fileno() { return lcm_->getFileno(); }
 struct LogReader::Mapping {
   const uint8_t* bytes = nullptr;
   std::size_t size = 0;
+  bool mapped = true;  // false: bytes in memory the caller owns
   Mapping() = default;
   Mapping(const Mapping&) = delete;
   Mapping& operator=(const Mapping&) = delete;
   ~Mapping() {
-    if (bytes != nullptr) ::munmap(const_cast<uint8_t*>(bytes), size);
+    if (mapped && bytes != nullptr) ::munmap(const_cast<uint8_t*>(bytes), size);
   }
 };
 
@@ -203,6 +259,14 @@ LogReader::LogReader(const std::string& path) : path_(path) {
   map_ = std::move(map);
 }
 
+LogReader::LogReader(std::span<const uint8_t> bytes, std::string name) : path_(std::move(name)) {
+  auto map = std::make_shared<Mapping>();
+  map->bytes = bytes.data();
+  map->size = bytes.size();
+  map->mapped = false;
+  map_ = std::move(map);
+}
+
 LogReader::~LogReader() = default;
 
 bool LogReader::next(LogEvent& event) {
@@ -249,6 +313,42 @@ bool LogReader::next(EventView& event) {
   const auto channel_len = static_cast<std::size_t>(read_be_i32(h + 20));
   const auto data_len = static_cast<std::size_t>(read_be_i32(h + 24));
   event.utime = read_be_i64(h + 12);
+  // A time far from both neighbours while they agree with each other is a flipped bit: not a clock
+  // step (the events after a step agree with it) nor a lone message in a pause (its neighbours do
+  // not agree). The first and the last event have one neighbour: only a day off is damage there (the
+  // first: from the next two, which agree). The events ahead are only looked at, not consumed.
+  const auto distance = [](int64_t a, int64_t b) {
+    return a > b ? static_cast<uint64_t>(a) - static_cast<uint64_t>(b) : static_cast<uint64_t>(b) - static_cast<uint64_t>(a);
+  };
+  const auto far = [&](int64_t a, int64_t b, int64_t limit) { return distance(a, b) > static_cast<uint64_t>(limit); };
+  const bool has_next = pos_ + total < size && check_event(base, size, pos_ + total, nullptr).size != 0;
+  const int64_t next_utime = has_next ? read_be_i64(base + pos_ + total + 12) : 0;
+  bool wild = false;
+  if (have_last_utime_ && has_next) {
+    wild = !far(last_utime_, next_utime, kMaxTimeJumpUs) && far(event.utime, last_utime_, kMaxTimeJumpUs) &&
+           far(event.utime, next_utime, kMaxTimeJumpUs);
+  } else if (have_last_utime_) {
+    wild = far(event.utime, last_utime_, kMaxEdgeTimeJumpUs);
+  } else if (has_next) {
+    // The first event: the next one stands for its time only if the one after it agrees.
+    const std::size_t next_at = pos_ + total;
+    const std::size_t next_total = check_event(base, size, next_at, nullptr).size;
+    const bool has_second = next_at + next_total < size && check_event(base, size, next_at + next_total, nullptr).size != 0;
+    wild = has_second && !far(next_utime, read_be_i64(base + next_at + next_total + 12), kMaxTimeJumpUs) &&
+           far(event.utime, next_utime, kMaxEdgeTimeJumpUs);
+  }
+  if (wild) {
+    const int64_t replacement = have_last_utime_ ? last_utime_ : next_utime;
+    if (damage_.first_problem.empty()) {
+      damage_.first_problem = path_ + ": corrupt LCM log: event time " + std::to_string(event.utime) + " us at byte " +
+                              std::to_string(pos_) + " is out of line with the events around it (taken as " +
+                              std::to_string(replacement) + " us)";
+    }
+    ++damage_.wild_times;
+    event.utime = replacement;
+  }
+  last_utime_ = event.utime;
+  have_last_utime_ = true;
   event.channel = std::string_view(reinterpret_cast<const char*>(h + kLogHeaderSize), channel_len);
   event.data = std::span<const uint8_t>(h + kLogHeaderSize + channel_len, data_len);
   if (event.owner != map_) event.owner = map_;
@@ -259,9 +359,12 @@ bool LogReader::next(EventView& event) {
 std::string LogReader::Damage::summary() const {
   if (!damaged()) return "";
   std::string s = first_problem;
-  s += "; " + std::to_string(skipped_bytes) + " bytes skipped in " + std::to_string(damaged_places) +
-       (damaged_places == 1 ? " place" : " places");
+  if (damaged_places > 0) {
+    s += "; " + std::to_string(skipped_bytes) + " bytes skipped in " + std::to_string(damaged_places) +
+         (damaged_places == 1 ? " place" : " places");
+  }
   if (truncated_tail) s += ", the last event cut off";
+  if (wild_times > 0) s += "; " + std::to_string(wild_times) + " event time(s) out of line with their neighbours replaced";
   return s;
 }
 

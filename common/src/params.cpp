@@ -1,8 +1,38 @@
 #include "whiskeye/common/params.h"
 
+#include <map>
 #include <set>
 
 namespace whiskeye {
+
+namespace {
+
+// yaml-cpp keeps every pair of a map with a key given twice, and lookups return the first: an
+// override further down a config would be ignored without a word. Refused, naming both lines.
+void check_no_duplicate_keys(const YAML::Node& node, const std::string& path, const std::string& source, int depth) {
+  // Deeper than any config; also stops at an alias that refers to a node containing it.
+  if (depth > 64) throw ParamError(source + ": '" + path + "' is nested more than 64 levels deep");
+  if (node.IsMap()) {
+    std::map<std::string, int> lines;
+    for (const auto& kv : node) {
+      if (!kv.first.IsScalar()) continue;
+      const std::string key = kv.first.Scalar();
+      const int line = kv.first.Mark().line + 1;
+      const std::string child = path.empty() ? key : path + "." + key;
+      if (const auto [it, inserted] = lines.emplace(key, line); !inserted) {
+        throw ParamError(source + ": duplicate key '" + child + "' on lines " + std::to_string(it->second) + " and " +
+                         std::to_string(line) + " (only one value can count: remove one)");
+      }
+      check_no_duplicate_keys(kv.second, child, source, depth + 1);
+    }
+  } else if (node.IsSequence()) {
+    for (std::size_t i = 0; i < node.size(); ++i) {
+      check_no_duplicate_keys(node[i], path + "[" + std::to_string(i) + "]", source, depth + 1);
+    }
+  }
+}
+
+}  // namespace
 
 struct ParamNode::State {
   std::string source;
@@ -25,6 +55,7 @@ ParamNode ParamNode::from_string(const std::string& yaml, const std::string& sou
   }
   if (state->root.IsNull()) state->root = YAML::Node(YAML::NodeType::Map);
   if (!state->root.IsMap()) throw ParamError(source + ": the document must be a map of keys");
+  check_no_duplicate_keys(state->root, "", source, 0);
   return ParamNode(state, state->root, "");
 }
 
@@ -40,6 +71,7 @@ ParamNode ParamNode::from_file(const std::string& path) {
   }
   if (state->root.IsNull()) state->root = YAML::Node(YAML::NodeType::Map);
   if (!state->root.IsMap()) throw ParamError(path + ": the document must be a map of keys");
+  check_no_duplicate_keys(state->root, "", path, 0);
   return ParamNode(state, state->root, "");
 }
 

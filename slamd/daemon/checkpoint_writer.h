@@ -6,7 +6,16 @@
 // now only serialises the state (a consistent snapshot) and hands it over. At most one snapshot
 // waits: a newer one replaces it, since only the newest state matters; each one replaced is counted
 // (`superseded`), which says the disk cannot keep up with --checkpoint-every.
+//
+// A failing disk (full, read-only) is not silent: the first failure is logged, then at most one line
+// per 10 s with the count held back (LogThrottle), the writer keeps trying with every new snapshot,
+// and `failing` says so until one is written again (logged too), so that SLAM_STATUS can report it
+// (report_checkpoints()).
 #pragma once
+
+#include "whiskeye/common/log_throttle.h"
+
+#include <whiskeye/slam_status_t.hpp>
 
 #include <condition_variable>
 #include <cstdint>
@@ -30,9 +39,12 @@ class CheckpointWriter {
     int64_t written = 0;
     int64_t errors = 0;
     int64_t superseded = 0;  // snapshots replaced by a newer one before they were written
+    bool failing = false;    // the latest write failed (none since succeeded)
+    std::string failure;     // its reason, while failing
   };
 
-  CheckpointWriter(WriteFn write, LogFn log);
+  // `clock`: monotonic microseconds for the log's rate limit (default: the monotonic clock).
+  CheckpointWriter(WriteFn write, LogFn log, std::function<int64_t()> clock = {});
   ~CheckpointWriter();  // finish()
   CheckpointWriter(const CheckpointWriter&) = delete;
   CheckpointWriter& operator=(const CheckpointWriter&) = delete;
@@ -55,6 +67,9 @@ class CheckpointWriter {
 
   WriteFn write_;
   LogFn log_;
+  std::function<int64_t()> clock_;
+  LogThrottle throttle_;
+  int64_t failures_in_a_row_ = 0;  // under write_mutex_
   std::mutex write_mutex_;  // held while writing
   mutable std::mutex mutex_;  // guards what follows
   std::condition_variable wake_;
@@ -63,5 +78,9 @@ class CheckpointWriter {
   Counters counters_;
   std::thread thread_;  // last: starts once everything above is built
 };
+
+// The writer's counters into SLAM_STATUS; while checkpoints fail, the state is DEGRADED and the
+// message says why (the map is not being saved: a full or read-only disk showed only at exit).
+void report_checkpoints(slam_status_t& status, const CheckpointWriter::Counters& counters);
 
 }  // namespace whiskeye::slamd

@@ -8,6 +8,7 @@
 
 #include "whiskeye/common/bus.h"
 #include "whiskeye/common/clock.h"
+#include "whiskeye/common/log_throttle.h"
 #include "whiskeye/common/params.h"
 #include "whiskeye/common/robot_geometry.h"
 #include "whiskeye/common/service.h"
@@ -152,8 +153,7 @@ int run_replay(const Loaded& cfg, const Options& o) {
   LogReader reader(o.replay_in);
   LogWriterBus out(o.replay_out);
   MemoryBus in;
-  DecodeErrors errors;
-  errors.set_callback([](const std::string& ch, const std::string& why) { log_line(ch + ": " + why); });
+  DecodeErrors errors;  // logged by the node, rate-limited
   // --localise writes no checkpoints: it needs no state directory (nor its lock).
   std::optional<slamd::CheckpointStore> store;
   if (!o.state_dir.empty() && !o.localise) store.emplace(o.state_dir, o.checkpoint_keep);
@@ -161,13 +161,17 @@ int run_replay(const Loaded& cfg, const Options& o) {
   node.set_logger(log_line);
   if (o.timing) node.set_latency_clock(monotonic_us);
   int64_t checkpointed_cycles = -1;
+  LogThrottle throttle;
   const auto checkpoint = [&] {
     try {
       store->write(static_cast<uint64_t>(node.slam().stats().cycles), node.slam().serialise());
       checkpointed_cycles = node.counters().cycles;
       return true;
     } catch (const std::exception& e) {
-      log_line(std::string("checkpoint failed: ") + e.what());  // as live: the replay goes on
+      // As live: the replay goes on, and the log is rate-limited.
+      if (auto line = throttle.admit("checkpoint", std::string("checkpoint failed: ") + e.what(), monotonic_us())) {
+        log_line(*line);
+      }
       return false;
     }
   };
@@ -238,8 +242,7 @@ int run_live(const Loaded& cfg, const Options& o) {
   std::optional<slamd::CheckpointStore> store;
   if (!o.localise) store.emplace(state_dir, o.checkpoint_keep);
   LcmBus bus(o.lcm_url);
-  DecodeErrors errors;
-  errors.set_callback([](const std::string& ch, const std::string& why) { log_line(ch + ": " + why); });
+  DecodeErrors errors;  // logged by the node, rate-limited
   slamd::SlamNode node(bus, bus, make_slam(cfg, o, store ? &*store : nullptr), cfg.node, errors);
   node.set_logger(log_line);
   node.set_latency_clock(monotonic_us);
@@ -265,6 +268,8 @@ int run_live(const Loaded& cfg, const Options& o) {
   log_line("running in " + slam::to_string(cfg.slam.mode) + " mode, " +
            (store ? "state in " + state_dir : "localising in " + o.map_file + ", no checkpoints"));
   int64_t next_tick = monotonic_us();
+  int64_t receive_drops = 0;
+  LogThrottle throttle;
   int exit_code = 0;
   while (!g_stop) {
     if (bus.handle_timeout(100) < 0 && !g_stop) {  // a signal interrupting the wait is not a failure
@@ -275,11 +280,21 @@ int run_live(const Loaded& cfg, const Options& o) {
     const int64_t now = monotonic_us();
     if (now >= next_tick) {
       auto st = node.status(now_utime(), now);
-      const auto written = writer.counters();
-      st.checkpoints_written = written.written;
-      st.checkpoint_errors = written.errors;
-      st.checkpoints_superseded = written.superseded;
+      slamd::report_checkpoints(st, writer.counters());  // DEGRADED while they fail
       st.lcm_publish_errors = bus.publish_errors();
+      // What LCM drops it does not count; the kernel's receive-buffer overflows it can tell.
+      if (const int64_t drops = udp_receive_drops(); drops >= 0) {
+        if (drops > receive_drops) {
+          if (auto line = throttle.admit("lcm drops",
+                                         "LCM: " + std::to_string(drops) + " datagram(s) dropped by the kernel so far "
+                                         "(receive buffer full: raise recv_buf_size in the LCM URL and net.core.rmem_max)",
+                                         now)) {
+            log_line(*line);
+          }
+        }
+        receive_drops = drops;
+        st.lcm_receive_drops = drops;
+      }
       publish(bus, "SLAM_STATUS", st);
       next_tick = now + 1'000'000;
     }

@@ -1,5 +1,6 @@
 #include "slam_node.h"
 
+#include "whiskeye/common/clock.h"
 #include "whiskeye/common/robot_geometry.h"
 #include "whiskeye/common/se2.h"
 #include "whiskeye/common/utime.h"
@@ -189,6 +190,19 @@ std::string whisk_cycle_size_error(std::span<const uint8_t> data) {
   return {};
 }
 
+std::string whisk_cycle_contract_error(std::span<const uint8_t> data) {
+  constexpr std::size_t kCountsAt = 8 + 4 * 8;
+  if (data.size() < kCountsAt + 8) return "WHISK_CYCLE: shorter than its fixed fields";
+  const int32_t whiskers = read_be_i32(data.data() + kCountsAt);
+  const int32_t samples = read_be_i32(data.data() + kCountsAt + 4);
+  // The same words as check_whisk_cycle(), which sees the decoded message.
+  if (whiskers != kNumWhiskers) return "WHISK_CYCLE: num_whiskers " + std::to_string(whiskers) + " (expected 24)";
+  if (samples <= 0 || samples > kMaxSamplesPerCycle) {
+    return "WHISK_CYCLE: num_samples " + std::to_string(samples) + " out of range";
+  }
+  return "";
+}
+
 slam::WhiskCycleInput to_core(const whisk_cycle_t& m) {
   slam::WhiskCycleInput in;
   in.cycle = m.cycle;
@@ -211,16 +225,30 @@ slam::WhiskCycleInput to_core(const whisk_cycle_t& m) {
 
 SlamNode::SlamNode(Bus& in, Bus& out, std::unique_ptr<slam::VitaSlam> slam, const NodeParams& params,
                    DecodeErrors& decode_errors)
-    : out_(out), slam_(std::move(slam)), params_(params), decode_errors_(decode_errors), sync_(params.sync) {
+    : out_(out),
+      slam_(std::move(slam)),
+      params_(params),
+      decode_errors_(decode_errors),
+      sync_(params.sync),
+      log_clock_([] { return monotonic_us(); }) {
+  // 2,000 undecodable messages were 2,000 lines: the first per channel, then one per 10 s with a count.
+  decode_errors_.set_callback([this](const std::string& channel, const std::string& reason) {
+    warn("decode " + channel, channel + ": " + reason);
+  });
   // Camera frames are the bulk of the input: decoded as views (no pixel copy), see on_camera().
   in.subscribe_raw("CAMERA", [this](std::span<const uint8_t> data, const MessageInfo& info) { on_camera(data, info); });
   subscribe<odometry_t>(in, "ODOMETRY", [this](const odometry_t& m) { on_odometry(m); }, decode_errors_);
   // The generated decoder sizes its arrays from the message's counts before it checks them against
-  // the message's length (a negative count throws, a huge one allocates gigabytes): check them first.
+  // the message's length (a negative count throws, a huge one allocates gigabytes): check them first,
+  // against the length, then against the contract.
   in.subscribe_raw("WHISK_CYCLE", [this](std::span<const uint8_t> data, const MessageInfo& info) {
     whisk_cycle_t msg;
     std::string reason = whisk_cycle_size_error(data);
-    if (reason.empty()) decode_message(data, msg, &reason);  // sets the reason when it fails
+    if (reason.empty()) {
+      // Decodable, but counts outside the contract: rejected before the decoder allocates for them.
+      if (std::string bad = whisk_cycle_contract_error(data); !bad.empty()) return reject(kWhisk, bad);
+      decode_message(data, msg, &reason);  // sets the reason when it fails
+    }
     if (!reason.empty()) return decode_errors_.record(info.channel, reason);
     on_whisk_cycle(msg);
   });
@@ -232,10 +260,20 @@ void SlamNode::reject(Input input, const std::string& what) {
 }
 
 void SlamNode::log_burst(Input input, const std::string& line) {
-  // Per input, so a broken sender is logged once per burst and then every 100th even while the other
-  // inputs are fine, and cannot flood the journal.
-  if (logger_ && (rejects_in_burst_[input] % 100) == 0) logger_(line);
-  ++rejects_in_burst_[input];
+  // Per input, so a broken sender is logged at the start of each burst even while the other inputs
+  // are fine, and then rate-limited, so a flood of bad messages cannot flood the journal.
+  const std::string key = "input " + std::to_string(static_cast<int>(input));
+  if (rejects_in_burst_[input]++ == 0) {
+    const std::string first = throttle_.force(key, line, log_clock_());  // starts the key's period
+    if (logger_) logger_(first);
+    return;
+  }
+  warn(key, line);
+}
+
+void SlamNode::warn(const std::string& key, const std::string& line) {
+  if (!logger_) return;
+  if (auto admitted = throttle_.admit(key, line, log_clock_())) logger_(*admitted);
 }
 
 void SlamNode::on_camera(std::span<const uint8_t> data, const MessageInfo& info) {

@@ -12,6 +12,7 @@
 #include "cycle_sync.h"
 
 #include "whiskeye/common/bus.h"
+#include "whiskeye/common/log_throttle.h"
 #include "whiskeye/common/params.h"
 #include "whiskeye/common/se2.h"
 #include "whiskeye/slam/vita_slam.h"
@@ -38,6 +39,12 @@ void load(const ParamNode& node, NodeParams& params);
 // the message's length), or "" when they can.
 std::string whisk_cycle_size_error(std::span<const uint8_t> data);
 
+// Why the counts of a WHISK_CYCLE message (whose size whisk_cycle_size_error() accepted) break the
+// contract (num_whiskers 24, num_samples 1..20000), or "". Checked before the generated decoder runs:
+// it allocates a vector per sample, so a message of 0 whiskers and 20 M samples (200 MB) took 2.3 GB
+// before it was rejected. Within the contract the decoded message is about 1.3× its wire size.
+std::string whisk_cycle_contract_error(std::span<const uint8_t> data);
+
 // A WHISK_CYCLE message as the core's input (the message is assumed already validated).
 slam::WhiskCycleInput to_core(const whisk_cycle_t& m);
 
@@ -59,7 +66,11 @@ class SlamNode {
            DecodeErrors& decode_errors);
 
   void set_cycle_hook(CycleHook hook) { cycle_hook_ = std::move(hook); }
+  // Log lines, among them each message that does not decode (the node takes DecodeErrors' callback).
+  // Repeated warnings are rate-limited (LogThrottle, 10 s per kind, with the count suppressed) on
+  // `clock` (default: the monotonic clock).
   void set_logger(Logger logger) { logger_ = std::move(logger); }
+  void set_log_clock(std::function<int64_t()> monotonic_us) { log_clock_ = std::move(monotonic_us); }
   // Wall-clock latency measurement of each cycle (live). Off: latencies stay 0 (deterministic output).
   void set_latency_clock(std::function<int64_t()> monotonic_us) { clock_ = std::move(monotonic_us); }
 
@@ -87,8 +98,11 @@ class SlamNode {
   enum Input { kCamera, kOdometry, kWhisk, kFrameInCycle, kWhiskInCycle, kInputs };
   // Counts a rejected message (validation_errors) and logs it as log_burst() does.
   void reject(Input input, const std::string& what);
-  // Logs the first line of a burst on that input and then every 100th, until accepted(input).
+  // Logs the first line of a burst on that input (a burst ends at accepted(input)); the rest of the
+  // burst goes through the throttle: at most one line per 10 s, saying how many were held back.
   void log_burst(Input input, const std::string& line);
+  // A repeated warning of kind `key`, through the throttle.
+  void warn(const std::string& key, const std::string& line);
   void accepted(Input input) { rejects_in_burst_[input] = 0; }
 
   Bus& out_;
@@ -98,6 +112,8 @@ class SlamNode {
   CycleSynchroniser sync_;
   CycleHook cycle_hook_;
   Logger logger_;
+  std::function<int64_t()> log_clock_;
+  LogThrottle throttle_;
   std::function<int64_t()> clock_;
   NodeCounters counters_;
 

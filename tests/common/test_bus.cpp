@@ -8,7 +8,13 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
 #include <iterator>
+#include <map>
 #include <tuple>
 
 namespace whiskeye {
@@ -232,6 +238,97 @@ TEST(LogFiles, ACorruptEventIsSkippedAndReadingResumesAtTheNextEvent) {
   auto [xs, damage] = read_all(path);
   EXPECT_EQ(xs, (std::vector<double>{0, 1, 2}));
   EXPECT_EQ(damage.skipped_bytes, sizeof junk);
+}
+
+// Event times of a log written at 50 Hz from kT0, with `changed` (index → time) in place of some.
+std::vector<int64_t> read_times(const std::string& name, int n, const std::map<int, int64_t>& changed,
+                                LogReader::Damage* damage = nullptr) {
+  constexpr int64_t kT0 = 1'700'000'000'000'000;
+  const std::string path = whiskeye::testing::scratch_file(name, ".lcmlog");
+  {
+    LogWriterBus out(path);
+    for (int i = 0; i < n; ++i) {
+      const auto it = changed.find(i);
+      out.set_time(it != changed.end() ? it->second : kT0 + i * 20'000);
+      publish(out, "GROUND_TRUTH", pose2d_t{});
+    }
+  }
+  LogReader in(path);
+  std::vector<int64_t> times;
+  LogEvent ev;
+  while (in.next(ev)) times.push_back(ev.utime - kT0);
+  if (damage) *damage = in.damage();
+  return times;
+}
+
+// A bit flip in one event's time made a replay report 35 million seconds of data and stamp its
+// outputs with it. One time out of line with both neighbours is damage: counted, reported, replaced.
+TEST(LogFiles, ASingleWildEventTimeIsDamageAndTakesThePreviousTime) {
+  constexpr int64_t kT0 = 1'700'000'000'000'000;
+  LogReader::Damage damage;
+  const auto times = read_times("bus_wild", 5, {{2, kT0 + 40'000 + (int64_t{1} << 45)}}, &damage);
+  EXPECT_EQ(times, (std::vector<int64_t>{0, 20'000, 20'000, 60'000, 80'000}));
+  EXPECT_TRUE(damage.damaged());
+  EXPECT_EQ(damage.wild_times, 1);
+  EXPECT_NE(damage.summary().find("event time " + std::to_string(kT0 + 40'000 + (int64_t{1} << 45)) + " us at byte"),
+            std::string::npos)
+      << damage.summary();
+  EXPECT_NE(damage.summary().find("1 event time(s) out of line"), std::string::npos) << damage.summary();
+  // Flipped down, and on the first event.
+  EXPECT_EQ(read_times("bus_wild_low", 4, {{1, kT0 + 20'000 - (int64_t{1} << 40)}}, &damage),
+            (std::vector<int64_t>{0, 0, 40'000, 60'000}));
+  EXPECT_EQ(damage.wild_times, 1);
+  EXPECT_EQ(read_times("bus_wild_first", 3, {{0, kT0 - (int64_t{1} << 45)}}, &damage),
+            (std::vector<int64_t>{20'000, 20'000, 40'000}));
+  EXPECT_EQ(damage.wild_times, 1);
+}
+
+TEST(LogFiles, AClockStepAndALoneMessageInAPauseAreNotDamage) {
+  constexpr int64_t kT0 = 1'700'000'000'000'000;
+  constexpr int64_t kHour = 3'600'000'000;
+  LogReader::Damage damage;
+  // Stepped an hour ahead at event 2, and back again at event 4.
+  read_times("bus_step", 6, {{2, kT0 + kHour}, {3, kT0 + kHour + 20'000}}, &damage);
+  EXPECT_FALSE(damage.damaged()) << damage.summary();
+  // One message in the middle of a 60 s pause.
+  read_times("bus_pause", 4, {{2, kT0 + 30'000'000}, {3, kT0 + 60'000'000}}, &damage);
+  EXPECT_FALSE(damage.damaged()) << damage.summary();
+}
+
+TEST(UdpReceiveDrops, ReadsTheDropsColumnOfTheGivenSockets) {
+  const std::string table =
+      "   sl  local_address rem_address   st tx_queue rx_queue tr tm->when retrnsmt   uid  timeout inode ref pointer drops\n"
+      "  1: 00000000:1DF3 00000000:0000 07 00000000:00000000 00:00000000 00000000     0        0 4242 2 0000000000000000 17\n"
+      "  2: 0100007F:A1B2 00000000:0000 07 00000000:00000000 00:00000000 00000000     0        0 555 2 0000000000000000 9\n"
+      "  3: 0100007F:A1B3 00000000:0000 07 00000000:00000000 00:00000000 00000000     0        0 777 2 0000000000000000 5\n";
+  EXPECT_EQ(udp_receive_drops(table, {4242, 777}), 22);
+  EXPECT_EQ(udp_receive_drops(table, {}), 0);
+  EXPECT_EQ(udp_receive_drops("garbage", {1}), 0);
+}
+
+// LCM 1.3.1 counts nothing it loses; datagrams the kernel drops on a full receive buffer are what a
+// daemon can see (docs/lcm-channels.md). A socket nobody reads, flooded: its drops are counted.
+TEST(UdpReceiveDrops, CountsWhatTheKernelDroppedOnThisProcesssSockets) {
+  const int64_t before = udp_receive_drops();
+  ASSERT_GE(before, 0) << "/proc/self/net/udp unreadable";
+  const int rx = ::socket(AF_INET, SOCK_DGRAM, 0);
+  const int tx = ::socket(AF_INET, SOCK_DGRAM, 0);
+  const int small = 4096;
+  ::setsockopt(rx, SOL_SOCKET, SO_RCVBUF, &small, sizeof small);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(::bind(rx, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+  socklen_t len = sizeof a;
+  ::getsockname(rx, reinterpret_cast<sockaddr*>(&a), &len);
+  const std::vector<char> datagram(1000, 'x');
+  for (int i = 0; i < 200; ++i) {
+    ::sendto(tx, datagram.data(), datagram.size(), 0, reinterpret_cast<sockaddr*>(&a), sizeof a);
+  }
+  const int64_t after = udp_receive_drops();
+  ::close(rx);
+  ::close(tx);
+  EXPECT_GE(after - before, 150) << "200 datagrams of 1 kB into a 4 kB buffer";
 }
 
 TEST(LogFiles, EmptyLogHasNoEvents) {

@@ -143,6 +143,26 @@ TEST(Params, DumpListsValuesAndDefaults) {
   EXPECT_THAT(d, HasSubstr("gains: [1, 2]  (default)\n"));
 }
 
+// yaml-cpp keeps the first of two equal keys: an override further down a config was ignored.
+TEST(Params, ADuplicateKeyIsRefusedNamingBothLines) {
+  EXPECT_THAT(error_of("rate_hz: 10\ncells: 30\nrate_hz: 20\n"),
+              HasSubstr("test.yaml: duplicate key 'rate_hz' on lines 1 and 3"));
+  EXPECT_THAT(error_of("nested:\n  inner: 0.1\n  inner: 0.9\n"),
+              HasSubstr("duplicate key 'nested.inner' on lines 2 and 3"));
+  EXPECT_THAT(error_of("nested: {inner: 0.1}\nnested: {inner: 0.2}\n"),
+              HasSubstr("duplicate key 'nested' on lines 1 and 2"));
+  EXPECT_THAT(error_of("items:\n  - {a: 1, a: 2}\n"), HasSubstr("duplicate key 'items[0].a' on lines 2 and 2"));
+  EXPECT_EQ(error_of("rate_hz: 10\nnested: {inner: 0.1}\n"), "") << "equal keys in different maps are fine";
+  const std::string path = whiskeye::testing::scratch_file("params_dup", ".yaml");
+  std::ofstream(path) << "cells: 30\n# an override\ncells: 40\n";
+  try {
+    ParamNode::from_file(path);
+    FAIL();
+  } catch (const ParamError& e) {
+    EXPECT_THAT(e.what(), HasSubstr(path + ": duplicate key 'cells' on lines 1 and 3"));
+  }
+}
+
 TEST(Params, FileErrorsNameTheFile) {
   try {
     ParamNode::from_file("/nonexistent/robot.yaml");

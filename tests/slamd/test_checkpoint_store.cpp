@@ -7,6 +7,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include <sys/stat.h>
+
 namespace whiskeye::slamd {
 namespace {
 
@@ -32,6 +34,13 @@ class CheckpointStoreTest : public ::testing::Test {
     c = static_cast<char>(c ^ 0x5a);
     f.seekp(offset);
     f.write(&c, 1);
+  }
+  // A checkpoint file written by hand: `version` 1 is the old format, 3 a newer slamd's.
+  static void write_raw(const std::string& path, uint64_t sequence, const std::vector<uint8_t>& p, uint32_t version) {
+    std::vector<uint8_t> bytes = checkpoint_header(sequence, p, version);
+    bytes.insert(bytes.end(), p.begin(), p.end());
+    std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()),
+                                                static_cast<std::streamsize>(bytes.size()));
   }
   fs::path dir_;
 };
@@ -99,13 +108,14 @@ TEST_F(CheckpointStoreTest, RejectsTruncatedBadMagicAndFutureVersion) {
   } catch (const CheckpointError& e) {
     EXPECT_THAT(e.what(), HasSubstr("bad magic"));
   }
-  const std::string p3 = store.write(9, payload(64, 9));
-  corrupt_byte(p3, 8);  // version
+  const std::string p3 = (dir_ / "checkpoint-000000000009.vslam").string();
+  write_raw(p3, 9, payload(64, 9), 3);  // intact, from a newer slamd
   try {
     read_checkpoint(p3);
     FAIL();
   } catch (const CheckpointError& e) {
-    EXPECT_THAT(e.what(), HasSubstr("unsupported checkpoint format version"));
+    EXPECT_EQ(e.kind(), CheckpointError::Kind::kUnusable);
+    EXPECT_THAT(e.what(), HasSubstr("unsupported checkpoint format version 3"));
   }
   std::ofstream(dir_ / "checkpoint-000000000010.vslam") << "short";
   try {
@@ -114,6 +124,38 @@ TEST_F(CheckpointStoreTest, RejectsTruncatedBadMagicAndFutureVersion) {
   } catch (const CheckpointError& e) {
     EXPECT_THAT(e.what(), HasSubstr("truncated header"));
   }
+}
+
+// One flipped bit in the version field stopped slamd ("unsupported checkpoint format version 17")
+// although older good checkpoints were there; a flipped sequence was taken silently. The checksum
+// now covers the header: both are damage, and the previous checkpoint is used.
+TEST_F(CheckpointStoreTest, AFlippedBitInTheHeaderIsDamageAndThePreviousCheckpointIsUsed) {
+  CheckpointStore store(dir_.string(), 3);
+  store.write(1, payload(300, 1));
+  const std::string middle = store.write(2, payload(300, 2));
+  const std::string newest = store.write(3, payload(300, 3));
+  corrupt_byte(newest, 8);   // version
+  corrupt_byte(middle, 17);  // sequence
+  std::vector<std::string> problems;
+  const auto cp = store.load_newest(&problems);
+  ASSERT_TRUE(cp);
+  EXPECT_EQ(cp->sequence, 1u);
+  EXPECT_EQ(cp->payload, payload(300, 1));
+  ASSERT_EQ(problems.size(), 2u);
+  EXPECT_THAT(problems[0], HasSubstr(newest + ": checksum mismatch (corrupt header or data)"));
+  EXPECT_THAT(problems[1], HasSubstr(middle + ": checksum mismatch"));
+  EXPECT_TRUE(fs::exists(newest + ".corrupt"));
+}
+
+TEST_F(CheckpointStoreTest, AFormatOneCheckpointIsStillRead) {
+  fs::create_directories(dir_);
+  const std::string path = (dir_ / "checkpoint-000000000004.vslam").string();
+  write_raw(path, 44, payload(100, 4), 1);
+  const Checkpoint cp = read_checkpoint(path);
+  EXPECT_EQ(cp.sequence, 44u);
+  EXPECT_EQ(cp.payload, payload(100, 4));
+  corrupt_byte(path, 60);
+  EXPECT_THROW(read_checkpoint(path), CheckpointError);
 }
 
 TEST_F(CheckpointStoreTest, TheLastWrittenIsTheNewestAcrossRestartsWhateverItsSequence) {
@@ -164,7 +206,7 @@ TEST_F(CheckpointStoreTest, AnIntactButUnusableNewestIsNamedAndKeptNotSkipped) {
     EXPECT_THAT(e.what(), HasSubstr(newest + ": written in another mode"));
   }
   EXPECT_TRUE(fs::exists(newest)) << "not renamed: it is not corrupt";
-  corrupt_byte(newest, 8);  // a format version this slamd does not read
+  write_raw(newest, 2, payload(64, 2), 3);  // intact, in a format version this slamd does not read
   try {
     store.load_newest(&problems);
     FAIL();
@@ -235,14 +277,79 @@ TEST_F(CheckpointStoreTest, OnlyARegularFileIsReadAndNotBeyondWhatItsHeaderSays)
   }
 }
 
-TEST_F(CheckpointStoreTest, AHandNamedFileWithAHugeNumberIsNotCountedFrom) {
+TEST_F(CheckpointStoreTest, AFileNumberedBeyondCountingIsNamedAndNotCountedFrom) {
   fs::create_directories(dir_);
   write_checkpoint_file((dir_ / "checkpoint-18446744073709551615.vslam").string(), 9, payload(10, 9));
+  write_checkpoint_file((dir_ / "checkpoint-99999999999999999999999.vslam").string(), 9, payload(10, 9));
   CheckpointStore store(dir_.string(), 1);
+  std::vector<std::string> problems;
+  EXPECT_FALSE(store.load_newest(&problems));
+  ASSERT_EQ(problems.size(), 2u) << "each is named, not skipped silently";
+  for (const auto& p : problems) EXPECT_THAT(p, HasSubstr("numbered beyond what slamd can count on from"));
   const std::string path = store.write(1, payload(10, 1));
   EXPECT_EQ(fs::path(path).filename(), "checkpoint-000000000001.vslam") << "the next number did not wrap";
   EXPECT_EQ(store.list(), std::vector<std::string>{path}) << "the file just written is kept";
   EXPECT_TRUE(fs::exists(dir_ / "checkpoint-18446744073709551615.vslam")) << "not ours: left alone";
+}
+
+// A file numbered beyond 10^15 was invisible: never pruned, and the next start resumed an older
+// state beside it (silent loss). Any number slamd can count on from is a checkpoint like the others.
+TEST_F(CheckpointStoreTest, AFileNumberedBeyondTenToTheFifteenIsResumedCountedFromAndPruned) {
+  fs::create_directories(dir_);
+  const std::string big = (dir_ / "checkpoint-1000000000000005.vslam").string();
+  write_checkpoint_file((dir_ / "checkpoint-000000000007.vslam").string(), 7, payload(10, 7));
+  write_checkpoint_file(big, 8, payload(10, 8));
+  CheckpointStore store(dir_.string(), 2);
+  std::vector<std::string> problems;
+  const auto cp = store.load_newest(&problems);
+  ASSERT_TRUE(cp);
+  EXPECT_EQ(cp->path, big);
+  EXPECT_EQ(cp->sequence, 8u);
+  EXPECT_TRUE(problems.empty());
+  const std::string next = store.write(9, payload(10, 9));
+  EXPECT_EQ(fs::path(next).filename(), "checkpoint-1000000000000006.vslam");
+  EXPECT_EQ(store.list(), (std::vector<std::string>{big, next})) << "the older file was pruned";
+  store.write(10, payload(10, 10));
+  EXPECT_FALSE(fs::exists(big)) << "pruned in its turn";
+}
+
+TEST_F(CheckpointStoreTest, ANewestCheckpointThatIsNotARegularFileIsNamedAndSkipped) {
+  fs::create_directories(dir_);
+  write_checkpoint_file((dir_ / "checkpoint-000000000001.vslam").string(), 1, payload(10, 1));
+  fs::create_directory(dir_ / "checkpoint-000000000002.vslam");
+  ASSERT_EQ(::mkfifo((dir_ / "checkpoint-000000000003.vslam").c_str(), 0600), 0);
+  write_checkpoint_file((dir_ / "elsewhere.vslam").string(), 4, payload(10, 4));
+  fs::create_symlink(dir_ / "elsewhere.vslam", dir_ / "checkpoint-000000000004.vslam");
+  CheckpointStore store(dir_.string(), 3);
+  std::vector<std::string> problems;
+  const auto cp = store.load_newest(&problems);
+  ASSERT_TRUE(cp);
+  EXPECT_EQ(cp->sequence, 1u);
+  ASSERT_EQ(problems.size(), 3u);
+  const std::string all = problems[0] + "\n" + problems[1] + "\n" + problems[2];
+  EXPECT_THAT(all, HasSubstr("checkpoint-000000000002.vslam: a directory, not a checkpoint file"));
+  EXPECT_THAT(all, HasSubstr("checkpoint-000000000003.vslam: a FIFO, not a checkpoint file"));
+  EXPECT_THAT(all, HasSubstr("checkpoint-000000000004.vslam: a symbolic link, not a checkpoint file"));
+  const std::string next = store.write(5, payload(10, 5));
+  EXPECT_EQ(fs::path(next).filename(), "checkpoint-000000000005.vslam") << "counted on past them";
+  store.write(6, payload(10, 6));
+  store.write(7, payload(10, 7));
+  EXPECT_TRUE(fs::is_directory(dir_ / "checkpoint-000000000002.vslam")) << "not ours to remove";
+  EXPECT_TRUE(fs::exists(dir_ / "elsewhere.vslam")) << "a link is never followed";
+}
+
+TEST_F(CheckpointStoreTest, FilesSetAsideAsCorruptArePrunedLikeCheckpoints) {
+  fs::create_directories(dir_);
+  for (int n = 1; n <= 4; ++n) {
+    std::ofstream(dir_ / ("checkpoint-00000000000" + std::to_string(n) + ".vslam.corrupt")) << "damaged";
+  }
+  CheckpointStore store(dir_.string(), 2);
+  store.write(1, payload(10, 1));
+  int corrupt = 0;
+  for (const auto& e : fs::directory_iterator(dir_)) corrupt += e.path().extension() == ".corrupt";
+  EXPECT_EQ(corrupt, 2);
+  EXPECT_TRUE(fs::exists(dir_ / "checkpoint-000000000004.vslam.corrupt")) << "the newest are kept";
+  EXPECT_TRUE(fs::exists(dir_ / "checkpoint-000000000003.vslam.corrupt"));
 }
 
 TEST_F(CheckpointStoreTest, NothingValidMeansNoCheckpoint) {

@@ -5,6 +5,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <whiskeye/driver_status_t.hpp>
+
+#include <atomic>
 #include <chrono>
 #include <filesystem>
 #include <future>
@@ -113,9 +116,74 @@ TEST(CheckpointWriter, AFailedWriteIsLoggedAndCountedAndTheNextOneIsStillWritten
   const auto c = writer.counters();
   EXPECT_EQ(c.written, 2);
   EXPECT_EQ(c.errors, 1);
-  ASSERT_EQ(log.size(), 1u);
+  EXPECT_FALSE(c.failing);
+  ASSERT_EQ(log.size(), 2u);
   EXPECT_THAT(log[0], HasSubstr("checkpoint failed"));
   EXPECT_THAT(log[0], HasSubstr("No space left on device"));
+  EXPECT_EQ(log[1], "checkpoints are written again, after 1 failed");
+}
+
+// With a full or read-only disk every checkpoint failed, logged every cycle, while SLAM_STATUS said
+// OK: the loss showed only at exit. Now: DEGRADED with the reason, the log rate-limited, and OK again
+// by itself once a checkpoint is written.
+TEST(CheckpointWriter, AFailingDiskIsReportedDegradedWithTheReasonThrottledAndRecoversByItself) {
+  std::atomic<bool> full{true};
+  std::atomic<int64_t> now{0};
+  std::vector<std::string> log;
+  std::mutex log_mutex;
+  CheckpointWriter writer(
+      [&](uint64_t, std::vector<uint8_t>&) {
+        if (full) throw std::runtime_error("/var/lib/slamd/.checkpoint-7.tmp: write failed: No space left on device");
+      },
+      [&](const std::string& line) {
+        std::lock_guard lock(log_mutex);
+        log.push_back(line);
+      },
+      [&] { return now.load(); });
+  const auto submit_and_wait = [&](uint64_t s) {
+    const auto before = writer.counters();
+    writer.submit(s, bytes(8));
+    for (int i = 0; i < 10000; ++i) {
+      const auto c = writer.counters();
+      if (c.written + c.errors > before.written + before.errors) return;
+      std::this_thread::sleep_for(1ms);
+    }
+  };
+  for (uint64_t s = 1; s <= 100; ++s, now += 100'000) submit_and_wait(s);  // 100 cycles in 10 s
+  auto c = writer.counters();
+  EXPECT_EQ(c.errors, 100);
+  EXPECT_TRUE(c.failing);
+  slam_status_t st{};
+  st.state = driver_status_t::STATE_OK;
+  report_checkpoints(st, c);
+  EXPECT_EQ(st.state, driver_status_t::STATE_DEGRADED);
+  EXPECT_THAT(st.message, HasSubstr("checkpoints failing, the map is not being saved: "));
+  EXPECT_THAT(st.message, HasSubstr("No space left on device"));
+  EXPECT_EQ(st.checkpoint_errors, 100);
+  {
+    std::lock_guard lock(log_mutex);
+    ASSERT_EQ(log.size(), 1u) << "the first failure; the next line comes 10 s later";
+  }
+  submit_and_wait(101);
+  {
+    std::lock_guard lock(log_mutex);
+    ASSERT_EQ(log.size(), 2u);
+    EXPECT_THAT(log[1], HasSubstr("; 99 more like it suppressed in the last 10 s"));
+  }
+  full = false;  // space returns
+  submit_and_wait(102);
+  c = writer.counters();
+  EXPECT_FALSE(c.failing);
+  EXPECT_EQ(c.written, 1);
+  slam_status_t ok{};
+  ok.state = driver_status_t::STATE_OK;
+  report_checkpoints(ok, c);
+  EXPECT_EQ(ok.state, driver_status_t::STATE_OK);
+  EXPECT_EQ(ok.message, "");
+  writer.finish();
+  std::lock_guard lock(log_mutex);
+  ASSERT_EQ(log.size(), 3u);
+  EXPECT_EQ(log[2], "checkpoints are written again, after 101 failed");
 }
 
 TEST(CheckpointWriter, FinishWritesWhatIsWaitingAndLaterSubmitsAreWrittenAtOnce) {

@@ -12,7 +12,36 @@
 
 #include <functional>
 
+#include <atomic>
 #include <cmath>
+#include <cstdlib>
+#include <new>
+
+// Heap use of this test binary, to prove a bound on what one message may make slamd allocate:
+// every operator new records its size in front of the block.
+namespace {
+std::atomic<int64_t> g_heap_live{0};
+std::atomic<int64_t> g_heap_peak{0};
+constexpr std::size_t kHeapHeader = alignof(std::max_align_t);
+}  // namespace
+
+void* operator new(std::size_t n) {
+  auto* p = static_cast<unsigned char*>(std::malloc(n + kHeapHeader));
+  if (p == nullptr) throw std::bad_alloc();
+  *reinterpret_cast<std::size_t*>(p) = n;
+  const int64_t live = g_heap_live.fetch_add(static_cast<int64_t>(n)) + static_cast<int64_t>(n);
+  int64_t peak = g_heap_peak.load();
+  while (live > peak && !g_heap_peak.compare_exchange_weak(peak, live)) {
+  }
+  return p + kHeapHeader;
+}
+void operator delete(void* p) noexcept {
+  if (p == nullptr) return;
+  auto* block = static_cast<unsigned char*>(p) - kHeapHeader;
+  g_heap_live.fetch_sub(static_cast<int64_t>(*reinterpret_cast<std::size_t*>(block)));
+  std::free(block);
+}
+void operator delete(void* p, std::size_t) noexcept { operator delete(p); }
 
 namespace whiskeye::slamd {
 namespace {
@@ -187,6 +216,50 @@ TEST_F(SlamNodeTest, AWhiskCycleWhoseCountsDoNotFitItsLengthIsADecodeErrorNotACr
   in_.publish_raw("WHISK_CYCLE", good);
   node_->flush();
   EXPECT_EQ(node_->counters().cycles, before + 1);
+}
+
+TEST_F(SlamNodeTest, AWhiskCycleOutsideTheContractIsRejectedBeforeTheDecoderAllocatesForIt) {
+  // 0 whiskers and 2 M samples: a 20 MB message whose size fits its counts. Decoded, it took a
+  // vector per sample and field (11× its size; 20 M samples took 2.3 GB) before validation refused it.
+  constexpr int32_t kSamples = 2'000'000;
+  whisk_cycle_t c{};
+  c.utime = c.utime_start = c.utime_end = kT0;
+  c.num_whiskers = 0;
+  c.num_samples = 1;
+  c.sample_utime = {kT0};
+  c.sample_valid = {1};
+  c.phase = {0};
+  c.theta.resize(1);
+  c.deflection_x.resize(1);
+  c.deflection_y.resize(1);
+  c.contact.resize(1);
+  std::vector<uint8_t> bytes = encode_message(c);
+  bytes.resize(bytes.size() + 10 * static_cast<std::size_t>(kSamples - 1), 0);
+  for (int i = 0; i < 4; ++i) bytes[44 + static_cast<std::size_t>(i)] = static_cast<uint8_t>(kSamples >> (24 - 8 * i));
+  ASSERT_EQ(whisk_cycle_size_error(bytes), "");
+  EXPECT_EQ(whisk_cycle_contract_error(bytes), "WHISK_CYCLE: num_whiskers 0 (expected 24)");
+
+  g_heap_peak = g_heap_live.load();
+  const int64_t before = g_heap_live.load();
+  in_.publish_raw("WHISK_CYCLE", bytes);
+  const int64_t used = g_heap_peak.load() - before;
+  EXPECT_LT(used, static_cast<int64_t>(bytes.size()) / 10) << "bytes allocated for a " << bytes.size() << "-byte message";
+  EXPECT_EQ(node_->counters().validation_errors, 1);
+  EXPECT_EQ(errors_.total(), 0) << "it decodes: a contract violation, not a decode error";
+  // 20,001 samples, the rest as a real cycle: the same.
+  whisk_cycle_t many = free_cycle(0, kT0 + kS);
+  many.num_samples = 20001;
+  for (int s = 500; s < 20001; ++s) {
+    many.sample_utime.push_back(many.utime_end);
+    many.sample_valid.push_back(1);
+    many.phase.push_back(1);
+    many.theta.push_back(many.theta.back());
+    many.deflection_x.push_back(many.deflection_x.back());
+    many.deflection_y.push_back(many.deflection_y.back());
+    many.contact.push_back(many.contact.back());
+  }
+  EXPECT_EQ(whisk_cycle_contract_error(encode_message(many)), "WHISK_CYCLE: num_samples 20001 out of range");
+  EXPECT_EQ(whisk_cycle_contract_error(encode_message(free_cycle(0, kT0 + kS))), "");
 }
 
 TEST_F(SlamNodeTest, AWhiskerNotMeasuredIsNaNAndAcceptedButAHalfNaNWhiskerIsRejected) {
@@ -426,6 +499,37 @@ TEST_F(SlamNodeTest, RejectsBadMessagesCountsThemAndCarriesOn) {
   const slam_status_t later = node_->status(kT0 + 11 * kS);
   EXPECT_EQ(later.state, driver_status_t::STATE_OK) << later.message;
   EXPECT_EQ(later.validation_errors, 4) << "the counters stay";
+}
+
+// 2,000 undecodable messages gave 2,000 stderr lines in 2 s: the journal on an eMMC is not free.
+TEST_F(SlamNodeTest, RepeatedWarningsAreRateLimitedWithACountOfWhatWasSuppressed) {
+  std::vector<std::string> lines;
+  int64_t now = 0;
+  node_->set_logger([&](const std::string& l) { lines.push_back(l); });
+  node_->set_log_clock([&] { return now; });
+  const std::vector<uint8_t> garbage{0xde, 0xad, 0xbe, 0xef};
+  for (int i = 0; i < 2000; ++i, now += 1000) in_.publish_raw("WHISK_CYCLE", garbage);
+  EXPECT_EQ(errors_.total(), 2000) << "every one counted";
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_NE(lines[0].find("WHISK_CYCLE: cannot decode 4 bytes"), std::string::npos) << lines[0];
+  now += 10 * kS;
+  in_.publish_raw("WHISK_CYCLE", garbage);
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_NE(lines[1].find("; 1999 more like it suppressed in the last 12 s"), std::string::npos) << lines[1];
+
+  // Rejected messages likewise: the first of a burst, then one per 10 s (it was every 100th).
+  lines.clear();
+  odometry_t nan_odo{};
+  nan_odo.utime = kT0;
+  nan_odo.vx = std::nan("");
+  for (int i = 0; i < 2000; ++i, now += 1000) publish(in_, "ODOMETRY", nan_odo);
+  EXPECT_EQ(node_->counters().validation_errors, 2000);
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_NE(lines[0].find("rejected ODOMETRY: non-finite value"), std::string::npos) << lines[0];
+  now += 10 * kS;
+  publish(in_, "ODOMETRY", nan_odo);
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_NE(lines[1].find("(2001 rejected so far); 1999 more like it suppressed"), std::string::npos) << lines[1];
 }
 
 TEST_F(SlamNodeTest, MissingCameraDegradesToTouchAndIsCounted) {

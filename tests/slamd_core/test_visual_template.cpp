@@ -154,6 +154,31 @@ TEST(VisualTemplate, AnMjpegFrameCutOffInTransferIsRefusedNotDecodedToGrey) {
   }
 }
 
+// A frame cut short in transfer with an end-of-image marker appended (a camera's buffer recycled
+// mid-frame) was decoded, greyed out where data was missing, and stored as a template; libjpeg said
+// "Corrupt JPEG data" on stderr, unprefixed. Refused with libjpeg's words in the reason, nothing on stderr.
+TEST(VisualTemplate, AnMjpegFrameCutShortWithAnEndMarkerAppendedIsRefusedAndLibjpegStaysQuiet) {
+  std::vector<uint8_t> grey(64 * 48);
+  for (std::size_t i = 0; i < grey.size(); ++i) grey[i] = static_cast<uint8_t>(i * 7);
+  std::vector<uint8_t> jpeg;
+  cv::imencode(".jpg", cv::Mat(48, 64, CV_8UC1, grey.data()), jpeg);
+  std::vector<uint8_t> cut(jpeg.begin(), jpeg.begin() + static_cast<std::ptrdiff_t>(jpeg.size() * 2 / 3));
+  cut.push_back(0xff);
+  cut.push_back(0xd9);
+  const VisualParams p = plain_params();
+  ::testing::internal::CaptureStderr();
+  std::string why;
+  try {
+    make_visual_template(view(cut, 64, 48, 0, kPixMjpeg), p);
+  } catch (const InputError& e) {
+    why = e.what();
+  }
+  const std::string err = ::testing::internal::GetCapturedStderr();
+  EXPECT_NE(why.find("image: MJPEG frame is damaged (Corrupt JPEG data"), std::string::npos) << why;
+  EXPECT_EQ(err, "") << "libjpeg's own line";
+  EXPECT_NO_THROW(make_visual_template(view(jpeg, 64, 48, 0, kPixMjpeg), p)) << "the whole frame still decodes";
+}
+
 TEST(VisualTemplate, RefusesBadFramesWithAReason) {
   const std::vector<uint8_t> small(100, 0);
   const VisualParams p = plain_params();

@@ -196,6 +196,7 @@ void BasedNode::poll_loop() {
       case ReplyStatus::kTimeout: count_fault("reply_timeouts", reply.error); break;
       case ReplyStatus::kDropped: count_fault("replies_dropped", reply.error); break;
       case ReplyStatus::kHttpError: count_fault("http_errors", reply.error); break;
+      case ReplyStatus::kTooLarge: count_fault("replies_malformed", reply.error); break;
       case ReplyStatus::kConnectFailed: break;  // handled above
       case ReplyStatus::kOk: {
         OdometrySample raw;

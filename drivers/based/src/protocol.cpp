@@ -49,7 +49,6 @@ namespace {
 
 // Bounds of a plausible reply (a Robotino drives at under 1 m/s): beyond them the tracker's
 // re-anchoring would overflow or lose precision and every later sample would be wrong.
-constexpr std::size_t kMaxReplyBytes = 4096;      // seven numbers take under 200
 constexpr double kMaxPosition = 1e5;              // m
 constexpr double kMaxHeading = 1e6;               // rad, in case the firmware does not wrap it
 constexpr double kMaxSpeed = 20.0;                // m/s

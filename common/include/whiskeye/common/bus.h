@@ -152,6 +152,14 @@ class MemoryBus : public Bus {
 // True when `channel` is a plain name, not a regex (so exact comparison gives the same answer).
 bool is_plain_channel_name(const std::string& channel);
 
+// Datagrams the kernel dropped on this process's UDP sockets because their receive buffer was full
+// (the `drops` column of /proc/self/net/udp and udp6, for the sockets among /proc/self/fd), or -1 if
+// that cannot be read. LCM itself counts nothing it drops (lcm 1.3.1 has no statistics; a message
+// missing fragments is dropped silently): this is the part of its losses the kernel can tell.
+int64_t udp_receive_drops();
+// The same from the text of /proc/net/udp, for the sockets whose inode is in `inodes`.
+int64_t udp_receive_drops(std::string_view proc_net_udp, const std::vector<uint64_t>& inodes);
+
 // LCM over a URL ("" = $LCM_DEFAULT_URL or LCM's default). Throws std::runtime_error if LCM cannot
 // start (e.g. no multicast route for udpm://).
 class LcmBus : public Bus {
@@ -189,7 +197,12 @@ struct LogEvent {
 // Reads an LCM log (as written by lcm-logger) directly, in file order. The file is memory-mapped:
 // events are views into the mapping, and pages of payloads nobody reads are never loaded. Every
 // event header is checked (sync word, lengths within the file); damage is skipped and reported by
-// damage(), never a silent early end.
+// damage(), never a silent early end. An event time out of line with both neighbours while they
+// agree with each other (more than kMaxTimeJumpUs from each: a flipped bit) is damage too: the event
+// is delivered with the time of the one before (the first event: of the one after) and counted, so
+// one wild time does not become months of data time. A clock step is not (the events after it agree
+// with it), nor a lone message in a pause (its neighbours do not agree); the first and last events,
+// with one neighbour, count as wild only more than kMaxEdgeTimeJumpUs from it.
 class LogReader {
  public:
   // Throws std::runtime_error naming the file if it cannot be opened. A damaged log (a corrupt
@@ -197,6 +210,13 @@ class LogReader {
   // cannot be read, resynchronising on the next event's sync word as LCM's own reader does, and
   // damage() says what was skipped, where first.
   explicit LogReader(const std::string& path);
+  // How far an event's time may lie from both neighbours before it is taken as damage (slamd's
+  // max_jump_s default).
+  static constexpr int64_t kMaxTimeJumpUs = 10'000'000;
+  static constexpr int64_t kMaxEdgeTimeJumpUs = 86'400'000'000;  // a day
+  // Reads a log held in memory (`name` stands for the file in messages); `bytes` must outlive the
+  // reader and every view's owner. For tests and the fuzz targets.
+  LogReader(std::span<const uint8_t> bytes, std::string name);
   ~LogReader();
   LogReader(const LogReader&) = delete;
   LogReader& operator=(const LogReader&) = delete;
@@ -218,7 +238,8 @@ class LogReader {
     std::size_t skipped_bytes = 0;
     int damaged_places = 0;
     bool truncated_tail = false;  // the log ends inside an event
-    bool damaged() const { return damaged_places > 0; }
+    int64_t wild_times = 0;       // events whose time was out of line with both neighbours, replaced
+    bool damaged() const { return damaged_places > 0 || wild_times > 0; }
     std::string summary() const;  // one line for the user; empty if undamaged
   };
   const Damage& damage() const { return damage_; }
@@ -228,6 +249,8 @@ class LogReader {
   std::string path_;
   std::shared_ptr<const Mapping> map_;
   std::size_t pos_ = 0;
+  int64_t last_utime_ = 0;
+  bool have_last_utime_ = false;
   Damage damage_;
 };
 

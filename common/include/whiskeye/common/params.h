@@ -5,7 +5,8 @@
 // A key absent from the file keeps its default. A wrong type, a value out of range, a non-finite number
 // (.nan, .inf: no parameter means them, and they slip through range checks or into geometry), or a
 // key that no loader asked for (a typo) is a ParamError whose message names the file and the full
-// key path.
+// key path. A key given twice in one map is refused at parse time, naming both lines (yaml-cpp would
+// silently keep the first, so an override further down a file was ignored).
 // dump() lists every parameter asked for, with its value and whether it came from the file, so a
 // daemon can print exactly what it runs with.
 #pragma once

@@ -5,6 +5,7 @@
 // No I/O here: the daemon's HTTP client hands bodies in and takes bodies out.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <string_view>
@@ -13,6 +14,9 @@ namespace whiskeye::based {
 
 // The base stops by itself when no omnidrive command has reached it for this long.
 inline constexpr int64_t kBaseStopsAfterUs = 200'000;
+
+// The largest reply body based accepts (seven numbers take under 200 bytes).
+inline constexpr std::size_t kMaxReplyBytes = 4096;
 
 inline constexpr const char* kOdometryPath = "/data/odometry";
 inline constexpr const char* kOmnidrivePath = "/data/omnidrive";
