@@ -76,6 +76,15 @@ class QuickSuite(unittest.TestCase):
         self.assertEqual(again.stderr.count(" resumed: "), 3, again.stderr)
         self.assertEqual(metrics(self.load("a")), metrics(self.load("a")))
 
+    def test_another_suite_seed_in_the_same_folder_reruns_every_world(self):
+        d = os.path.join(self.tmp, "c")
+        shutil.copytree(os.path.join(self.tmp, "a"), d)
+        other = suite("--quick", "--worlds", "1", "--suite-seed", "2", "--bin", BIN, "--results", d, "--no-plots")
+        self.assertEqual(other.returncode, 0, other.stderr)
+        self.assertEqual(other.stderr.count(" resumed: "), 0, other.stderr)
+        with open(os.path.join(d, "suite.json")) as f:
+            self.assertEqual([w["world_seed"] for w in json.load(f)["worlds"]], [2001])
+
     def test_the_same_suite_seed_gives_the_same_numbers(self):
         other = suite("--quick", "--bin", BIN, "--results", os.path.join(self.tmp, "b"), "--jobs", "1", "--no-plots")
         self.assertEqual(other.returncode, 0, other.stderr)
