@@ -13,14 +13,14 @@
 // restores exactly: a restored instance produces byte-identical results.
 //
 // Checkpoint format (all little-endian):
-//   magic "VITASLAM" (8 bytes) | u32 version (2; 1 is still read) | u8 mode | i64 last odometry utime | u8 has it |
+//   magic "VITASLAM" (8 bytes) | u32 version (3; 1 and 2 are still read) | u8 mode | i64 last odometry utime | u8 has it |
 //   5 × i64 stats | template store | pose cells | experience map | u32 FNV-1a of all previous bytes
 //   template store: i32 w, i32 h, then arrays (u64 count + elements): visual u8, visual mean f32,
 //     has_visual u8, pfh u16, sda f32, has_tactile u8, num_contacts i32, pc (x,y,θ) f64, decay f64
 //   pose cells: i32 dim_xy, i32 dim_theta, u64 count + f32 activity [θ][y][x]
 //   experience map: u64 n, n × (f64 x, y, cos θ, sin θ, pc_x, pc_y, pc_θ, i64 utime, i32 template,
 //     visual, tactile id, u8 dense, i32 view shift (version ≥ 2)) | u64 links, each (i32 from, to, f64 dx, dy, dθ, i64 utime) |
-//     i32 current | f64 offset x, y, θ
+//     i32 current | f64 offset x, y, θ | f64 distance travelled since the last re-localisation (version ≥ 3)
 #pragma once
 
 #include "whiskeye/common/params.h"
