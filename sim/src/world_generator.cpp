@@ -50,6 +50,20 @@ std::string num(double v, int decimals = 4) {
   return s;
 }
 
+// Radius (m) of the circle the head travels on when the base circles at `base_radius`.
+double head_path_radius(double base_radius, const RobotGeometry& robot) {
+  return std::hypot(base_radius + robot.T_base_head.x, robot.T_base_head.y);
+}
+
+// Polar angle (deg) that `m` metres of the head's path span.
+double m_to_deg(double m, double head_r) { return m / head_r * 180.0 / kPi; }
+
+// Half a whisk cycle's (1 s) travel along the path, in degrees: how far a place's touch reaches.
+double half_cycle_deg(double speed, double head_r) { return 0.5 * speed / head_r * 180.0 / kPi; }
+
+// A pair of views looks alike within this matcher distance (margin × slamd's visual match limit).
+double alike_limit(const AliasCheckParams& p) { return p.margin * p.match.threshold_visual * p.match.sigma_visual; }
+
 double circular_deg(double a) {
   a = std::fmod(a, 360.0);
   return a < 0.0 ? a + 360.0 : a;
@@ -160,9 +174,7 @@ PatternSpec draw_pattern(Rng& rng, int k) {
   return p;
 }
 
-double head_radius(const Draft& d, const RobotGeometry& robot) {
-  return std::hypot(d.radius + robot.T_base_head.x, robot.T_base_head.y);
-}
+double head_radius(const Draft& d, const RobotGeometry& robot) { return head_path_radius(d.radius, robot); }
 
 // Angle (deg) of the path that one metre along the head's path spans.
 double deg_per_m(const Draft& d, const RobotGeometry& robot) { return 180.0 / (kPi * head_radius(d, robot)); }
@@ -258,6 +270,12 @@ struct Views {
   std::vector<double> angles_deg;
   int w = 0, h = 0;
   std::vector<std::vector<uint8_t>> column_major;  // one template per angle, the matcher's layout
+
+  // The view rendered nearest to polar angle `deg`.
+  int index_of(double deg) const {
+    const int n = static_cast<int>(angles_deg.size());
+    return static_cast<int>(std::lround(circular_deg(deg) / (360.0 / n))) % n;
+  }
 };
 
 Views render_views(const World& world, const RobotGeometry& robot, const AliasCheckParams& p) {
@@ -307,8 +325,7 @@ constexpr double kProfileStepDeg = 0.5;
 
 std::vector<TouchProfile> touch_profiles(const World& world, const RobotGeometry& robot) {
   const Trajectory& t = world.trajectory;
-  const double head_r = std::hypot(t.radius + robot.T_base_head.x, robot.T_base_head.y);
-  const double half_deg = (kObjectHalfLength + kReach + 0.05) / head_r * 180.0 / kPi;
+  const double half_deg = m_to_deg(kObjectHalfLength + kReach + 0.05, head_path_radius(t.radius, robot));
   const int steps = static_cast<int>(std::ceil(half_deg / kProfileStepDeg));
   std::vector<TouchProfile> out;
   for (std::size_t s = 0; s < world.solids.size(); ++s) {
@@ -393,9 +410,9 @@ AliasReport check_aliasing(const World& world, const RobotGeometry& robot, const
   const Views v = render_views(world, robot, p);
   const int n = static_cast<int>(v.angles_deg.size());
   const Trajectory& t = world.trajectory;
-  const double head_r = std::hypot(t.radius + robot.T_base_head.x, robot.T_base_head.y);
-  const double min_sep_deg = p.min_separation_m / head_r * 180.0 / kPi;
-  const double limit = p.margin * p.match.threshold_visual * p.match.sigma_visual;
+  const double head_r = head_path_radius(t.radius, robot);
+  const double min_sep_deg = m_to_deg(p.min_separation_m, head_r);
+  const double limit = alike_limit(p);
 
   // Every pair of places far enough apart: the matcher's own distance.
   std::vector<double> dist(static_cast<std::size_t>(n) * static_cast<std::size_t>(n), 1.0);
@@ -459,7 +476,7 @@ AliasReport check_aliasing(const World& world, const RobotGeometry& robot, const
   // A group may be a long band (a point-symmetric stretch of arena: every view alike with the one
   // opposite), or one stretch alike with several: it is cut into places at most max_place_m long on
   // both sides, each with its look-alike partner.
-  const double place_deg = p.max_place_m / head_r * 180.0 / kPi;
+  const double place_deg = m_to_deg(p.max_place_m, head_r);
   std::vector<bool> self_alike;
   std::vector<LookAlikePair> closest;
   for (const auto& cells : groups) {
@@ -510,20 +527,17 @@ AliasReport check_aliasing(const World& world, const RobotGeometry& robot, const
     }
   }
   // Two alike landmarks where the views differ (the touch alone is aliased there).
-  auto view_index = [&](double deg) {
-    return static_cast<int>(std::lround(circular_deg(deg) / (360.0 / n))) % n;
-  };
   for (std::size_t a = 0; a < prof.size(); ++a) {
     for (std::size_t b = a + 1; b < prof.size(); ++b) {
       if (cls[a] != cls[b]) continue;
-      const int ia = view_index(prof[a].centre_deg), ib = view_index(prof[b].centre_deg);
+      const int ia = v.index_of(prof[a].centre_deg), ib = v.index_of(prof[b].centre_deg);
       const double d = dist[static_cast<std::size_t>(ia * n + ib)];
       if (d > limit) report.feel_alike_pairs_apart.emplace_back(world.solids[a].name, world.solids[b].name);
     }
   }
 
   // What is touched along each place (the place widened by half a whisk cycle's travel each way).
-  const double widen_deg = 0.5 * t.speed * 1.0 / head_r * 180.0 / kPi + p.angle_step_deg / 2;
+  const double widen_deg = half_cycle_deg(t.speed, head_r) + p.angle_step_deg / 2;
   for (AliasedPlace& place : report.places) {
     std::set<std::string> touched;
     const double span = circular_deg(place.to_deg - place.from_deg) + 2 * widen_deg;
@@ -692,7 +706,7 @@ bool far_from_objects(const Draft& d, double angle_deg, double min_gap_deg) {
 // the draw cannot be completed within the option's counts.
 bool place_objects(Rng& rng, const GeneratorOptions& o, const RobotGeometry& robot, const AliasReport& layout,
                    const Views& views, const AliasCheckParams& check, Draft& d) {
-  const double limit = check.margin * check.match.threshold_visual * check.match.sigma_visual;
+  const double limit = alike_limit(check);
   d.objects.clear();
   const int max_objects = static_cast<int>(std::lround(o.tactile_landmarks.max));
   const int target = rng.integer(o.tactile_landmarks);
@@ -706,7 +720,7 @@ bool place_objects(Rng& rng, const GeneratorOptions& o, const RobotGeometry& rob
     }
     return s;
   };
-  const double widen = 0.5 * d.speed / head_radius(d, robot) * 180.0 / kPi;
+  const double widen = half_cycle_deg(d.speed, head_radius(d, robot));
   int k = 0;
   auto add = [&](int shape, double angle) {
     d.objects.push_back({shape, circular_deg(angle), std::string(object_library()[static_cast<std::size_t>(shape)].name) + "_" + std::to_string(k++)});
@@ -715,9 +729,8 @@ bool place_objects(Rng& rng, const GeneratorOptions& o, const RobotGeometry& rob
   // A point of a place (widened as touched_in() widens it) clear of the other objects: every free
   // degree is a candidate, one drawn at random.
   auto spot_in = [&](const AliasedPlace& p, double& angle) {
-    const double widen_here = 0.5 * d.speed / head_radius(d, robot) * 180.0 / kPi;
-    const double from = p.from_deg - widen_here;
-    const double span = circular_deg(p.to_deg - p.from_deg) + 2 * widen_here;
+    const double from = p.from_deg - widen;
+    const double span = circular_deg(p.to_deg - p.from_deg) + 2 * widen;
     std::vector<double> free;
     for (double a = 0.0; a <= span; a += 1.0) {
       if (far_from_objects(d, from + a, spacing_deg)) free.push_back(from + a);
@@ -770,9 +783,7 @@ bool place_objects(Rng& rng, const GeneratorOptions& o, const RobotGeometry& rob
     return true;
   };
   auto view_distance = [&](double a1, double a2) {
-    const int n = static_cast<int>(views.angles_deg.size());
-    const int i = static_cast<int>(std::lround(circular_deg(a1) / (360.0 / n))) % n;
-    const int j = static_cast<int>(std::lround(circular_deg(a2) / (360.0 / n))) % n;
+    const int i = views.index_of(a1), j = views.index_of(a2);
     int shift = 0;
     return slam::TemplateStore::visual_distance(views.column_major[static_cast<std::size_t>(i)].data(),
                                                 views.column_major[static_cast<std::size_t>(j)].data(), views.w, views.h,
@@ -909,7 +920,7 @@ GeneratedWorld generate_world(const GeneratorOptions& o, const RobotGeometry& ro
       const auto& [a, b] = report.place_pairs[static_cast<std::size_t>(rng.integer(0, static_cast<int>(report.place_pairs.size()) - 1))];
       const AliasedPlace pa = report.places[static_cast<std::size_t>(a)];
       const AliasedPlace pb = report.places[static_cast<std::size_t>(b)];
-      const double widen = 0.5 * d.speed / head_radius(d, robot) * 180.0 / kPi + (kObjectHalfLength + kReach) * deg_per_m(d, robot);
+      const double widen = half_cycle_deg(d.speed, head_radius(d, robot)) + (kObjectHalfLength + kReach) * deg_per_m(d, robot);
       auto near = [&](const AliasedPlace& p, double ang) {
         return circular_deg(ang - (p.from_deg - widen)) <= circular_deg(p.to_deg - p.from_deg) + 2 * widen;
       };

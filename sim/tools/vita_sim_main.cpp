@@ -25,7 +25,6 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
-#include <map>
 #include <memory>
 #include <limits>
 #include <string>
@@ -171,19 +170,20 @@ Range parse_range(const std::string& option, const std::string& text) {
   return r;
 }
 
+// A drawing range of the generator as a command-line option: "MIN,MAX" text into a Range field.
+struct RangeOption {
+  const char* name;
+  const char* help;
+  Range GeneratorOptions::*field;
+  std::string text;
+};
+
 // --generate-world: draws a world, checks it and writes it. Returns the exit status.
-int generate(GeneratorOptions options, const std::map<std::string, std::string>& ranges, const RobotGeometry& robot,
+int generate(GeneratorOptions options, const std::vector<RangeOption>& ranges, const RobotGeometry& robot,
              const std::string& slam_config, const std::string& output_world, bool quiet) {
   try {
-    for (const auto& [option, text] : ranges) {
-      if (text.empty()) continue;
-      const Range r = parse_range(option, text);
-      if (option == "--arena-side") options.side = r;
-      if (option == "--radius") options.radius = r;
-      if (option == "--speed") options.speed = r;
-      if (option == "--gen-laps") options.laps = r;
-      if (option == "--wall-landmarks") options.wall_landmarks = r;
-      if (option == "--tactile-landmarks") options.tactile_landmarks = r;
+    for (const RangeOption& r : ranges) {
+      if (!r.text.empty()) options.*r.field = parse_range(r.name, r.text);
     }
     validate(options);
   } catch (const GeneratorOptionError& e) {
@@ -273,8 +273,14 @@ int main(int argc, char** argv) {
   GeneratorOptions gen;
   std::string output_world;
   std::string slam_config = "config/slam.yaml";
-  std::map<std::string, std::string> gen_ranges{{"--arena-side", ""}, {"--radius", ""}, {"--speed", ""},
-                                                {"--gen-laps", ""}, {"--wall-landmarks", ""}, {"--tactile-landmarks", ""}};
+  std::vector<RangeOption> gen_ranges{
+      {"--arena-side", "Generated world: arena side range MIN,MAX (m; 5,8)", &GeneratorOptions::side, ""},
+      {"--radius", "Generated world: trajectory radius range MIN,MAX (m; 0.8,1.3)", &GeneratorOptions::radius, ""},
+      {"--speed", "Generated world: tangential speed range MIN,MAX (m/s; 0.07,0.15)", &GeneratorOptions::speed, ""},
+      {"--gen-laps", "Generated world: laps range MIN,MAX (4,10)", &GeneratorOptions::laps, ""},
+      {"--wall-landmarks", "Generated world: wall landmarks MIN,MAX (4,8)", &GeneratorOptions::wall_landmarks, ""},
+      {"--tactile-landmarks", "Generated world: tactile landmarks MIN,MAX (3,6)", &GeneratorOptions::tactile_landmarks,
+       ""}};
   app.add_flag("--generate-world", generate_flag,
                "Draw a world (--world-seed, --family), check its aliasing and write it to --output-world; no simulation");
   app.add_option("--world-seed", gen.world_seed, "Seed of the generated world")->capture_default_str();
@@ -286,13 +292,7 @@ int main(int argc, char** argv) {
                "blackout, a 20 % odometry slip for 10 s)");
   app.add_option("--slam-config", slam_config, "slamd config whose visual template and match threshold the check uses")
       ->capture_default_str();
-  app.add_option("--arena-side", gen_ranges["--arena-side"], "Generated world: arena side range MIN,MAX (m; 5,8)");
-  app.add_option("--radius", gen_ranges["--radius"], "Generated world: trajectory radius range MIN,MAX (m; 0.8,1.3)");
-  app.add_option("--speed", gen_ranges["--speed"], "Generated world: tangential speed range MIN,MAX (m/s; 0.07,0.15)");
-  app.add_option("--gen-laps", gen_ranges["--gen-laps"], "Generated world: laps range MIN,MAX (4,10)");
-  app.add_option("--wall-landmarks", gen_ranges["--wall-landmarks"], "Generated world: wall landmarks MIN,MAX (4,8)");
-  app.add_option("--tactile-landmarks", gen_ranges["--tactile-landmarks"],
-                 "Generated world: tactile landmarks MIN,MAX (3,6)");
+  for (RangeOption& r : gen_ranges) app.add_option(r.name, r.text, r.help);
   app.add_option("--output,-o", output, "LCM log to write");
   app.add_option("--candump", candump_path,
                  "Also (or only) write the whisker boards' CAN frames as a candump -l log, for canplayer");
