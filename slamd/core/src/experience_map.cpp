@@ -223,13 +223,13 @@ Event ExperienceMap::on_cycle(int template_id, int visual_template_id, int tacti
     // distance or the view shift.
     const bool gate = !frozen_ && params_.drift_per_m < 100.0;
     const bool by_map = gate && travel_ > params_.packet_trust_m;
-    const Pose2 here = current_pose();
+    const Pose2 here = gate ? current_pose() : Pose2{};  // the map's distances only matter with the gate
     const double budget = drift_budget();
     for (int id : *candidates) {
       const Experience& e = meta_[static_cast<size_t>(id)];
       if (!frozen_ && std::abs(view_shift - e.view_shift) > max_shift) continue;
       const auto i = static_cast<size_t>(id);
-      const double dm = std::hypot(x_[i] - here.x, y_[i] - here.y);
+      const double dm = gate ? std::hypot(x_[i] - here.x, y_[i] - here.y) : 0.0;
       if (gate && dm > budget) continue;
       const double d = by_map ? dm : cells.distance(e.pc_x, e.pc_y, e.pc_theta, pc_x, pc_y, pc_theta);
       if (nearest < 0 || d < dmin) {
