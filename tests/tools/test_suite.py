@@ -179,6 +179,8 @@ class BadInput(unittest.TestCase):
                            (["--jobs", "0"], "suite: --jobs: 0 is not a positive number"),
                            (["--laps", "1000000000"], "suite: --laps: 1000000000 is not in 1..10000"),
                            (["--bin", "/nonexistent"], "suite: --bin: /nonexistent/vita-sim is not an executable"),
+                           (["--executor", "pbs"], "suite: --executor: unknown executor 'pbs' (local or slurm)"),
+                           (["--partition", "p"], "suite: --partition: only with --executor slurm"),
                            (["--retry-failed", "--aggregate-only"], "suite: --retry-failed: runs worlds")):
             with tempfile.TemporaryDirectory() as d:
                 r = suite(*args, "--results", d)
