@@ -114,7 +114,9 @@ class TargetCheck(unittest.TestCase):
                 json.dump(r, f)
 
     def check(self, n, *extra):
-        return suite("--aggregate-only", "--check", "--worlds", str(n), "--results", self.tmp, "--no-plots", *extra)
+        # world_record's seeds are suite seed 5's (5000 + i); other seeds' records are not this suite's.
+        return suite("--aggregate-only", "--check", "--worlds", str(n), "--suite-seed", "5", "--results", self.tmp,
+                     "--no-plots", *extra)
 
     def good(self, i):
         return world_record(i, (0.85, 1.0, 0.05, 0.001), (0.6, 0.7, 0.8, 0.05), (0.5, 0.0, 1.0, 0.2))
@@ -176,30 +178,55 @@ class BadInput(unittest.TestCase):
                            (["--worlds", "0"], "suite: --worlds: 0 is not in 1..10000"),
                            (["--jobs", "0"], "suite: --jobs: 0 is not a positive number"),
                            (["--laps", "1000000000"], "suite: --laps: 1000000000 is not in 1..10000"),
-                           (["--bin", "/nonexistent"], "suite: --bin: /nonexistent/vita-sim is not an executable")):
+                           (["--bin", "/nonexistent"], "suite: --bin: /nonexistent/vita-sim is not an executable"),
+                           (["--executor", "pbs"], "suite: --executor: unknown executor 'pbs' (local or slurm)"),
+                           (["--partition", "p"], "suite: --partition: only with --executor slurm"),
+                           (["--retry-failed", "--aggregate-only"], "suite: --retry-failed: runs worlds")):
             with tempfile.TemporaryDirectory() as d:
                 r = suite(*args, "--results", d)
             self.assertEqual(r.returncode, 2, args)
             self.assertIn(text, r.stderr)
 
-    def test_a_failing_world_is_listed_with_its_log_and_fails_the_run(self):
+    def test_a_failing_world_is_listed_with_its_log_and_rerun_alone(self):
         with tempfile.TemporaryDirectory() as d:
             bins = os.path.join(d, "bin")
             os.makedirs(bins)
             for tool in ("vita-sim", "vita-eval"):
                 os.symlink(os.path.join(BIN, tool), os.path.join(bins, tool))
+            # slamd fails while the marker exists: the programs (and so the worlds' key) stay the same.
+            marker = os.path.join(d, "broken")
+            open(marker, "w").close()
             fake = os.path.join(bins, "slamd")
             with open(fake, "w") as f:
-                f.write("#!/bin/sh\necho 'slamd: broken on purpose' >&2\nexit 1\n")
+                f.write(f"#!/bin/sh\nif [ -e {marker} ]; then echo 'slamd: broken on purpose' >&2; exit 1; fi\n"
+                        f"exec {os.path.join(BIN, 'slamd')} \"$@\"\n")
             os.chmod(fake, stat.S_IRWXU)
-            r = suite("--worlds", "1", "--laps", "1", "--bin", bins, "--results", os.path.join(d, "r"))
+            args = ("--worlds", "2", "--laps", "1", "--bin", bins, "--results", os.path.join(d, "r"), "--no-plots")
+            r = suite(*args)
             self.assertEqual(r.returncode, 1, r.stderr)
             log = os.path.join(d, "r", "world-001", "run.log")
             self.assertIn(f"world 1 (seed 1001) FAILED: slamd exited 1 (see {log})", r.stderr)
             self.assertIn("slamd: broken on purpose", open(log).read())
             self.assertFalse(os.path.exists(os.path.join(d, "r", "world-001", "sim.lcmlog")))
             with open(os.path.join(d, "r", "suite.json")) as f:
-                self.assertEqual(json.load(f)["failed_worlds"][0]["index"], 1)
+                self.assertEqual([w["index"] for w in json.load(f)["failed_worlds"]], [1, 2])
+            self.assertIn("suite: rerun only those: ", r.stderr.splitlines()[-1])
+            self.assertTrue(r.stderr.splitlines()[-1].endswith(" --retry-failed"))
+            # The same failures are listed by --aggregate-only, which runs nothing.
+            again = suite("--aggregate-only", "--worlds", "2", "--results", os.path.join(d, "r"), "--no-plots")
+            self.assertEqual(again.returncode, 1, again.stderr)
+            self.assertIn("suite: 2 world(s) failed: 1 (", again.stderr)
+            # Fixed, only the failed worlds run again; then none is left failed.
+            os.remove(marker)
+            os.remove(os.path.join(d, "r", "world-002", "failed.json"))  # as if world 2 had never run
+            retried = suite(*args, "--retry-failed")
+            self.assertEqual(retried.returncode, 0, retried.stderr)
+            self.assertIn("retrying 1 failed", retried.stderr)
+            self.assertEqual(retried.stderr.count("] world "), 1, retried.stderr)
+            self.assertFalse(os.path.exists(os.path.join(d, "r", "world-001", "failed.json")))
+            with open(os.path.join(d, "r", "suite.json")) as f:
+                doc = json.load(f)
+            self.assertEqual(([w["index"] for w in doc["worlds"]], doc["failed_worlds"]), ([1], []))
 
 
 if __name__ == "__main__":
