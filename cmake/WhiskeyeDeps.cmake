@@ -15,6 +15,9 @@ find_package(Eigen3 3.3 REQUIRED NO_MODULE)
 find_package(OpenCVParts REQUIRED)  # OpenCV::core, OpenCV::imgproc, OpenCV::imgcodecs
 # libjpeg directly for slamd's MJPEG frames, to see its warnings (a damaged frame) that OpenCV hides.
 find_package(JPEG REQUIRED)  # libjpeg-dev (libjpeg62-turbo)
+# libturbojpeg (libturbojpeg0-dev): the known MJPEG frames of camerad's tests (tests/support) and the
+# decode benchmark's comparison.
+pkg_check_modules(TURBOJPEG REQUIRED IMPORTED_TARGET libturbojpeg)
 find_package(yaml-cpp REQUIRED)
 find_package(CLI11 REQUIRED)
 find_package(nlohmann_json 3 REQUIRED)  # vita-eval JSON output (nlohmann-json3-dev)

@@ -118,7 +118,8 @@ int main(int argc, char** argv) {
   int64_t frames = 0, reopens = 0, device_lost = 0, open_failures = 0, sequence_gaps = 0, dequeue_errors = 0;
   // Totals of the capture sessions already closed; the open one adds its own (Capture counts since open).
   int64_t closed_corrupt_frames = 0, closed_requeue_failures = 0;
-  bool corrupt_logged = false;  // one log line per capture session, the counter says how many
+  // One log line per reason of skipping and capture session; corrupt_frames says how many.
+  uint32_t corrupt_logged = 0;  // bit i: a frame skipped as FrameCheck i was logged
   bool dequeue_error_logged = false;  // likewise
   auto close_capture = [&] {
     closed_corrupt_frames += cap->corrupt_frames();
@@ -151,7 +152,7 @@ int main(int argc, char** argv) {
         last_open_error.clear();
         last_frame_us = now;
         last_sequence = -1;
-        corrupt_logged = false;
+        corrupt_logged = 0;
         dequeue_error_logged = false;
         // At least three frame periods of the negotiated rate (the driver may pick a slower one
         // than asked, or the configuration ask for less than a frame per frame_timeout_s).
@@ -191,11 +192,12 @@ int main(int argc, char** argv) {
         if (last_sequence < 0) backoff.reset();  // the session works
         last_sequence = f.sequence;
         last_frame_us = monotonic_us();
-      } else if (r == v4l2::Capture::Result::kSkipped && !corrupt_logged) {
+      } else if (r == v4l2::Capture::Result::kSkipped &&
+                 !(corrupt_logged & (1u << static_cast<unsigned>(cap->last_skip())))) {
         // Not a frame: last_frame_us stays, so a camera sending only damaged frames gets reopened.
         std::cerr << "camerad: " << cap->device() << ": skipping a frame "
                   << v4l2::frame_check_name(cap->last_skip()) << " (counted in corrupt_frames)\n";
-        corrupt_logged = true;
+        corrupt_logged |= 1u << static_cast<unsigned>(cap->last_skip());
       } else if (r == v4l2::Capture::Result::kError) {
         ++dequeue_errors;
         if (!dequeue_error_logged) {

@@ -2,6 +2,10 @@
 // tests/vm/scenario_camerad.sh).
 #include <gtest/gtest.h>
 
+#include <set>
+#include <string>
+
+#include "mjpeg_pattern.h"
 #include "whiskeye/drivers/v4l2_capture.h"
 
 using namespace whiskeye::v4l2;
@@ -93,11 +97,37 @@ TEST(V4l2FrameCheck, ABufferClaimingMoreThanItsMappedLengthIsSkipped) {
 }
 
 TEST(V4l2FrameCheck, EveryReasonHasAName) {
+  std::set<std::string> names;
   for (FrameCheck c : {FrameCheck::kUsable, FrameCheck::kErrorFlag, FrameCheck::kShortPayload, FrameCheck::kEmpty,
-                       FrameCheck::kOverlong}) {
+                       FrameCheck::kOverlong, FrameCheck::kJpegNoStartMarker, FrameCheck::kJpegBadHeader,
+                       FrameCheck::kJpegCutShort, FrameCheck::kJpegDamagedData, FrameCheck::kJpegWrongSize}) {
     EXPECT_STRNE(frame_check_name(c), "?");
+    names.insert(frame_check_name(c));
   }
+  EXPECT_EQ(names.size(), 10u) << "each reason its own words";
   EXPECT_STREQ(frame_check_name(FrameCheck::kShortPayload), "shorter than stride x height");
+}
+
+// MJPEG frames as a camera sends them (baseline, 4:2:2): camerad publishes whole ones and skips the
+// rest, counting them in corrupt_frames, as it does truncated raw frames.
+TEST(V4l2FrameCheck, AWholeMjpegFrameOfTheNegotiatedSizeIsUsable) {
+  const std::vector<uint8_t> jpeg = whiskeye::test::mjpeg_pattern_jpeg(640, 480, 7);
+  EXPECT_EQ(check_mjpeg(jpeg, 640, 480), FrameCheck::kUsable);
+  EXPECT_EQ(check_mjpeg(jpeg, 1280, 720), FrameCheck::kJpegWrongSize);
+}
+
+TEST(V4l2FrameCheck, AnMjpegFrameCutShortOrWithGarbageAfterItsHeaderIsSkipped) {
+  const std::vector<uint8_t> jpeg = whiskeye::test::mjpeg_pattern_jpeg(640, 480, 7);
+  const std::vector<uint8_t> cut(jpeg.begin(), jpeg.begin() + static_cast<std::ptrdiff_t>(jpeg.size() / 2));
+  EXPECT_EQ(check_mjpeg(cut, 640, 480), FrameCheck::kJpegCutShort);
+  // The header up to the first scan, then bytes that are no JPEG data, then an end marker.
+  std::size_t pos = 2;
+  while (jpeg[pos + 1] != 0xda) pos += 2 + ((jpeg[pos + 2] << 8) | jpeg[pos + 3]);
+  std::vector<uint8_t> garbage(jpeg.begin(), jpeg.begin() + static_cast<std::ptrdiff_t>(pos + 14));
+  for (int i = 0; i < 20000; ++i) garbage.push_back(static_cast<uint8_t>(i * 7919 >> 3));
+  garbage.insert(garbage.end(), {0xff, 0xd9});
+  EXPECT_EQ(check_mjpeg(garbage, 640, 480), FrameCheck::kJpegDamagedData);
+  EXPECT_EQ(check_mjpeg(std::vector<uint8_t>(614400, 0x80), 640, 480), FrameCheck::kJpegNoStartMarker);
 }
 
 TEST(V4l2Requeue, BufferWhoseQbufFailsIsKeptAndRetried) {

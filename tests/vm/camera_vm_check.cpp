@@ -12,6 +12,8 @@
 #include <whiskeye/driver_status_t.hpp>
 #include <whiskeye/image_t.hpp>
 
+#include "vm_report.h"
+
 using namespace whiskeye;
 
 int main(int argc, char** argv) {
@@ -59,14 +61,7 @@ int main(int argc, char** argv) {
   }
 done:
 
-  std::ofstream out(results_path, std::ios::app);
-  int failures = 0;
-  auto report = [&](const std::string& name, bool ok, const std::string& why) {
-    const std::string line = (ok ? "PASS " : "FAIL ") + name + (ok ? "" : ": " + why);
-    out << line << "\n";
-    std::cout << line << std::endl;
-    failures += !ok;
-  };
+  vm::Report report(results_path);
 
   report("camerad_publishes_frames", frames.size() >= 10, std::to_string(frames.size()) + " frames");
   bool format_ok = !frames.empty();
@@ -116,5 +111,5 @@ done:
          "device_lost " + std::to_string(lost) + " reopens " + std::to_string(reopens) + " in " +
              std::to_string(status.size()) + " status messages");
   report("camerad_status_degraded_then_ok", degraded_seen && ok_at_end, "state sequence does not show the outage");
-  return failures == 0 ? 0 : 1;
+  return report.exit_code();
 }

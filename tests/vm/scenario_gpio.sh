@@ -1,6 +1,6 @@
 #!/bin/bash
 # VM scenario: whiskerd's motor lines (libgpiod) against a real gpiochip, the kernel's gpio-mockup
-# driver built by build_gpio_mockup.sh on the host (a ctest fixture) and loaded here with three named
+# driver built by build_guest_module.sh on the host (a ctest fixture) and loaded here with three named
 # lines (enable, fault, e-stop): first the lines alone (gpio_vm_check), then whiskerd using them, idle
 # and then driving its motors while vita-sim's candump log (fixture vm.sim_replay_inputs) streams.
 #   scenario_gpio.sh RESULTS_DIR CHECK MODULE_DIR WHISKERD WHISKERD_CONFIG SIM_REPLAY_INPUTS

@@ -22,6 +22,8 @@
 
 #include "whiskerd_core.h"
 
+#include "vm_report.h"
+
 using namespace whiskeye;
 
 namespace {
@@ -111,14 +113,7 @@ int main(int argc, char** argv) {
   app.add_option("--timeout-s", timeout_s, "stop listening after this long in any case");
   CLI11_PARSE(app, argc, argv);
 
-  std::ofstream results(results_path, std::ios::app);
-  int failures = 0;
-  auto report = [&](const std::string& name, bool ok, const std::string& why = "") {
-    const std::string line = (ok ? "PASS " : "FAIL ") + prefix + name + (ok ? "" : ": " + why);
-    results << line << std::endl;
-    std::cout << line << std::endl;
-    if (!ok) ++failures;
-  };
+  vm::Report report(results_path, prefix);
 
   whiskerd::Params params;
   std::vector<whisker_sample_t> sim, control;
@@ -209,5 +204,5 @@ int main(int argc, char** argv) {
   }
   report("whiskerd_accepts_every_replayed_frame", rejected == 0 && heartbeats > 0,
          "rejected " + std::to_string(rejected) + ", heartbeats " + std::to_string(heartbeats));
-  return failures == 0 ? 0 : 1;
+  return report.exit_code();
 }

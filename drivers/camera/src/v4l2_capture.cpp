@@ -1,6 +1,8 @@
 // V4L2 mmap streaming capture (see v4l2_capture.h).
 #include "whiskeye/drivers/v4l2_capture.h"
 
+#include <whiskeye/common/jpeg_markers.h>
+
 #include <fcntl.h>
 #include <linux/videodev2.h>
 #include <poll.h>
@@ -50,6 +52,11 @@ const char* frame_check_name(FrameCheck c) {
     case FrameCheck::kShortPayload: return "shorter than stride x height";
     case FrameCheck::kEmpty: return "empty";
     case FrameCheck::kOverlong: return "longer than its buffer";
+    case FrameCheck::kJpegNoStartMarker: return "without a JPEG start-of-image marker";
+    case FrameCheck::kJpegBadHeader: return "whose JPEG header does not parse";
+    case FrameCheck::kJpegCutShort: return "cut short (no JPEG end-of-image marker)";
+    case FrameCheck::kJpegDamagedData: return "with damaged JPEG data after its header";
+    case FrameCheck::kJpegWrongSize: return "whose JPEG header says another size than negotiated";
   }
   return "?";
 }
@@ -63,6 +70,21 @@ FrameCheck check_frame(uint32_t buffer_flags, std::size_t bytesused, std::size_t
   if (bytesused > buffer_length) return FrameCheck::kOverlong;
   if (is_raw_format(pixelformat) && bytesused < static_cast<std::size_t>(stride) * height) {
     return FrameCheck::kShortPayload;
+  }
+  return FrameCheck::kUsable;
+}
+
+FrameCheck check_mjpeg(std::span<const uint8_t> frame, uint32_t width, uint32_t height) {
+  switch (jpeg::check_structure(frame)) {
+    case jpeg::Structure::kWhole: break;
+    case jpeg::Structure::kNoStartMarker: return FrameCheck::kJpegNoStartMarker;
+    case jpeg::Structure::kBadHeader: return FrameCheck::kJpegBadHeader;
+    case jpeg::Structure::kCutShort: return FrameCheck::kJpegCutShort;
+    case jpeg::Structure::kDamagedData: return FrameCheck::kJpegDamagedData;
+  }
+  const jpeg::FrameSize size = jpeg::frame_size(frame);
+  if (static_cast<uint32_t>(size.width) != width || static_cast<uint32_t>(size.height) != height) {
+    return FrameCheck::kJpegWrongSize;
   }
   return FrameCheck::kUsable;
 }
@@ -197,6 +219,7 @@ void Capture::close_device() {
 void Capture::negotiate(const CaptureConfig& config) {
   v4l2_format fmt{};
   bool found = false;
+  int refusal = 0;  // an errno other than EINVAL ("not this format"), e.g. EBUSY: no format to offer yet
   for (uint32_t want : config.formats) {
     fmt = {};
     fmt.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
@@ -213,11 +236,14 @@ void Capture::negotiate(const CaptureConfig& config) {
       break;
     }
     if (r < 0 && gone_errno(errno)) fail("TRY_FMT");
+    if (r < 0 && errno != EINVAL) refusal = errno;
   }
   if (!found) {
     std::string wanted;
     for (uint32_t f : config.formats) wanted += (wanted.empty() ? "" : ", ") + fourcc_name(f);
-    throw CaptureError(device_ + " supports none of the pixel formats " + wanted, false);
+    throw CaptureError(device_ + " supports none of the pixel formats " + wanted +
+                           (refusal ? std::string(" (VIDIOC_TRY_FMT: ") + std::strerror(refusal) + ")" : ""),
+                       false);
   }
   if (xioctl(fd_, VIDIOC_S_FMT, &fmt) < 0) fail("S_FMT");
   const NegotiatedFormat got{fmt.fmt.pix.pixelformat, fmt.fmt.pix.width,     fmt.fmt.pix.height,
@@ -321,13 +347,15 @@ Capture::Result Capture::next(FrameView& frame, int timeout_ms) {
     return Result::kError;
   }
   pending_.push_back(b.index);  // lent to the caller (or skipped): back to the driver at the next call
-  if (const FrameCheck c = check_frame(b.flags, b.bytesused, buffers_[b.index].length, pixelformat_, stride_, height_);
-      c != FrameCheck::kUsable) {
+  const auto* data = static_cast<const uint8_t*>(buffers_[b.index].start);
+  FrameCheck c = check_frame(b.flags, b.bytesused, buffers_[b.index].length, pixelformat_, stride_, height_);
+  if (c == FrameCheck::kUsable && pixelformat_ == kMJPG) c = check_mjpeg({data, b.bytesused}, width_, height_);
+  if (c != FrameCheck::kUsable) {
     ++corrupt_frames_;
     last_skip_ = c;
     return requeue_pending() ? Result::kSkipped : Result::kGone;
   }
-  frame.data = static_cast<const uint8_t*>(buffers_[b.index].start);
+  frame.data = data;
   frame.size = b.bytesused;
   frame.width = width_;
   frame.height = height_;

@@ -8,15 +8,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <csetjmp>
-#include <cstddef>
-#include <cstdio>
-#include <span>
 #include <string>
-#include <utility>
 
-// libjpeg's C API, after <cstdio> (it needs FILE).
-#include <jpeglib.h>
+#include "whiskeye/slam/mjpeg_decode.h"
 
 namespace whiskeye::slam {
 
@@ -59,110 +53,6 @@ void check_raw(const ImageView& im, int bytes_per_pixel) {
   }
 }
 
-// The frame size in a JPEG's header (its first SOF segment), or {0, 0} when there is none before the
-// scan. cv::imdecode takes the size from there, not from the message: a few hundred bytes can claim
-// 32752 x 32752 pixels (gigabytes, seconds of CPU), so the header is read first.
-std::pair<int, int> jpeg_size(std::span<const uint8_t> d) {
-  if (d.size() < 4 || d[0] != 0xff || d[1] != 0xd8) return {0, 0};
-  std::size_t pos = 2;
-  while (pos + 4 <= d.size()) {
-    if (d[pos] != 0xff) return {0, 0};
-    const uint8_t marker = d[pos + 1];
-    if (marker == 0xff) {  // fill byte
-      ++pos;
-      continue;
-    }
-    if (marker == 0x01 || (marker >= 0xd0 && marker <= 0xd7)) {  // no length field
-      pos += 2;
-      continue;
-    }
-    const std::size_t length = (std::size_t{d[pos + 2]} << 8) | d[pos + 3];
-    const bool sof = marker >= 0xc0 && marker <= 0xcf && marker != 0xc4 && marker != 0xc8 && marker != 0xcc;
-    if (sof) {
-      if (length < 7 || pos + 9 > d.size()) return {0, 0};
-      return {(d[pos + 7] << 8) | d[pos + 8], (d[pos + 5] << 8) | d[pos + 6]};
-    }
-    if (marker == 0xda || marker == 0xd9 || length < 2) return {0, 0};  // scan or end before a frame header
-    pos += 2 + length;
-  }
-  return {0, 0};
-}
-
-// Whether a JPEG ends with its end-of-image marker (FF D9), ignoring zero padding after it (some UVC
-// cameras pad their buffers). A frame cut off in transfer has none; OpenCV would decode it anyway,
-// greying out what is missing, and that grey would become a template.
-bool ends_with_eoi(std::span<const uint8_t> d) {
-  std::size_t end = d.size();
-  while (end > 0 && d[end - 1] == 0x00) --end;
-  return end >= 2 && d[end - 2] == 0xff && d[end - 1] == 0xd9;
-}
-
-// MJPEG frames are decoded with libjpeg directly (as OpenCV's imdecode does underneath) so that its
-// warnings are seen: a frame cut short in transfer with an end-of-image marker appended decodes
-// "successfully", greyed out where data is missing, with only libjpeg's own unprefixed "Corrupt JPEG
-// data: premature end of data segment" on stderr. Here any warning refuses the frame, with libjpeg's
-// text in the reason, and nothing is written to stderr. The state is plain C data: libjpeg reports
-// fatal errors by longjmp, which must not cross objects with destructors.
-struct JpegDecoder {
-  jpeg_decompress_struct cinfo;
-  jpeg_error_mgr err;
-  std::jmp_buf jump;
-  char error[JMSG_LENGTH_MAX];
-  char warning[JMSG_LENGTH_MAX];
-};
-
-void jpeg_on_error(j_common_ptr c) {
-  auto* d = reinterpret_cast<JpegDecoder*>(reinterpret_cast<char*>(c->err) - offsetof(JpegDecoder, err));
-  (*c->err->format_message)(c, d->error);
-  std::longjmp(d->jump, 1);
-}
-
-void jpeg_on_message(j_common_ptr c, int level) {
-  if (level >= 0) return;  // trace messages
-  auto* d = reinterpret_cast<JpegDecoder*>(reinterpret_cast<char*>(c->err) - offsetof(JpegDecoder, err));
-  if (c->err->num_warnings++ == 0) (*c->err->format_message)(c, d->warning);
-}
-
-void jpeg_no_output(j_common_ptr) {}
-
-enum class JpegResult { kOk, kError, kWarning, kWrongSize };
-
-// Decodes `data` as greyscale into `out` (width x height, `stride` bytes per row).
-JpegResult decode_jpeg_grey(JpegDecoder* d, const uint8_t* data, std::size_t size, uint8_t* out, std::size_t stride,
-                            int width, int height) {
-  d->error[0] = d->warning[0] = '\0';
-  d->cinfo.err = jpeg_std_error(&d->err);
-  d->err.error_exit = jpeg_on_error;
-  d->err.emit_message = jpeg_on_message;
-  d->err.output_message = jpeg_no_output;
-  jpeg_create_decompress(&d->cinfo);
-  if (setjmp(d->jump) != 0) {
-    jpeg_destroy_decompress(&d->cinfo);
-    return JpegResult::kError;
-  }
-  jpeg_mem_src(&d->cinfo, data, static_cast<unsigned long>(size));
-  jpeg_read_header(&d->cinfo, TRUE);
-  d->cinfo.out_color_space = JCS_GRAYSCALE;
-  jpeg_start_decompress(&d->cinfo);
-  if (static_cast<int>(d->cinfo.output_width) != width || static_cast<int>(d->cinfo.output_height) != height ||
-      d->cinfo.output_components != 1) {
-    jpeg_destroy_decompress(&d->cinfo);
-    return JpegResult::kWrongSize;
-  }
-  while (d->cinfo.output_scanline < d->cinfo.output_height) {
-    JSAMPROW row = out + static_cast<std::size_t>(d->cinfo.output_scanline) * stride;
-    jpeg_read_scanlines(&d->cinfo, &row, 1);
-  }
-  jpeg_finish_decompress(&d->cinfo);
-  const bool warned = d->err.num_warnings > 0;
-  jpeg_destroy_decompress(&d->cinfo);
-  return warned ? JpegResult::kWarning : JpegResult::kOk;
-}
-
-// Decoding costs what the header claims, not what the message weighs: a 331-byte JPEG claiming
-// 10000 x 10000 took 2 s and 550 MB. No camera of this robot comes near 16.8 MP.
-constexpr int64_t kMaxJpegPixels = int64_t{4096} * 4096;
-
 cv::Mat to_grey8(const ImageView& im) {
   // OpenCV wants a non-const pointer for a header over foreign data; it is only read.
   auto* data = const_cast<uint8_t*>(im.data.data());
@@ -184,31 +74,11 @@ cv::Mat to_grey8(const ImageView& im) {
       check_raw(im, 3);
       cv::cvtColor(cv::Mat(im.height, im.width, CV_8UC3, data, stride), grey, cv::COLOR_BGR2GRAY);
       return grey;
-    case kPixMjpeg: {
-      if (im.data.empty()) throw InputError("image: empty MJPEG frame");
-      const auto [width, height] = jpeg_size(im.data);
-      if (width == 0 || height == 0) throw InputError("image: MJPEG frame without a readable JPEG frame header");
-      if (width != im.width || height != im.height) {
-        throw InputError("image: MJPEG frame is " + std::to_string(width) + "x" + std::to_string(height) +
-                         " by its JPEG header, the message says " + std::to_string(im.width) + "x" +
-                         std::to_string(im.height));
-      }
-      if (int64_t{width} * height > kMaxJpegPixels) {
-        throw InputError("image: MJPEG frame of " + std::to_string(width) + "x" + std::to_string(height) +
-                         " is larger than 4096x4096 pixels");
-      }
-      if (!ends_with_eoi(im.data)) throw InputError("image: MJPEG frame cut off (no end-of-image marker)");
-      grey.create(height, width, CV_8UC1);
-      JpegDecoder decoder;
-      switch (decode_jpeg_grey(&decoder, im.data.data(), im.data.size(), grey.data, grey.step[0], width, height)) {
-        case JpegResult::kOk: return grey;
-        case JpegResult::kError: throw InputError(std::string("image: MJPEG frame does not decode: ") + decoder.error);
-        case JpegResult::kWarning:
-          throw InputError(std::string("image: MJPEG frame is damaged (") + decoder.warning + ")");
-        case JpegResult::kWrongSize: throw InputError("image: MJPEG frame decodes to another size than its header's");
-      }
-      throw InputError("image: MJPEG frame does not decode");
-    }
+    case kPixMjpeg:
+      check_mjpeg_frame(im.data, im.width, im.height);  // before allocating what the message claims
+      grey.create(im.height, im.width, CV_8UC1);
+      decode_mjpeg_grey(im.data, im.width, im.height, grey.data, grey.step[0]);
+      return grey;
     default:
       throw InputError("image: unsupported pixel format '" + fourcc_text(im.pixelformat) + "'");
   }

@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -33,15 +34,25 @@ inline int64_t monotonic_to_utime(int64_t ts_mono_us, int64_t now_mono_us, int64
 // Whether a dequeued buffer holds a whole frame. The driver flags a frame it knows is damaged
 // (V4L2_BUF_FLAG_ERROR: lost USB packets, a resync); an uncompressed frame (YUYV, GREY) shorter than
 // stride x height is truncated; an empty buffer holds nothing; one that says it holds more than its
-// mapped length cannot be read. A compressed frame (MJPG) has no fixed size and is usable whenever
-// it is none of these. Such buffers are requeued, counted (camerad's corrupt_frames) and never
+// mapped length cannot be read. A compressed frame (MJPG) has no fixed size; its bytes are read
+// by check_mjpeg() below. Such buffers are requeued, counted (camerad's corrupt_frames) and never
 // published.
-enum class FrameCheck { kUsable, kErrorFlag, kShortPayload, kEmpty, kOverlong };
+enum class FrameCheck {
+  kUsable, kErrorFlag, kShortPayload, kEmpty, kOverlong,
+  // MJPG only (check_mjpeg):
+  kJpegNoStartMarker, kJpegBadHeader, kJpegCutShort, kJpegDamagedData, kJpegWrongSize
+};
 const char* frame_check_name(FrameCheck c);
 inline constexpr uint32_t kBufFlagError = 0x00000040;  // V4L2_BUF_FLAG_ERROR (checked in the source)
 bool is_raw_format(uint32_t pixelformat);
 FrameCheck check_frame(uint32_t buffer_flags, std::size_t bytesused, std::size_t buffer_length, uint32_t pixelformat,
                        uint32_t stride, uint32_t height);
+// An MJPEG frame's bytes, read without decoding (whiskeye::jpeg::check_structure, one pass over the
+// data): a frame cut short (no end-of-image marker), a header that does not parse, data after the
+// header holding markers no JPEG holds there (garbage), or a JPEG whose header claims another size
+// than the negotiated width x height. Garbage that happens to hold only legal markers passes; slamd's
+// decoder refuses it (decode errors in SLAM_STATUS).
+FrameCheck check_mjpeg(std::span<const uint8_t> frame, uint32_t width, uint32_t height);
 
 // What the driver settled on when asked for a format (VIDIOC_S_FMT's answer).
 inline constexpr uint32_t kFieldNone = 1;  // V4L2_FIELD_NONE: progressive (checked in the source)

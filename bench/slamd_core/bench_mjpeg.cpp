@@ -1,0 +1,105 @@
+// mjpeg-bench: what one MJPEG camera frame costs slamd to decode to grey (the visual template's
+// input), at 640x480 and 1280x720, against OpenCV's cv::imdecode and libturbojpeg's tjDecompress2 on
+// the same frames, with a plain reference in the same run: slamd's conversion of a YUYV frame of the
+// same size to grey (cv::cvtColor), i.e. what the frame would cost uncompressed. Figures in
+// docs/performance.md ("### MJPEG decode").
+// Frames: a camera-like grey image (gradients, edges, ±12 grey levels of sensor noise) encoded as a
+// UVC camera sends it (baseline JPEG, YCbCr 4:2:2, quality 85; tests/support/mjpeg_pattern.h).
+#include <benchmark/benchmark.h>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <turbojpeg.h>
+
+#include <algorithm>
+#include <random>
+#include <stdexcept>
+#include <vector>
+
+#include "mjpeg_pattern.h"
+#include "whiskeye/slam/mjpeg_decode.h"
+
+namespace {
+
+struct Size {
+  int width, height;
+};
+constexpr Size kSizes[] = {{640, 480}, {1280, 720}};
+
+const std::vector<uint8_t>& frame(int which) {
+  static std::vector<uint8_t> frames[2];
+  std::vector<uint8_t>& f = frames[which];
+  if (f.empty()) {
+    const auto [w, h] = kSizes[which];
+    std::vector<uint8_t> grey = whiskeye::test::mjpeg_pattern(w, h, 77);
+    std::mt19937 rng(1);
+    std::uniform_int_distribution<int> noise(-12, 12);
+    for (uint8_t& p : grey) p = static_cast<uint8_t>(std::clamp(p + noise(rng), 0, 255));
+    f = whiskeye::test::encode_jpeg(grey, w, h, w, 85);
+  }
+  return f;
+}
+
+void label(benchmark::State& state) {
+  const auto [w, h] = kSizes[state.range(0)];
+  state.SetLabel(std::to_string(w) + "x" + std::to_string(h) + ", " + std::to_string(frame(state.range(0)).size() / 1024) +
+                 " KiB");
+}
+
+void BM_MjpegDecodeSlamd(benchmark::State& state) {
+  const auto [w, h] = kSizes[state.range(0)];
+  const std::vector<uint8_t>& jpeg = frame(state.range(0));
+  std::vector<uint8_t> grey(static_cast<std::size_t>(w) * h);
+  for (auto _ : state) {
+    whiskeye::slam::decode_mjpeg_grey(jpeg, w, h, grey.data(), static_cast<std::size_t>(w));
+    benchmark::DoNotOptimize(grey.data());
+  }
+  label(state);
+}
+
+void BM_MjpegDecodeImdecode(benchmark::State& state) {
+  const std::vector<uint8_t>& jpeg = frame(state.range(0));
+  const cv::Mat buf(1, static_cast<int>(jpeg.size()), CV_8UC1, const_cast<uint8_t*>(jpeg.data()));
+  for (auto _ : state) {
+    cv::Mat grey = cv::imdecode(buf, cv::IMREAD_GRAYSCALE);
+    benchmark::DoNotOptimize(grey.data);
+  }
+  label(state);
+}
+
+void BM_MjpegDecodeTurbojpeg(benchmark::State& state) {
+  const auto [w, h] = kSizes[state.range(0)];
+  const std::vector<uint8_t>& jpeg = frame(state.range(0));
+  std::vector<uint8_t> grey(static_cast<std::size_t>(w) * h);
+  tjhandle tj = tjInitDecompress();
+  for (auto _ : state) {
+    if (tjDecompress2(tj, jpeg.data(), jpeg.size(), grey.data(), w, w, h, TJPF_GRAY, TJFLAG_STOPONWARNING) != 0) {
+      state.SkipWithError(tjGetErrorStr2(tj));
+      break;
+    }
+    benchmark::DoNotOptimize(grey.data());
+  }
+  tjDestroy(tj);
+  label(state);
+}
+
+// The plain reference: a YUYV frame of the same size to grey, as slamd converts uncompressed frames.
+void BM_YuyvToGreyReference(benchmark::State& state) {
+  const auto [w, h] = kSizes[state.range(0)];
+  const cv::Mat yuyv(h, w, CV_8UC2, cv::Scalar(90, 128));
+  cv::Mat grey;
+  for (auto _ : state) {
+    cv::cvtColor(yuyv, grey, cv::COLOR_YUV2GRAY_YUYV);
+    benchmark::DoNotOptimize(grey.data);
+  }
+  label(state);
+}
+
+}  // namespace
+
+BENCHMARK(BM_MjpegDecodeSlamd)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_MjpegDecodeImdecode)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_MjpegDecodeTurbojpeg)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_YuyvToGreyReference)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+BENCHMARK_MAIN();

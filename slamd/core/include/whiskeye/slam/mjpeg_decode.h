@@ -1,0 +1,27 @@
+// slamd's MJPEG decoder: one camera frame (a JPEG) to 8-bit grey, refusing a damaged one with a
+// reason instead of decoding it to grey. The visual template uses it (make_visual_template for
+// kPixMjpeg); the VM test of camerad's MJPEG path decodes the published frames with it too, and
+// bench/slamd_core/bench_mjpeg.cpp measures it against cv::imdecode and libturbojpeg.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+
+#include "whiskeye/slam/types.h"
+
+namespace whiskeye::slam {
+
+// What is checked before decoding, without allocating (so the caller may allocate `out` after it):
+// the size in the JPEG's header must be the message's (`width` x `height`) and at most 4096 x 4096
+// (decoding costs what the header claims), and the frame must end with its end-of-image marker.
+// Throws InputError ("image: MJPEG frame ...").
+void check_mjpeg_frame(std::span<const uint8_t> jpeg, int width, int height);
+
+// Decodes `jpeg` to grey into `out` (`stride` bytes a row, `height` rows), after check_mjpeg_frame().
+// Any warning of libjpeg's refuses the frame (a frame cut short with an EOI appended decodes
+// "successfully", greyed out where data is missing), with libjpeg's words in the reason; libjpeg
+// writes nothing to stderr. Throws InputError ("image: MJPEG frame ...").
+void decode_mjpeg_grey(std::span<const uint8_t> jpeg, int width, int height, uint8_t* out, std::size_t stride);
+
+}  // namespace whiskeye::slam

@@ -1,0 +1,141 @@
+#!/bin/bash
+# VM scenario: camerad's MJPEG path against a kernel device. v4l2loopback (built for the guest kernel
+# on the host, fixture vm.v4l2loopback_module) is fed known JPEG frames by mjpeg_loopback_writer;
+# camerad negotiates MJPG on it and publishes CAMERA; mjpeg_vm_check decodes every published frame
+# with slamd's decoder and compares it with the pattern written for its number. Meanwhile the writer
+# damages frames (cut short, garbage after a valid header), goes silent and comes back, and last the
+# device is removed and created again; each shows in camerad's DRIVER_STATUS.
+#   scenario_camerad_mjpeg.sh RESULTS_DIR MODULE_DIR CAMERAD WRITER CHECK DRIVER_STATUS_PROBE
+set -u
+RESULTS_DIR=$1
+MODULE=$2/v4l2loopback.ko
+CAMERAD=$3
+WRITER=$4
+CHECK=$5
+PROBE=$6
+source "$(dirname "$0")/lib.sh"
+# A command written to a writer that has gone must fail that write, not kill the scenario.
+trap '' PIPE
+
+setup_lcm_loopback
+# One loopback device, /dev/video10, announcing capture and output at once (exclusive_caps=0), with
+# 8 buffers (v4l2loopback's default is 2).
+# Module autoloading would run the initramfs's modprobe: V4L2's core (videodev) is loaded explicitly.
+load_loopback() {
+  modprobe videodev && insmod "$MODULE" devices=1 video_nr=10 card_label=WhiskEye-MJPEG-loopback max_buffers=8
+}
+check v4l2loopback_loads load_loopback
+check v4l2loopback_device_appears test -c /dev/video10
+[ -c /dev/video10 ] || exit 0  # nothing below can run; the failures above say why
+
+# The writer reads its commands from a FIFO the scenario holds open (fd 3) until it sends quit.
+# start_writer LOG FIRST_NUMBER: the writer's pid in $writer.
+start_writer() {
+  rm -f /tmp/writer.cmd
+  mkfifo /tmp/writer.cmd
+  "$WRITER" --device /dev/video10 --fps 10 --first-number "$2" < /tmp/writer.cmd > "$1" 2>&1 &
+  writer=$!
+  exec 3> /tmp/writer.cmd
+}
+say() { echo "$1" >&3 || echo "the writer is gone: '$1' not sent"; }
+start_writer "$RESULTS_DIR/writer.log" 0
+check writer_sets_mjpeg_on_the_device wait_for "$RESULTS_DIR/writer.log" "writing 640x480 MJPG" 30
+
+cat > /tmp/camerad_mjpeg.yaml <<'YAML'
+camera: {match_card: WhiskEye-MJPEG, width: 640, height: 480, fps: 10, formats: [MJPG],
+         frame_timeout_s: 4.0, reopen_initial_s: 0.2, reopen_max_s: 1.0}
+YAML
+log=$RESULTS_DIR/camerad.log
+"$CAMERAD" -c /tmp/camerad_mjpeg.yaml > "$log" 2>&1 &
+cam_pid=$!
+"$CHECK" --results "$RESULTS_DIR/results.txt" > "$RESULTS_DIR/check.log" 2>&1 &
+check_pid=$!
+check camerad_negotiates_640x480_mjpg_on_the_loopback_device \
+  wait_for "$log" "streaming /dev/video10 640x480 MJPG" 60
+
+probe() { "$PROBE" --driver camerad --seconds "${2:-2}" > "/tmp/status_$1.txt"; cp "/tmp/status_$1.txt" "$RESULTS_DIR/status_$1.txt"; }
+counter() { sed -n "s/^$2=//p" "/tmp/status_$1.txt"; }
+has() { grep -Eq "^$2\$" "/tmp/status_$1.txt"; }  # has PROBE 'name=regex'
+# grew PROBE_BEFORE PROBE_AFTER NAME N: the counter NAME went up by exactly N between the two probes.
+grew() { [ $(( $(counter "$2" "$3") - $(counter "$1" "$3") )) -eq "$4" ]; }
+
+sleep 3
+probe streaming
+clean_stream() { has streaming 'state=1' && has streaming 'frames=([1-9][0-9]+)' && has streaming 'corrupt_frames=0'; }
+check camerad_is_ok_and_counts_no_damaged_frame_in_a_clean_stream clean_stream
+
+# Three frames cut short (their first half: no end-of-image marker), then three whose data after a
+# valid header is garbage: each skipped and counted, logged once per kind, the stream going on.
+say "cut 3"
+sleep 2
+probe cut
+check camerad_counts_each_frame_cut_short grew streaming cut corrupt_frames 3
+check camerad_logs_a_frame_cut_short grep -q "skipping a frame cut short (no JPEG end-of-image marker)" "$log"
+say "garbage 3"
+sleep 2
+probe garbage
+check camerad_counts_each_frame_with_garbage_after_its_header grew cut garbage corrupt_frames 3
+check camerad_logs_a_frame_with_garbage grep -q "skipping a frame with damaged JPEG data after its header" "$log"
+check camerad_stays_ok_through_damaged_frames has garbage 'state=1'
+
+# The camera goes silent (the device stays open): DEGRADED, "no frame", then OK when frames return.
+say pause
+sleep 1.5
+probe silent 1
+check camerad_is_degraded_while_the_camera_is_silent \
+  bash -c "grep -q '^state=2$' /tmp/status_silent.txt && grep -q '^message=.*no frame' /tmp/status_silent.txt"
+say resume
+sleep 3
+probe resumed
+check camerad_is_ok_again_when_the_camera_resumes has resumed 'state=1'
+resumed_frames() { [ "$(counter resumed frames)" -gt "$(counter silent frames)" ]; }
+check camerad_publishes_again_after_the_silence resumed_frames
+
+# The device removed and created again. v4l2loopback 0.12.7 cannot remove a device while it is open
+# (an open file pins the module; there is no remove ioctl before 0.13), so the camera stops first:
+# the writer exits, camerad closes the silent device after frame_timeout_s and retries it, and the
+# module is unloaded between two of its tries.
+say quit
+exec 3>&-
+wait $writer
+cat "$RESULTS_DIR/writer.log"
+unload_loopback() {
+  for _ in $(seq 60); do rmmod v4l2loopback 2>/dev/null && return 0; sleep 0.2; done
+  rmmod v4l2loopback
+}
+check v4l2loopback_unloads_once_camerad_lets_go unload_loopback
+check camerad_closes_the_silent_device wait_for "$log" "/dev/video10: no frames; closing and reopening" 10
+check camerad_says_the_camera_is_gone \
+  wait_for "$log" "no V4L2 capture device whose card or driver contains 'WhiskEye-MJPEG'" 10
+probe gone 2
+check camerad_is_degraded_without_a_camera has gone 'state=2'
+check v4l2loopback_loads_again load_loopback
+start_writer "$RESULTS_DIR/writer2.log" 10000
+# Two "streaming" lines: the first session and the one after the device came back (up to 20 s).
+streams_again() {
+  for _ in $(seq 100); do
+    [ "$(grep -c 'streaming /dev/video10 640x480 MJPG' "$log")" -ge 2 ] && return 0
+    sleep 0.2
+  done
+  return 1
+}
+check camerad_reopens_the_recreated_device streams_again
+sleep 3
+probe back
+check camerad_is_ok_on_the_recreated_device has back 'state=1'
+check camerad_status_counts_the_loss_and_the_reopen \
+  bash -c "[ $(counter back device_lost) -ge 1 ] && [ $(counter back reopens) -ge 1 ] && [ $(counter back open_failures) -ge 1 ]"
+check camerad_counts_no_more_damaged_frames_than_were_written has back 'corrupt_frames=6'
+
+kill -TERM $check_pid
+check_rc=0
+wait $check_pid || check_rc=$?
+cat "$RESULTS_DIR/check.log"
+exited_ok mjpeg_vm_check_exits_0 "$check_rc"
+say quit
+exec 3>&-
+wait $writer
+kill -TERM $cam_pid
+wait $cam_pid
+check camerad_exits_cleanly_on_sigterm test $? = 0
+exit 0
