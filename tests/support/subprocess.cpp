@@ -47,6 +47,9 @@ Subprocess::Subprocess(const std::vector<std::string>& argv, std::string output_
     }
     const int devnull = ::open("/dev/null", O_RDONLY);
     if (devnull >= 0) ::dup2(devnull, 0);
+    // Nothing else of the test's: an inherited socket (the test's own LCM) would be counted as the
+    // child's (slamd's receive drops are read per socket from /proc/net/udp) and outlive the test.
+    ::close_range(3, ~0U, 0);
     ::setpgid(0, 0);  // its own process group, so stop() reaches grandchildren (xvfb-run, java)
     ::execvpe(args[0], args.data(), env.data());
     std::fprintf(stderr, "exec %s failed: %s\n", args[0], std::strerror(errno));

@@ -1,0 +1,615 @@
+// The chaos test (docs/reliability.md, "A chaos test"): live slamd over udpm:// (in a private network
+// namespace) fed four minutes of simulated data while a fault injector interleaves SIGKILL and
+// restart, malformed and oversized messages, a 10x flood, and the state directory filling up and
+// being freed. Afterwards slamd is running and OK, every fault was counted in SLAM_STATUS, memory
+// stayed bounded, and the map equals, experience for experience and byte for byte, the map of an
+// uninterrupted `slamd --replay` fed the same cycles.
+//
+// What the uninterrupted run is not fed: what slamd could not have kept. The messages published while
+// it was down, and, at each SIGKILL, the cycle it was still assembling (its odometry since the last
+// cycle handed out, a whisk cycle waiting for its camera frame): held in memory, not yet a cycle, so
+// in no checkpoint. Every cycle handed out was checkpointed before the kill (the injector waits for
+// the newest checkpoint to hold it), so nothing processed is lost; the test proves that.
+#include "checkpoint_store.h"
+#include "scratch.h"
+#include "subprocess.h"
+
+#include "whiskeye/common/bus.h"
+
+#include <whiskeye/driver_status_t.hpp>
+#include <whiskeye/image_t.hpp>
+#include <whiskeye/odometry_t.hpp>
+#include <whiskeye/slam_status_t.hpp>
+#include <whiskeye/vita_event_t.hpp>
+#include <whiskeye/vita_map_t.hpp>
+#include <whiskeye/whisk_cycle_t.hpp>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <deque>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <regex>
+#include <sched.h>
+#include <span>
+#include <sys/mount.h>
+#include <thread>
+#include <unistd.h>
+
+namespace whiskeye {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::Subprocess;
+using testing::wait_until;
+
+const std::string kSlamd = SLAMD_EXE;
+const std::string kConfig = WHISKEYE_SOURCE_DIR "/config/slam.yaml";
+
+// The schedule, in seconds of data from the start of the log.
+constexpr double kDataSeconds = 240.0;
+constexpr double kSpeed = 4.0;        // data seconds per wall second (the flood goes at 1x)
+constexpr double kDownSeconds = 3.0;  // data published while slamd is down
+const std::vector<double> kKillsAt{30, 70, 130, 160, 190, 215};
+const std::vector<double> kHostileAt{20, 145};
+constexpr double kFloodFrom = 50, kFloodTo = 60;
+constexpr int kFloodFactor = 10;  // every message of the flood window goes out 10 times: itself and 9 stale copies
+                                  // spread evenly until its channel's next message
+constexpr double kDiskFullFrom = 90, kDiskFullTo = 110;
+constexpr long kMaxRssKb = 256 * 1024;  // slamd's high-water mark, whatever was thrown at it
+
+// The state directory on a tmpfs of its own (in a private mount namespace), small enough to fill.
+void mount_small_tmpfs(const fs::path& dir) {
+  // Before any thread exists: unshare(CLONE_NEWNS) refuses a multi-threaded process.
+  ASSERT_EQ(::unshare(CLONE_NEWNS), 0) << "unshare(CLONE_NEWNS): " << std::strerror(errno) << " (the test runs as root)";
+  ASSERT_EQ(::mount("none", "/", nullptr, MS_REC | MS_PRIVATE, nullptr), 0) << std::strerror(errno);
+  fs::create_directories(dir);
+  ASSERT_EQ(::mount("chaos", dir.c_str(), "tmpfs", 0, "size=4m,mode=0700"), 0) << std::strerror(errno);
+}
+
+// Writes `path` until the filesystem is full; returns the bytes written.
+std::size_t fill_disk(const fs::path& path) {
+  std::FILE* f = std::fopen(path.c_str(), "wb");
+  if (f == nullptr) return 0;
+  std::setvbuf(f, nullptr, _IONBF, 0);
+  std::size_t written = 0;
+  for (const std::size_t chunk : {std::size_t{65536}, std::size_t{512}}) {
+    const std::vector<char> block(chunk, 'x');
+    while (std::fwrite(block.data(), 1, block.size(), f) == block.size()) written += chunk;
+    std::clearerr(f);
+  }
+  std::fclose(f);
+  return written;
+}
+
+long vm_hwm_kb(int pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/status");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("VmHWM:", 0) == 0) return std::stol(line.substr(6));
+  }
+  return -1;
+}
+
+uint64_t newest_checkpoint_sequence(const fs::path& dir) {
+  std::vector<fs::path> files;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    if (e.path().extension() == ".vslam") files.push_back(e.path());
+  }
+  if (files.empty()) return 0;
+  std::sort(files.begin(), files.end());
+  return slamd::read_checkpoint(files.back().string()).sequence;
+}
+
+// What slamd publishes, gathered by a thread of its own: it must read every datagram on the group
+// (camera frames included) to see slamd's few small messages.
+class Observer {
+ public:
+  Observer() {
+    subscribe<vita_event_t>(bus_, "VITA_EVENT", [this](const vita_event_t& m) {
+      std::lock_guard lock(mutex_);
+      ++events_;
+      all_events_.push_back(m);
+      last_event_utime_ = m.utime;
+      last_event_at_ = std::chrono::steady_clock::now();
+    }, errors_);
+    subscribe<slam_status_t>(bus_, "SLAM_STATUS", [this](const slam_status_t& m) {
+      std::lock_guard lock(mutex_);
+      status_ = m;
+      if (m.state == driver_status_t::STATE_DEGRADED) degraded_ = m;
+    }, errors_);
+    subscribe<vita_map_t>(bus_, "VITA_MAP", [this](const vita_map_t& m) {
+      std::lock_guard lock(mutex_);
+      map_ = m;
+    }, errors_);
+    thread_ = std::thread([this] {
+      while (!stop_) bus_.handle_timeout(20);
+    });
+  }
+  ~Observer() {
+    stop_ = true;
+    thread_.join();
+  }
+  // A new slamd process: its counters start again.
+  void new_session() {
+    std::lock_guard lock(mutex_);
+    events_ = 0;
+    status_.reset();
+    degraded_.reset();
+  }
+  int events() const {
+    std::lock_guard lock(mutex_);
+    return events_;
+  }
+  int64_t last_event_utime() const {
+    std::lock_guard lock(mutex_);
+    return last_event_utime_;
+  }
+  double seconds_since_last_event() const {
+    std::lock_guard lock(mutex_);
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - last_event_at_).count();
+  }
+  std::optional<slam_status_t> status() const {
+    std::lock_guard lock(mutex_);
+    return status_;
+  }
+  std::optional<slam_status_t> degraded() const {
+    std::lock_guard lock(mutex_);
+    return degraded_;
+  }
+  std::optional<vita_map_t> map() const {
+    std::lock_guard lock(mutex_);
+    return map_;
+  }
+  int64_t decode_errors() const { return errors_.total(); }
+  std::vector<vita_event_t> all_events() const {
+    std::lock_guard lock(mutex_);
+    return all_events_;
+  }
+
+ private:
+  LcmBus bus_;
+  DecodeErrors errors_;
+  mutable std::mutex mutex_;
+  int events_ = 0;
+  std::vector<vita_event_t> all_events_;  // every session's
+  int64_t last_event_utime_ = INT64_MIN;
+  std::chrono::steady_clock::time_point last_event_at_ = std::chrono::steady_clock::now();
+  std::optional<slam_status_t> status_;
+  std::optional<slam_status_t> degraded_;
+  std::optional<vita_map_t> map_;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+// One of slamd's inputs in the simulator's log, and whether the uninterrupted run is fed it.
+struct Input {
+  int64_t event_utime = 0;  // the log's time: what publishing is paced by
+  int64_t sample_utime = 0; // the message's own time (odometry: sample; whisk cycle: its end)
+  std::string channel;
+  std::span<const uint8_t> data;
+  int session = -1;  // the slamd process it was published to; -1: published while slamd was down
+  bool kept = true;
+};
+
+// Malformed and oversized messages, each of which slamd must reject and count, at data time `now`.
+// Returns how many are undecodable and how many decode but are rejected.
+std::pair<int, int> publish_hostile(LcmBus& bus, int64_t now) {
+  int undecodable = 0, rejected = 0;
+  const std::vector<uint8_t> garbage{0xde, 0xad, 0xbe, 0xef, 0x00, 0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07};
+  for (const char* channel : {"WHISK_CYCLE", "CAMERA", "ODOMETRY"}) {
+    bus.publish_raw(channel, garbage);
+    ++undecodable;
+  }
+  odometry_t odo{};
+  odo.utime = now;
+  odo.vx = std::numeric_limits<double>::quiet_NaN();
+  publish(bus, "ODOMETRY", odo);
+  ++rejected;
+
+  whisk_cycle_t wc{};
+  wc.utime = wc.utime_start = wc.utime_end = now;
+  wc.num_whiskers = 24;
+  wc.num_samples = 1;
+  wc.sample_utime = {now};
+  wc.sample_valid = {1};
+  wc.phase = {0};
+  wc.theta = {std::vector<float>(24, 7.0f)};  // beyond ±pi
+  wc.deflection_x = wc.deflection_y = {std::vector<float>(24, 0.0f)};
+  wc.contact = {std::vector<int8_t>(24, 0)};
+  publish(bus, "WHISK_CYCLE", wc);
+  ++rejected;
+
+  image_t im{};
+  im.utime = now;
+  im.width = 640;
+  im.height = 480;
+  im.row_stride = 1280;
+  im.pixelformat = image_t::PIXEL_FORMAT_YUYV;
+  im.size = 16;
+  im.data.assign(16, 0);  // far fewer bytes than row_stride × height
+  publish(bus, "CAMERA", im);
+  ++rejected;
+
+  // Oversized: 0 whiskers and 200,000 samples (2 MB; ten times the samples a cycle may hold), outside
+  // the contract before decoding.
+  whisk_cycle_t big{};
+  big.utime = big.utime_start = big.utime_end = now;
+  big.num_whiskers = 0;
+  big.num_samples = 200'000;
+  big.sample_utime.assign(static_cast<std::size_t>(big.num_samples), now);
+  big.sample_valid.assign(static_cast<std::size_t>(big.num_samples), 1);
+  big.phase.assign(static_cast<std::size_t>(big.num_samples), 0);
+  big.theta = big.deflection_x = big.deflection_y =
+      std::vector<std::vector<float>>(static_cast<std::size_t>(big.num_samples));
+  big.contact = std::vector<std::vector<int8_t>>(static_cast<std::size_t>(big.num_samples));
+  publish(bus, "WHISK_CYCLE", big);
+  ++rejected;
+  return {undecodable, rejected};
+}
+
+TEST(SlamdChaos, SurvivesKillsHostileMessagesAFloodAndAFullDiskAndKeepsTheMapOfAnUninterruptedRun) {
+  const fs::path dir = testing::scratch_dir("slamd_chaos");
+  const fs::path state = dir / "state";
+  mount_small_tmpfs(state);
+  if (HasFatalFailure()) return;
+  struct Unmount {
+    fs::path path;
+    ~Unmount() { ::umount2(path.c_str(), MNT_DETACH); }
+  } unmount{state};
+
+  const std::string sim_log = (dir / "sim.lcmlog").string();
+  {
+    Subprocess sim({VITA_SIM_EXE, "--world", WHISKEYE_SOURCE_DIR "/config/worlds/aliased_arena.yaml", "--robot",
+                    WHISKEYE_SOURCE_DIR "/config/robot.yaml", "--duration", std::to_string(kDataSeconds), "--seed",
+                    "11", "--quiet", "--output", sim_log});
+    ASSERT_EQ(sim.wait(120), 0) << sim.output();
+  }
+  LogReader reader(sim_log);
+  std::vector<Input> inputs;
+  {
+    LogReader::EventView ev;
+    while (reader.next(ev)) {
+      Input in;
+      in.channel = std::string(ev.channel);
+      if (in.channel == "ODOMETRY") {
+        odometry_t m;
+        ASSERT_TRUE(decode_message(ev.data, m));
+        in.sample_utime = m.utime;
+      } else if (in.channel == "WHISK_CYCLE") {
+        whisk_cycle_t m;
+        ASSERT_TRUE(decode_message(ev.data, m));
+        in.sample_utime = m.utime_end;
+      } else if (in.channel == "CAMERA") {
+        in.sample_utime = ev.utime;
+      } else {
+        continue;
+      }
+      in.event_utime = ev.utime;
+      in.data = ev.data;  // a view into the mapped log, valid while `reader` lives
+      inputs.push_back(std::move(in));
+    }
+  }
+  ASSERT_GT(inputs.size(), 10000u);
+  const int64_t t0 = inputs.front().event_utime;
+  const auto at = [&](double seconds) { return t0 + static_cast<int64_t>(seconds * 1e6); };
+
+  Observer observer;
+  LcmBus bus;
+
+  // The slamd process of the current session.
+  std::unique_ptr<Subprocess> slamd;
+  int session = 0;
+  uint64_t resumed_after = 0;  // the checkpointed cycles the current session started from
+  long max_rss_kb = 0;
+  const auto start_slamd = [&] {
+    observer.new_session();
+    slamd = std::make_unique<Subprocess>(std::vector<std::string>{kSlamd, "--config", kConfig, "--state-dir", state.string()},
+                                         (dir / ("slamd-" + std::to_string(session) + ".log")).string());
+    ASSERT_TRUE(wait_until([&] { return slamd->output().find("running in vita mode") != std::string::npos; }, 20))
+        << slamd->output();
+    const std::string out = slamd->output();
+    if (session == 0) {
+      EXPECT_EQ(out.find("resuming from"), std::string::npos) << out;
+      return;
+    }
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(out, m, std::regex(R"(resuming from \S+ \(after cycle (\d+)\))"))) << out;
+    EXPECT_EQ(std::stoull(m[1]), resumed_after) << "every cycle handed out before the kill was in the newest checkpoint";
+  };
+  // Until every cycle slamd handed out is in the newest checkpoint and nothing more comes.
+  const auto quiesce = [&] {
+    ASSERT_TRUE(wait_until([&] {
+      return observer.seconds_since_last_event() > 0.5 &&
+             newest_checkpoint_sequence(state) == resumed_after + static_cast<uint64_t>(observer.events());
+    }, 30)) << "events " << observer.events() << " after cycle " << resumed_after << ", newest checkpoint after cycle "
+            << newest_checkpoint_sequence(state) << "\n" << slamd->output();
+  };
+  // The newest SLAM_STATUS of this session, once it has counted every cycle handed out.
+  const auto settled_status = [&] {
+    std::optional<slam_status_t> st;
+    EXPECT_TRUE(wait_until([&] {
+      st = observer.status();
+      return st && st->cycles == observer.events();
+    }, 5)) << slamd->output();
+    return st.value_or(slam_status_t{});
+  };
+
+  start_slamd();
+  ASSERT_FALSE(HasFatalFailure());
+
+  std::size_t kill = 0, hostile = 0;
+  int hostile_undecodable = 0, hostile_rejected = 0;  // this session's
+  int64_t stale_published = 0;                         // this session's
+  bool disk_full = false, disk_freed = false;
+  bool flooding = false;
+  int64_t written_while_full = 0;
+  int kills = 0;
+  std::map<std::string, std::deque<std::span<const uint8_t>>> recent;  // per channel, for the flood's stale copies
+  std::multimap<int64_t, std::pair<std::string, std::span<const uint8_t>>> stale_due;  // by log time
+  // The log time of the next message on the same channel (a stale copy goes out before it).
+  std::vector<int64_t> next_on_channel(inputs.size(), INT64_MAX);
+  {
+    std::map<std::string, int64_t> next;
+    for (std::size_t j = inputs.size(); j-- > 0;) {
+      const auto it = next.find(inputs[j].channel);
+      next_on_channel[j] = it == next.end() ? inputs[j].event_utime + 1'000'000 : it->second;
+      next[inputs[j].channel] = inputs[j].event_utime;
+    }
+  }
+  const fs::path filler = state / "filler";
+  auto pace_start = std::chrono::steady_clock::now();
+  int64_t pace_utime = t0;
+  const auto pace = [&](int64_t event_utime, double speed) {
+    const auto due = pace_start + std::chrono::microseconds(static_cast<int64_t>((event_utime - pace_utime) / speed));
+    std::this_thread::sleep_until(due);
+  };
+  const auto restart_pacing = [&](int64_t event_utime) {
+    pace_start = std::chrono::steady_clock::now();
+    pace_utime = event_utime;
+  };
+
+  for (std::size_t i = 0; i < inputs.size(); ++i) {
+    Input& in = inputs[i];
+    if (kill < kKillsAt.size() && in.event_utime >= at(kKillsAt[kill])) {
+      // This session's faults are all counted.
+      quiesce();
+      ASSERT_FALSE(HasFatalFailure());
+      const slam_status_t st = settled_status();
+      // DEGRADED for 10 s after rejected input, saying so; otherwise OK.
+      if (st.state == driver_status_t::STATE_DEGRADED && hostile_undecodable + hostile_rejected + stale_published > 0) {
+        EXPECT_NE(st.message.find("rejected input"), std::string::npos) << st.message;
+      } else {
+        EXPECT_EQ(st.state, driver_status_t::STATE_OK) << st.message;
+      }
+      if (disk_freed) {
+        EXPECT_GT(st.checkpoints_written, written_while_full) << "checkpoints again once the disk had room";
+      }
+      EXPECT_EQ(st.decode_errors, hostile_undecodable);
+      EXPECT_EQ(st.validation_errors, hostile_rejected + stale_published);
+      EXPECT_EQ(st.out_of_order, stale_published);
+      EXPECT_EQ(st.lcm_receive_drops, 0) << "session " << session;
+      EXPECT_EQ(st.checkpoint_errors > 0, disk_freed) << "checkpoints failed only while the disk was full";
+      max_rss_kb = std::max(max_rss_kb, vm_hwm_kb(slamd->pid()));
+      // SIGKILL: the cycle being assembled is lost with the process (not in the uninterrupted run).
+      const int64_t last_cycle_end = observer.last_event_utime();
+      for (std::size_t j = 0; j < i; ++j) {
+        Input& p = inputs[j];
+        if (p.session == session && p.channel != "CAMERA" && p.sample_utime > last_cycle_end) p.kept = false;
+      }
+      resumed_after += static_cast<uint64_t>(observer.events());
+      slamd->signal(SIGKILL);
+      ASSERT_EQ(slamd->wait(10), 128 + SIGKILL);
+      ++kills;
+      // Published while slamd is down: lost to it.
+      const int64_t down_until = in.event_utime + static_cast<int64_t>(kDownSeconds * 1e6);
+      restart_pacing(in.event_utime);
+      for (; i < inputs.size() && inputs[i].event_utime < down_until; ++i) {
+        pace(inputs[i].event_utime, kSpeed);
+        bus.publish_raw(inputs[i].channel, inputs[i].data);
+        inputs[i].kept = false;
+      }
+      ++session;
+      hostile_undecodable = hostile_rejected = 0;
+      stale_published = 0;
+      disk_freed = false;
+      start_slamd();
+      ASSERT_FALSE(HasFatalFailure());
+      ++kill;
+      if (i >= inputs.size()) break;
+      restart_pacing(inputs[i].event_utime);
+    }
+    Input& cur = inputs[i];
+    if (hostile < kHostileAt.size() && cur.event_utime >= at(kHostileAt[hostile])) {
+      const auto [u, r] = publish_hostile(bus, cur.event_utime);
+      hostile_undecodable += u;
+      hostile_rejected += r;
+      ++hostile;
+    }
+    if (!disk_full && !disk_freed && cur.event_utime >= at(kDiskFullFrom) && cur.event_utime < at(kDiskFullTo)) {
+      ASSERT_GT(fill_disk(filler), 0u);
+      disk_full = true;
+    }
+    if (disk_full && cur.event_utime >= at(kDiskFullTo)) {
+      // While full: DEGRADED, saying why, and the checkpoints counted as failing.
+      ASSERT_TRUE(wait_until([&] { return observer.degraded().has_value(); }, 10)) << slamd->output();
+      const slam_status_t d = *observer.degraded();
+      EXPECT_NE(d.message.find("checkpoints failing, the map is not being saved"), std::string::npos) << d.message;
+      EXPECT_GT(d.checkpoint_errors, 0);
+      fs::remove(filler);  // OK again by itself: checked at the end of the session
+      disk_full = false;
+      disk_freed = true;
+      written_while_full = d.checkpoints_written;
+      restart_pacing(cur.event_utime);
+    }
+    const bool flood = cur.event_utime >= at(kFloodFrom) && cur.event_utime < at(kFloodTo);
+    if (flood != flooding) {  // the flood goes at 1x, the rest at kSpeed
+      restart_pacing(cur.event_utime);
+      flooding = flood;
+    }
+    // The flood's stale copies due before this message.
+    while (!stale_due.empty() && stale_due.begin()->first < cur.event_utime) {
+      pace(stale_due.begin()->first, flood ? 1.0 : kSpeed);
+      bus.publish_raw(stale_due.begin()->second.first, stale_due.begin()->second.second);
+      ++stale_published;
+      stale_due.erase(stale_due.begin());
+    }
+    pace(cur.event_utime, flood ? 1.0 : kSpeed);
+    bus.publish_raw(cur.channel, cur.data);
+    cur.session = session;
+    auto& ring = recent[cur.channel];
+    if (flood && !ring.empty()) {
+      // Nine stale copies, spread evenly until the channel's next message: each older than what its
+      // input already delivered, so each is dropped and counted.
+      const int64_t period = next_on_channel[i] - cur.event_utime;
+      for (int c = 1; c < kFloodFactor; ++c) {
+        stale_due.emplace(cur.event_utime + period * c / kFloodFactor,
+                          std::make_pair(cur.channel, ring[static_cast<std::size_t>(c - 1) % ring.size()]));
+      }
+    }
+    ring.push_front(cur.data);
+    if (ring.size() > kFloodFactor) ring.pop_back();
+  }
+  EXPECT_GE(kills, 5);
+  EXPECT_EQ(hostile, kHostileAt.size());
+
+  // After the last message: running, OK, everything counted; then stopped, which saves the state.
+  quiesce();
+  ASSERT_FALSE(HasFatalFailure());
+  ASSERT_TRUE(slamd->running()) << slamd->output();
+  // OK again once the last rejected input is 10 s old.
+  std::optional<slam_status_t> last;
+  EXPECT_TRUE(wait_until([&] {
+    last = observer.status();
+    return last && last->state == driver_status_t::STATE_OK;
+  }, 15)) << (last ? last->message : "no SLAM_STATUS");
+  const slam_status_t st = settled_status();
+  EXPECT_EQ(st.decode_errors, hostile_undecodable);
+  EXPECT_EQ(st.validation_errors, hostile_rejected + stale_published);
+  EXPECT_EQ(st.lcm_receive_drops, 0);
+  max_rss_kb = std::max(max_rss_kb, vm_hwm_kb(slamd->pid()));
+  EXPECT_EQ(slamd->stop(20, SIGTERM), 0) << slamd->output();
+  wait_until([&] { return observer.seconds_since_last_event() > 0.5; }, 5);  // the last cycle's, flushed at exit
+  const uint64_t live_cycles = newest_checkpoint_sequence(state);
+  std::printf("chaos: %d kills, %d sessions, %llu cycles kept, slamd's max RSS %ld kB\n", kills, session + 1,
+              static_cast<unsigned long long>(live_cycles), max_rss_kb);
+  EXPECT_LE(max_rss_kb, kMaxRssKb);
+  EXPECT_EQ(observer.decode_errors(), 0);
+
+  // The uninterrupted run, fed the same cycles.
+  const std::string kept_log = (dir / "kept.lcmlog").string();
+  int kept = 0;
+  {
+    LogWriterBus writer(kept_log);
+    for (const Input& in : inputs) {
+      if (!in.kept) continue;
+      writer.set_time(in.event_utime);
+      writer.publish_raw(in.channel, in.data);
+      ++kept;
+    }
+  }
+  EXPECT_LT(kept, static_cast<int>(inputs.size()));
+  const fs::path reference_state = dir / "reference_state";
+  const std::string reference_out = (dir / "reference.lcmlog").string();
+  Subprocess replay({kSlamd, "--replay", kept_log, "--output", reference_out, "--config", kConfig, "--state-dir",
+                     reference_state.string()});
+  ASSERT_EQ(replay.wait(120), 0) << replay.output();
+
+  std::vector<fs::path> live_files, reference_files;
+  for (const auto& e : fs::directory_iterator(state)) {
+    if (e.path().extension() == ".vslam") live_files.push_back(e.path());
+  }
+  for (const auto& e : fs::directory_iterator(reference_state)) {
+    if (e.path().extension() == ".vslam") reference_files.push_back(e.path());
+  }
+  std::sort(live_files.begin(), live_files.end());
+  std::sort(reference_files.begin(), reference_files.end());
+  ASSERT_FALSE(live_files.empty());
+  ASSERT_FALSE(reference_files.empty());
+  const slamd::Checkpoint live = slamd::read_checkpoint(live_files.back().string());
+  const slamd::Checkpoint reference = slamd::read_checkpoint(reference_files.back().string());
+  EXPECT_EQ(live.sequence, reference.sequence) << "cycles in the map";
+
+  // Cycle for cycle: what each did to the map (every cycle handed out live was kept, so the two
+  // runs handed out the same cycles).
+  std::optional<vita_map_t> reference_map;
+  std::vector<vita_event_t> reference_events;
+  {
+    LogReader r(reference_out);
+    LogEvent ev;
+    while (r.next(ev)) {
+      if (ev.channel == "VITA_MAP") {
+        vita_map_t m;
+        ASSERT_TRUE(decode_message(ev.data, m));
+        reference_map = m;
+      } else if (ev.channel == "VITA_EVENT") {
+        vita_event_t m;
+        ASSERT_TRUE(decode_message(ev.data, m));
+        reference_events.push_back(m);
+      }
+    }
+  }
+  const std::vector<vita_event_t> live_events = observer.all_events();
+  EXPECT_EQ(live_events.size(), reference_events.size());
+  for (std::size_t e = 0; e < std::min(live_events.size(), reference_events.size()); ++e) {
+    const vita_event_t& a = live_events[e];
+    const vita_event_t& b = reference_events[e];
+    if (a.cycle != b.cycle || a.type != b.type || a.from_id != b.from_id || a.to_id != b.to_id ||
+        a.template_id != b.template_id) {
+      ADD_FAILURE() << "event " << e << " differs: live cycle " << a.cycle << " (t " << a.utime << ") type "
+                    << int(a.type) << " " << a.from_id << "->" << a.to_id << " template " << a.template_id
+                    << "; uninterrupted cycle " << b.cycle << " (t " << b.utime << ") type " << int(b.type) << " "
+                    << b.from_id << "->" << b.to_id << " template " << b.template_id;
+      break;
+    }
+  }
+  // Experience for experience: the last VITA_MAP of each.
+  const std::optional<vita_map_t> live_map = observer.map();
+  ASSERT_TRUE(reference_map && live_map);
+  EXPECT_EQ(live_map->num_experiences, reference_map->num_experiences);
+  for (int e = 0; e < std::min(live_map->num_experiences, reference_map->num_experiences); ++e) {
+    const experience_t& a = live_map->experiences[static_cast<std::size_t>(e)];
+    const experience_t& b = reference_map->experiences[static_cast<std::size_t>(e)];
+    EXPECT_EQ(a.id, b.id) << e;
+    EXPECT_EQ(a.x, b.x) << e;
+    EXPECT_EQ(a.y, b.y) << e;
+    EXPECT_EQ(a.theta, b.theta) << e;
+    EXPECT_EQ(a.utime_created, b.utime_created) << e;
+    EXPECT_EQ(a.visual_template_id, b.visual_template_id) << e;
+    EXPECT_EQ(a.tactile_template_id, b.tactile_template_id) << e;
+    EXPECT_EQ(a.dense, b.dense) << e;
+  }
+  EXPECT_EQ(live_map->num_links, reference_map->num_links);
+  EXPECT_EQ(live_map->current_experience_id, reference_map->current_experience_id);
+  // And the whole state, byte for byte: templates, pose cells, links and all.
+  if (live.payload != reference.payload || HasFailure()) {
+    std::size_t first = 0;
+    while (first < std::min(live.payload.size(), reference.payload.size()) &&
+           live.payload[first] == reference.payload[first]) {
+      ++first;
+    }
+    // Kept for a look: every session's slamd log, both final states, the reference replay's output.
+    const fs::path keep = fs::path(::testing::TempDir()) / ("slamd_chaos_failure_" + std::to_string(::getpid()));
+    fs::create_directories(keep);
+    for (const auto& e : fs::directory_iterator(dir)) {
+      if (e.path().extension() == ".log" || e.path().filename() == "reference.lcmlog") fs::copy(e.path(), keep);
+    }
+    fs::copy(live_files.back(), keep / "live.vslam");
+    fs::copy(reference_files.back(), keep / "reference.vslam");
+    ADD_FAILURE() << "the saved states differ (" << live.payload.size() << " vs " << reference.payload.size()
+                  << " bytes, first at byte " << first << " of the payload); kept in " << keep.string();
+  }
+}
+
+}  // namespace
+}  // namespace whiskeye
