@@ -12,6 +12,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <cstdlib>
 #include <filesystem>
 #include <map>
@@ -163,6 +165,16 @@ TEST_F(LcmTools, LcmSpyStartsHeadlessAndFindsAllOurTypes) {
   EXPECT_TRUE(spy.running()) << spy.output();
   EXPECT_EQ(spy.output().find("Exception"), std::string::npos) << spy.output();
   spy.stop(5.0, SIGTERM);
+}
+
+TEST_F(LcmTools, LcmSpyWithoutADisplayFailsWithOneLineSayingSo) {
+  // On the robot over plain ssh: not Java's page of AWT trace, one line and a non-zero exit.
+  Subprocess spy({"env", "-u", "DISPLAY", "-u", "WAYLAND_DISPLAY", WHISKEYE_SOURCE_DIR "/scripts/lcm-spy"}, "",
+                 {"WHISKEYE_TYPES_JAR=" WHISKEYE_TYPES_JAR});
+  EXPECT_EQ(spy.wait(30.0), 1) << spy.output();
+  const std::string out = spy.output();
+  EXPECT_EQ(out.rfind("lcm-spy: no display (DISPLAY is not set)", 0), 0u) << out;
+  EXPECT_EQ(std::count(out.begin(), out.end(), '\n'), 1) << out;
 }
 
 }  // namespace
