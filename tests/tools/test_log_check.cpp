@@ -1,0 +1,105 @@
+// whiskeye-logcheck's analysis (tools/logcheck): sequence gaps, restarts, rates and pauses.
+#include "whiskeye/logcheck/log_check.h"
+
+#include "whiskeye/common/bus.h"
+
+#include <whiskeye/image_t.hpp>
+#include <whiskeye/odometry_t.hpp>
+#include <whiskeye/pose2d_t.hpp>
+#include <whiskeye/whisk_cycle_t.hpp>
+#include <whiskeye/whisker_sample_t.hpp>
+
+#include <gtest/gtest.h>
+
+namespace whiskeye::logcheck {
+namespace {
+
+template <typename T>
+std::vector<uint8_t> bytes(const T& msg) {
+  std::vector<uint8_t> buf(static_cast<std::size_t>(msg.getEncodedSize()));
+  msg.encode(buf.data(), 0, static_cast<int>(buf.size()));
+  return buf;
+}
+
+std::vector<uint8_t> sample(int64_t seq) {
+  whisker_sample_t m{};
+  m.utime = 1'000'000 + seq * 2000;
+  m.seq = seq;
+  return bytes(m);
+}
+
+TEST(LogCheck, ReadsTheSequenceNumberOfEveryTypeThatCarriesOne) {
+  image_t im{};
+  im.utime = 5;
+  im.seq = 41;
+  odometry_t odo{};
+  odo.utime = 5;
+  odo.seq = 42;
+  whisker_sample_t ws{};
+  ws.utime = 5;
+  ws.seq = 43;
+  whisk_cycle_t wc{};
+  wc.utime = 5;
+  wc.cycle = 44;
+  EXPECT_EQ(sequence_number(bytes(im)), 41);
+  EXPECT_EQ(sequence_number(bytes(odo)), 42);
+  EXPECT_EQ(sequence_number(bytes(ws)), 43);
+  EXPECT_EQ(sequence_number(bytes(wc)), 44);
+  pose2d_t pose{};
+  EXPECT_EQ(sequence_number(bytes(pose)), std::nullopt) << "no sequence number";
+  EXPECT_EQ(sequence_number(std::vector<uint8_t>(10, 0)), std::nullopt) << "too short";
+}
+
+TEST(LogCheck, CountsMessagesMissingFromTheSequenceAndWhereTheyWent) {
+  LogCheck check;
+  for (int64_t seq : {1, 2, 3, 7, 8, 9, 10, 12}) check.add("WHISKER_SAMPLE", 1'000'000 + seq * 2000, sample(seq));
+  const auto channels = check.channels();
+  ASSERT_EQ(channels.size(), 1u);
+  const ChannelStats& s = channels[0];
+  EXPECT_TRUE(s.sequenced);
+  EXPECT_EQ(s.count, 8);
+  EXPECT_EQ(s.lost, 4);  // 4, 5, 6 and 11
+  EXPECT_EQ(s.loss_places, 2);
+  EXPECT_EQ(s.longest_loss, 3);
+  EXPECT_EQ(s.restarts, 0);
+  EXPECT_DOUBLE_EQ(s.lost_fraction(), 4.0 / 12.0);
+}
+
+TEST(LogCheck, ASenderThatStartsAgainIsARestartNotALoss) {
+  LogCheck check;
+  for (int64_t seq : {100, 101, 102, 0, 1, 2}) check.add("WHISKER_SAMPLE", 0, sample(seq));
+  const ChannelStats s = check.channels().at(0);
+  EXPECT_EQ(s.lost, 0);
+  EXPECT_EQ(s.restarts, 1);
+}
+
+TEST(LogCheck, AChannelWithoutSequenceNumbersGetsItsRateAndPausesOnly) {
+  LogCheck check(3.0);
+  pose2d_t pose{};
+  const auto data = bytes(pose);
+  // 10 Hz for 2 s, a 1 s pause, 10 Hz again.
+  int64_t t = 0;
+  for (int i = 0; i < 20; ++i) check.add("VITA_POSE", t += 100'000, data);
+  t += 900'000;
+  for (int i = 0; i < 20; ++i) check.add("VITA_POSE", t += 100'000, data);
+  const ChannelStats s = check.channels().at(0);
+  EXPECT_FALSE(s.sequenced);
+  EXPECT_EQ(s.lost, 0);
+  EXPECT_EQ(s.count, 40);
+  EXPECT_EQ(s.time_gaps, 1);
+  EXPECT_EQ(s.max_interval_us, 1'000'000);
+  EXPECT_NEAR(s.rate_hz(), 39.0 / 4.8, 1e-9);
+}
+
+TEST(LogCheck, ChannelsComeOutByName) {
+  LogCheck check;
+  check.add("ODOMETRY", 0, sample(1));
+  check.add("CAMERA", 0, sample(1));
+  const auto channels = check.channels();
+  ASSERT_EQ(channels.size(), 2u);
+  EXPECT_EQ(channels[0].channel, "CAMERA");
+  EXPECT_EQ(channels[1].channel, "ODOMETRY");
+}
+
+}  // namespace
+}  // namespace whiskeye::logcheck

@@ -1,0 +1,95 @@
+#include "whiskeye/logcheck/log_check.h"
+
+#include <whiskeye/image_t.hpp>
+#include <whiskeye/odometry_t.hpp>
+#include <whiskeye/whisk_cycle_t.hpp>
+#include <whiskeye/whisker_sample_t.hpp>
+
+#include <algorithm>
+
+namespace whiskeye::logcheck {
+namespace {
+
+int64_t big_endian_i64(std::span<const uint8_t> bytes) {
+  uint64_t v = 0;
+  for (int i = 0; i < 8; ++i) v = (v << 8) | bytes[static_cast<std::size_t>(i)];
+  return static_cast<int64_t>(v);
+}
+
+}  // namespace
+
+std::optional<int64_t> sequence_number(std::span<const uint8_t> encoded) {
+  // Each of these types starts with `int64_t utime` and then its sequence number, after LCM's 8-byte
+  // fingerprint (test_log_check checks that against the generated encoders).
+  constexpr std::size_t kSeqAt = 16;
+  if (encoded.size() < kSeqAt + 8) return std::nullopt;
+  const int64_t fingerprint = big_endian_i64(encoded.first(8));
+  for (const int64_t hash : {image_t::getHash(), odometry_t::getHash(), whisker_sample_t::getHash(),
+                             whisk_cycle_t::getHash()}) {
+    if (fingerprint == hash) return big_endian_i64(encoded.subspan(kSeqAt, 8));
+  }
+  return std::nullopt;
+}
+
+double ChannelStats::rate_hz() const {
+  if (count < 2 || last_utime <= first_utime) return 0.0;
+  return static_cast<double>(count - 1) * 1e6 / static_cast<double>(last_utime - first_utime);
+}
+
+double ChannelStats::lost_fraction() const {
+  return count + lost > 0 ? static_cast<double>(lost) / static_cast<double>(count + lost) : 0.0;
+}
+
+void LogCheck::add(std::string_view channel, int64_t utime, std::span<const uint8_t> encoded) {
+  auto [it, inserted] = channels_.try_emplace(std::string(channel));
+  Channel& c = it->second;
+  ChannelStats& s = c.stats;
+  if (inserted) {
+    s.channel = std::string(channel);
+    s.first_utime = utime;
+    s.sequenced = true;
+  } else {
+    const int64_t interval = utime - s.last_utime;
+    c.intervals_us.push_back(interval);
+    s.max_interval_us = std::max(s.max_interval_us, interval);
+  }
+  s.last_utime = utime;
+  ++s.count;
+  const std::optional<int64_t> seq = sequence_number(encoded);
+  if (!seq) {
+    s.sequenced = false;
+    return;
+  }
+  if (c.last_seq) {
+    if (*seq <= *c.last_seq) {
+      ++s.restarts;
+    } else if (*seq > *c.last_seq + 1) {
+      const int64_t missing = *seq - *c.last_seq - 1;
+      s.lost += missing;
+      ++s.loss_places;
+      s.longest_loss = std::max(s.longest_loss, missing);
+    }
+  }
+  c.last_seq = seq;
+}
+
+std::vector<ChannelStats> LogCheck::channels() const {
+  std::vector<ChannelStats> out;
+  for (const auto& [name, c] : channels_) {
+    ChannelStats s = c.stats;
+    if (!s.sequenced) s.lost = s.loss_places = s.longest_loss = s.restarts = 0;
+    if (!c.intervals_us.empty()) {
+      std::vector<int64_t> sorted = c.intervals_us;
+      std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
+      const double median = static_cast<double>(sorted[sorted.size() / 2]);
+      for (const int64_t i : c.intervals_us) {
+        if (static_cast<double>(i) > gap_factor_ * median && median > 0) ++s.time_gaps;
+      }
+    }
+    out.push_back(std::move(s));
+  }
+  std::sort(out.begin(), out.end(), [](const ChannelStats& a, const ChannelStats& b) { return a.channel < b.channel; });
+  return out;
+}
+
+}  // namespace whiskeye::logcheck
