@@ -66,7 +66,9 @@ void load(const ParamNode& node, ControllerParams& params) {
   }
   for (std::size_t i = 0; i < row_phase.size(); ++i) {
     if (!(row_phase[i] >= 0.0 && row_phase[i] < 1.0)) {
-      fail(pat, "row_phase", "[" + std::to_string(i) + "] must be in [0, 1) cycles");
+      // A char, not a one-character string: GCC 12 at -O3 raises a bogus -Wrestrict on "x" + std::string&&
+      // (GCC bug 105329), which breaks the Release build.
+      fail(pat, "row_phase", '[' + std::to_string(i) + "] must be in [0, 1) cycles");
     }
     p.row_phase[i] = row_phase[i];
   }

@@ -629,6 +629,9 @@ void draw_layout(Rng& rng, const GeneratorOptions& o, Draft& d) {
   std::vector<int> walls{0, 1, 2, 3};
   rng.shuffle(walls);
   int k = 0;
+  // L0, L1, ... and the tag. A char, not a one-character string: GCC 12 at -O3 raises a bogus
+  // -Wrestrict on "x" + std::string&& (GCC bug 105329), which breaks the Release build.
+  auto next_name = [&](const std::string& tag) { return 'L' + std::to_string(k++) + tag; };
   auto new_landmark = [&](int wall, int slot, int pattern, const std::string& tag) {
     LandmarkSpec l;
     l.wall = wall;
@@ -637,7 +640,7 @@ void draw_layout(Rng& rng, const GeneratorOptions& o, Draft& d) {
     l.z0 = rng.uniform(0.15, 0.3);
     l.z1 = rng.uniform(0.95, 1.1);
     l.pattern = pattern;
-    l.name = "L" + std::to_string(k++) + tag;
+    l.name = next_name(tag);
     return l;
   };
   auto new_pattern = [&]() {
@@ -655,7 +658,7 @@ void draw_layout(Rng& rng, const GeneratorOptions& o, Draft& d) {
       LandmarkSpec a = new_landmark(from, slot, new_pattern(), "_twin" + std::to_string(twin));
       LandmarkSpec b = a;
       b.wall = to;
-      b.name = "L" + std::to_string(k++) + "_twin" + std::to_string(twin);
+      b.name = next_name("_twin" + std::to_string(twin));
       d.landmarks.push_back(a);
       d.landmarks.push_back(b);
     }

@@ -5,6 +5,7 @@
 // writes the whisker boards' CAN traffic for the same samples as a `candump -l` log (--candump) for
 // can-utils' canplayer, using whiskerd's config for the bus mode, ids and (inverted) calibration.
 #include "whiskeye/common/bus.h"
+#include "whiskeye/common/config_path.h"
 #include "whiskeye/sim/can_log.h"
 #include "whiskeye/sim/lcm_sink.h"
 #include "whiskeye/sim/simulator.h"
@@ -246,13 +247,19 @@ std::string fault_summary(const FaultRecord& f, int64_t start_utime) {
   return what;
 }
 
+// The end of the help of each option whose config has a default (common/config_path.h).
+const std::string kDefaultConfigDirs =
+    " in the installed config directory, <prefix>/etc/whiskeye or /etc/whiskeye; from a build tree also the "
+    "source tree's config/)";
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"vita-sim: simulated WhiskEye in a YAML world -> LCM log (drivers' channels + GROUND_TRUTH)"};
   std::string world_path;
   std::string output;
-  std::string robot_path = "config/robot.yaml";
+  // The three configs given by no option are found by default_config_path (common/config_path.h).
+  std::string robot_path;
   std::string rcp_path;
   std::string plot_path;
   std::string frames_dir;
@@ -265,14 +272,14 @@ int main(int argc, char** argv) {
   int64_t start_utime = SimParams{}.start_utime;
   bool quiet = false;
   std::string candump_path;
-  std::string whiskerd_config = "config/whiskerd.yaml";
+  std::string whiskerd_config;
   std::string can_mode;
   std::string can_interface;
   app.add_option("--world", world_path, "World YAML file (e.g. config/worlds/aliased_arena.yaml)")->check(CLI::ExistingFile);
   bool generate_flag = false;
   GeneratorOptions gen;
   std::string output_world;
-  std::string slam_config = "config/slam.yaml";
+  std::string slam_config;
   std::vector<RangeOption> gen_ranges{
       {"--arena-side", "Generated world: arena side range MIN,MAX (m; 5,8)", &GeneratorOptions::side, ""},
       {"--radius", "Generated world: trajectory radius range MIN,MAX (m; 0.8,1.3)", &GeneratorOptions::radius, ""},
@@ -290,20 +297,22 @@ int main(int argc, char** argv) {
   app.add_flag("--faults", gen.faults,
                "Generated world: add the standard sensor faults (4 dead whiskers, a board offline 30 s, a 10 s camera "
                "blackout, a 20 % odometry slip for 10 s)");
-  app.add_option("--slam-config", slam_config, "slamd config whose visual template and match threshold the check uses")
-      ->capture_default_str();
+  app.add_option("--slam-config", slam_config,
+                 "slamd config whose visual template and match threshold the check uses (default: slam.yaml" +
+                     kDefaultConfigDirs);
   for (RangeOption& r : gen_ranges) app.add_option(r.name, r.text, r.help);
   app.add_option("--output,-o", output, "LCM log to write");
   app.add_option("--candump", candump_path,
                  "Also (or only) write the whisker boards' CAN frames as a candump -l log, for canplayer");
   app.add_option("--whiskerd-config", whiskerd_config,
-                 "whiskerd YAML giving --candump its bus mode, rate, ids and calibration (inverted)")
-      ->capture_default_str();
+                 "whiskerd YAML giving --candump its bus mode, rate, ids and calibration (inverted; default: "
+                 "whiskerd.yaml" +
+                     kDefaultConfigDirs);
   app.add_option("--can-mode", can_mode, "--candump bus mode, overrides the whiskerd config's can.mode")
       ->check(CLI::IsMember({"fd", "classic"}));
   app.add_option("--can-interface", can_interface,
                  "Interface name in the --candump log (default: the whiskerd config's can.interface)");
-  app.add_option("--robot", robot_path, "Robot geometry YAML")->capture_default_str();
+  app.add_option("--robot", robot_path, "Robot geometry YAML (default: robot.yaml" + kDefaultConfigDirs);
   app.add_option("--rcp", rcp_path, "Whisking controller YAML (e.g. config/rcp.yaml; default: built-in defaults)")
       ->check(CLI::ExistingFile);
   app.add_option("--seed", seed, "Seed of every noise source (same seed -> byte-identical log)")->capture_default_str();
@@ -325,11 +334,15 @@ int main(int argc, char** argv) {
   try {
     RobotGeometry robot = default_robot_geometry();
     {
+      if (robot_path.empty()) robot_path = default_config_path("robot.yaml", "--robot");
       const ParamNode root = ParamNode::from_file(robot_path);
       load(root.section("robot"), robot);
       root.check_no_unknown_keys();
     }
-    if (generate_flag) return generate(gen, gen_ranges, robot, slam_config, output_world, quiet);
+    if (generate_flag) {
+      if (slam_config.empty()) slam_config = default_config_path("slam.yaml", "--slam-config");
+      return generate(gen, gen_ranges, robot, slam_config, output_world, quiet);
+    }
     if (world_path.empty()) {
       std::cerr << "vita-sim: --world FILE is required (or --generate-world)\n";
       return 2;
@@ -364,6 +377,7 @@ int main(int argc, char** argv) {
     BoardTrafficParams traffic;
     if (!candump_path.empty()) {
       whiskerd::Params wd;
+      if (whiskerd_config.empty()) whiskerd_config = default_config_path("whiskerd.yaml", "--whiskerd-config");
       {
         const ParamNode root = ParamNode::from_file(whiskerd_config);
         whiskerd::load(root, wd);

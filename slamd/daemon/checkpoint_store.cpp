@@ -226,7 +226,9 @@ void write_checkpoint_file(const std::string& path, uint64_t sequence, std::span
 
   const fs::path final_path(path);
   const fs::path dir = final_path.has_parent_path() ? final_path.parent_path() : fs::path(".");
-  const std::string tmp = (dir / ("." + final_path.filename().string() + ".tmp")).string();
+  // A char, not a one-character string: GCC 12 at -O3 raises a bogus -Wrestrict on "x" + std::string&&
+  // (GCC bug 105329), which breaks the Release build.
+  const std::string tmp = (dir / ('.' + final_path.filename().string() + ".tmp")).string();
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) fail(tmp, std::string("cannot create: ") + std::strerror(errno));
   try {

@@ -12,6 +12,9 @@ CHECK is one of:
   verify    `systemd-analyze verify` accepts every installed unit without a single warning.
   security  `systemd-analyze security --offline=true`: slamd and camerad expose <= 3.0 ("OK" or better);
             whiskerd and based are printed (docs/deployment.md quotes them) and must stay <= 3.0 too.
+  defaults  the installed vita-sim, run from a folder outside any source or build tree without
+            --robot or --whiskerd-config, finds the configs installed in <sysconfdir>/whiskeye; with
+            robot.yaml removed it exits non-zero naming the path it tried.
   deb       `cpack -G DEB` builds a package whose contents (`dpkg-deb -c`) are the /usr + /etc layout
             and whose control files mark the configs as conffiles.
 Exit status 0 only if every assertion held; each failure is printed on its own line.
@@ -209,9 +212,30 @@ def check_deb(a, destdir):
     print(f"{debs[0]}: {len(paths)} entries")
 
 
+def check_defaults(a, destdir):
+    root = os.path.join(destdir, a.prefix.lstrip("/"))
+    confdir = os.path.join(destdir, a.sysconfdir.lstrip("/"), "whiskeye")
+    work = os.path.join(destdir, "work")
+    os.makedirs(work)
+    sim = [os.path.join(root, "bin/vita-sim"), "--world", os.path.join(root, "share/whiskeye/worlds/aliased_arena.yaml"),
+           "--duration", "1", "--output", "sim.lcmlog", "--candump", "sim.candump", "-q"]
+    r = run(sim, cwd=work)
+    if r.returncode != 0:
+        fail(f"installed vita-sim without --robot/--whiskerd-config exited {r.returncode}: {r.stderr.strip()[-500:]}")
+    elif not os.path.getsize(os.path.join(work, "sim.lcmlog")) or not os.path.getsize(os.path.join(work, "sim.candump")):
+        fail("installed vita-sim wrote an empty log or candump log")
+    robot = os.path.join(confdir, "robot.yaml")
+    os.remove(robot)
+    r = run(sim, cwd=work)
+    if r.returncode == 0 or robot not in r.stderr or "--robot" not in r.stderr:
+        fail(f"without {robot}: exit {r.returncode}, expected an error naming it and --robot: {r.stderr.strip()[-500:]}")
+    else:
+        print("without robot.yaml: " + r.stderr.strip())
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("check", choices=["layout", "verify", "security", "deb"])
+    p.add_argument("check", choices=["layout", "verify", "security", "defaults", "deb"])
     p.add_argument("--build", required=True)
     p.add_argument("--prefix", required=True)
     p.add_argument("--sysconfdir", required=True)
@@ -222,7 +246,9 @@ def main():
         if a.check == "deb":
             check_deb(a, destdir)
         elif install(a.build, destdir, a.prefix):
-            {"layout": check_layout, "verify": check_verify, "security": check_security}[a.check](a, destdir)
+            checks = {"layout": check_layout, "verify": check_verify, "security": check_security,
+                      "defaults": check_defaults}
+            checks[a.check](a, destdir)
     finally:
         shutil.rmtree(destdir, ignore_errors=True)
     if failures:

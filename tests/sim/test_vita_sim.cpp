@@ -185,6 +185,28 @@ std::string faulty_world() {
   return path;
 }
 
+TEST(VitaSim, FromAnotherFolderFindsTheSourceTreesConfigsWithoutBeingGivenThem) {
+  // No --robot and no --whiskerd-config, in a folder with no config/: the defaults come from the
+  // program's location (a build tree: the source tree's config/), not the working directory.
+  const fs::path dir = temp_path("elsewhere");
+  fs::create_directories(dir);
+  const std::string cmd = "cd " + dir.string() + " && " + VITA_SIM_EXE + " " + arena() +
+                          " --duration 1 --seed 2 -o a.lcmlog --candump a.candump -q 2>err.txt";
+  const int status = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << slurp((dir / "err.txt").string());
+  // The same bytes as with the source tree's configs named.
+  const std::string b = temp_path("named.lcmlog");
+  const std::string b_candump = temp_path("named.candump");
+  ASSERT_EQ(vita_sim(arena() + " --duration 1 --seed 2 -o " + b + " --candump " + b_candump + " --whiskerd-config " +
+                     test::source_path("config/whiskerd.yaml")),
+            0);
+  EXPECT_TRUE(slurp((dir / "a.lcmlog").string()) == slurp(b));
+  EXPECT_TRUE(slurp((dir / "a.candump").string()) == slurp(b_candump));
+  fs::remove_all(dir);
+  fs::remove(b);
+  fs::remove(b_candump);
+}
+
 TEST(VitaSim, AFaultyWorldsLogRecordsEachFaultOnSimFaultAndIsByteIdenticalForTheSameSeed) {
   const std::string world = faulty_world();
   const std::string a = temp_path("fa.lcmlog");

@@ -16,7 +16,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <mutex>
 #include <regex>
 #include <sstream>
 #include <unistd.h>
@@ -364,7 +363,6 @@ TEST_F(SlamdBinary, LiveRunFedByLcmLogplayerTakesTheSameDecisionsAsReplay) {
 
   LcmBus bus;
   DecodeErrors errors;
-  std::mutex mutex;
   std::vector<vita_event_t> live;
   subscribe<vita_event_t>(bus, "VITA_EVENT", [&](const vita_event_t& m) { live.push_back(m); }, errors);
   slam_status_t status;

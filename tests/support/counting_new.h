@@ -13,10 +13,13 @@ inline std::atomic<long> g_allocations{0};
 inline long allocations() { return g_allocations.load(); }
 }  // namespace whiskeye::test
 
-void* operator new(std::size_t n) {
+// None of the three is inlined: with one side inlined (new as malloc, or delete as free), GCC 12
+// pairs a malloc with an operator delete or an operator new with a free and raises
+// -Wmismatched-new-delete (-O2 or -Os), which -Werror turns into a failed build.
+[[gnu::noinline]] void* operator new(std::size_t n) {
   ++whiskeye::test::g_allocations;
   if (void* p = std::malloc(n == 0 ? 1 : n)) return p;
   throw std::bad_alloc();
 }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+[[gnu::noinline]] void operator delete(void* p) noexcept { std::free(p); }
+[[gnu::noinline]] void operator delete(void* p, std::size_t) noexcept { std::free(p); }
