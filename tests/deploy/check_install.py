@@ -28,7 +28,7 @@ import sys
 import tempfile
 
 DAEMONS = ["whiskerd", "camerad", "based", "slamd"]
-TOOLS = ["rcp-plant", "vita-sim", "vita-eval", "whiskeye-lcm-spy"]
+TOOLS = ["rcp-plant", "vita-sim", "vita-eval", "whiskeye-lcm-spy", "whiskeye-logcheck"]
 UNITS = [d + ".service" for d in DAEMONS] + ["whiskeye-can0.service", "whiskeye.target"]
 CONFIGS = ["whiskerd.yaml", "camerad.yaml", "based.yaml", "slam.yaml", "robot.yaml", "rcp.yaml"]
 EXPOSURE_LIMIT = 3.0
@@ -119,7 +119,12 @@ def check_layout(a, destdir):
     if not url or sourced != url.group(1):
         fail(f"environment file: LCM_DEFAULT_URL not quoted or not shell-sourceable (shell read {sourced!r})")
     with open(os.path.join(destdir, a.prefix.lstrip("/"), "lib/sysctl.d/60-whiskeye-lcm.conf")) as f:
-        rmem = re.search(r"^net\.core\.rmem_max\s*=\s*(\d+)", f.read(), re.M)
+        sysctl = f.read()
+    rmem = re.search(r"^net\.core\.rmem_max\s*=\s*(\d+)", sysctl, re.M)
+    # Java's LCM (lcm-spy) ignores recv_buf_size: it gets the default, which must hold camera frames.
+    rmem_default = re.search(r"^net\.core\.rmem_default\s*=\s*(\d+)", sysctl, re.M)
+    if not rmem_default or int(rmem_default.group(1)) < 4 * 1024 * 1024:
+        fail("sysctl.d: net.core.rmem_default missing or below 4 MiB (lcm-spy would drop camera frames)")
     if not url or "ttl=0" not in url.group(1):
         fail("environment file: LCM_DEFAULT_URL without ttl=0")
     elif not rmem:
