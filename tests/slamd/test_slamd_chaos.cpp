@@ -40,6 +40,7 @@
 #include <mutex>
 #include <optional>
 #include <regex>
+#include <sstream>
 #include <sched.h>
 #include <span>
 #include <sys/mount.h>
@@ -99,6 +100,19 @@ long vm_hwm_kb(int pid) {
     if (line.rfind("VmHWM:", 0) == 0) return std::stol(line.substr(6));
   }
   return -1;
+}
+
+// What LCM says (with LCM_DBG=all) it dropped inside a process: a message missing fragments, a
+// fragment out of place. The kernel's drops are counted in SLAM_STATUS; these are not.
+std::string lcm_internal_drops(const std::string& output) {
+  std::string lines;
+  std::istringstream in(output);
+  for (std::string line; std::getline(in, line);) {
+    if (line.find("Dropping message") != std::string::npos || line.find("dropping invalid fragment") != std::string::npos) {
+      lines += line + "\n";
+    }
+  }
+  return lines;
 }
 
 uint64_t newest_checkpoint_sequence(const fs::path& dir) {
@@ -314,8 +328,10 @@ TEST(SlamdChaos, SurvivesKillsHostileMessagesAFloodAndAFullDiskAndKeepsTheMapOfA
   long max_rss_kb = 0;
   const auto start_slamd = [&] {
     observer.new_session();
+    // LCM_DBG=all: LCM's own lines (quiet in normal traffic) name a message it drops inside slamd.
     slamd = std::make_unique<Subprocess>(std::vector<std::string>{kSlamd, "--config", kConfig, "--state-dir", state.string()},
-                                         (dir / ("slamd-" + std::to_string(session) + ".log")).string());
+                                         (dir / ("slamd-" + std::to_string(session) + ".log")).string(),
+                                         std::vector<std::string>{"LCM_DBG=all"});
     ASSERT_TRUE(wait_until([&] { return slamd->output().find("running in vita mode") != std::string::npos; }, 20))
         << slamd->output();
     const std::string out = slamd->output();
@@ -401,6 +417,7 @@ TEST(SlamdChaos, SurvivesKillsHostileMessagesAFloodAndAFullDiskAndKeepsTheMapOfA
       EXPECT_EQ(st.lcm_receive_drops, 0) << "session " << session;
       EXPECT_EQ(st.checkpoint_errors > 0, disk_freed) << "checkpoints failed only while the disk was full";
       max_rss_kb = std::max(max_rss_kb, vm_hwm_kb(slamd->pid()));
+      EXPECT_EQ(lcm_internal_drops(slamd->output()), "") << "session " << session;
       // SIGKILL: the cycle being assembled is lost with the process (not in the uninterrupted run).
       const int64_t last_cycle_end = observer.last_event_utime();
       for (std::size_t j = 0; j < i; ++j) {
@@ -498,6 +515,7 @@ TEST(SlamdChaos, SurvivesKillsHostileMessagesAFloodAndAFullDiskAndKeepsTheMapOfA
   EXPECT_EQ(st.validation_errors, hostile_rejected + stale_published);
   EXPECT_EQ(st.lcm_receive_drops, 0);
   max_rss_kb = std::max(max_rss_kb, vm_hwm_kb(slamd->pid()));
+  EXPECT_EQ(lcm_internal_drops(slamd->output()), "");
   EXPECT_EQ(slamd->stop(20, SIGTERM), 0) << slamd->output();
   wait_until([&] { return observer.seconds_since_last_event() > 0.5; }, 5);  // the last cycle's, flushed at exit
   const uint64_t live_cycles = newest_checkpoint_sequence(state);
