@@ -16,15 +16,18 @@ namespace {
 
 template <typename T>
 std::vector<uint8_t> bytes(const T& msg) {
-  std::vector<uint8_t> buf(static_cast<std::size_t>(msg.getEncodedSize()));
-  msg.encode(buf.data(), 0, static_cast<int>(buf.size()));
-  return buf;
+  return encode_message(msg);
 }
 
 std::vector<uint8_t> sample(int64_t seq) {
+  constexpr std::size_t kWhiskers = 24;
   whisker_sample_t m{};
   m.utime = 1'000'000 + seq * 2000;
   m.seq = seq;
+  m.num_whiskers = kWhiskers;
+  m.theta = m.deflection_x = m.deflection_y = std::vector<float>(kWhiskers, 0.0f);
+  m.raw_x = m.raw_y = m.raw_theta = std::vector<int16_t>(kWhiskers, 0);
+  m.status = std::vector<int8_t>(kWhiskers, 0);
   return bytes(m);
 }
 
@@ -35,15 +38,12 @@ TEST(LogCheck, ReadsTheSequenceNumberOfEveryTypeThatCarriesOne) {
   odometry_t odo{};
   odo.utime = 5;
   odo.seq = 42;
-  whisker_sample_t ws{};
-  ws.utime = 5;
-  ws.seq = 43;
   whisk_cycle_t wc{};
   wc.utime = 5;
   wc.cycle = 44;
   EXPECT_EQ(sequence_number(bytes(im)), 41);
   EXPECT_EQ(sequence_number(bytes(odo)), 42);
-  EXPECT_EQ(sequence_number(bytes(ws)), 43);
+  EXPECT_EQ(sequence_number(sample(43)), 43);
   EXPECT_EQ(sequence_number(bytes(wc)), 44);
   pose2d_t pose{};
   EXPECT_EQ(sequence_number(bytes(pose)), std::nullopt) << "no sequence number";
