@@ -2,6 +2,7 @@
 // reuse of a saved map, bad configuration, and a live run fed by lcm-logplayer over udpm:// (inside
 // a private network namespace) that takes the same decisions as --replay.
 #include "checkpoint_store.h"
+#include "slamd_files.h"
 #include "subprocess.h"
 
 #include "whiskeye/common/bus.h"
@@ -24,6 +25,9 @@ namespace whiskeye {
 namespace {
 
 namespace fs = std::filesystem;
+using testing::checkpoint_files;
+using testing::read_slamd_output;
+using testing::SlamdOutput;
 using testing::Subprocess;
 using testing::wait_until;
 using ::testing::HasSubstr;
@@ -31,42 +35,6 @@ using ::testing::Not;
 
 const std::string kSlamd = SLAMD_EXE;
 const std::string kConfig = WHISKEYE_SOURCE_DIR "/config/slam.yaml";
-
-struct Output {
-  std::vector<vita_event_t> events;
-  std::vector<vita_map_t> maps;
-  int ground_truth = 0;
-};
-
-Output read_output(const std::string& path) {
-  Output o;
-  LogReader r(path);
-  LogEvent ev;
-  while (r.next(ev)) {
-    if (ev.channel == "VITA_EVENT") {
-      vita_event_t m;
-      EXPECT_TRUE(decode_message(ev.data, m));
-      o.events.push_back(m);
-    } else if (ev.channel == "VITA_MAP") {
-      vita_map_t m;
-      EXPECT_TRUE(decode_message(ev.data, m));
-      o.maps.push_back(m);
-    } else if (ev.channel == "GROUND_TRUTH") {
-      ++o.ground_truth;
-    }
-  }
-  return o;
-}
-
-// Checkpoint files in `dir`, oldest first.
-std::vector<fs::path> checkpoints(const fs::path& dir) {
-  std::vector<fs::path> files;
-  for (const auto& e : fs::directory_iterator(dir)) {
-    if (e.path().extension() == ".vslam") files.push_back(e.path());
-  }
-  std::sort(files.begin(), files.end());
-  return files;
-}
 
 std::string slurp(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -113,7 +81,7 @@ TEST_F(SlamdBinary, ReplayIsByteIdenticalAndCopiesGroundTruth) {
   EXPECT_THAT(log, HasSubstr("replayed"));
   ASSERT_EQ(replay(b), 0);
   EXPECT_EQ(slurp(a), slurp(b));
-  const Output o = read_output(a);
+  const SlamdOutput o = read_slamd_output(a);
   EXPECT_GE(o.events.size(), 12u) << "one event per whisk cycle (14 s of whisking at 1 Hz)";
   EXPECT_EQ(o.events.front().type, vita_event_t::NEW_EXPERIENCE);
   EXPECT_GE(o.ground_truth, 14 * 50 - 5) << "GROUND_TRUTH (50 Hz) is copied through for vita-eval";
@@ -130,7 +98,7 @@ TEST_F(SlamdBinary, TruncatedLogIsReplayedUpToTheBreakThenFailsNamingIt) {
   Subprocess p(argv);
   EXPECT_EQ(p.wait(120), 1);
   EXPECT_THAT(p.output(), HasSubstr(cut + ": truncated LCM log: the event at byte "));
-  const Output o = read_output(out);
+  const SlamdOutput o = read_slamd_output(out);
   EXPECT_GE(o.events.size(), 6u) << "the cycles before the break were processed";
   ASSERT_FALSE(o.maps.empty()) << "and the final map written";
 }
@@ -139,7 +107,7 @@ TEST_F(SlamdBinary, ModesDifferInWhatTheyCompare) {
   for (const std::string mode : {"visual", "tactile"}) {
     const std::string out = (dir_ / ("mode_" + mode + ".lcmlog")).string();
     ASSERT_EQ(replay(out, {"--mode", mode}), 0);
-    const Output o = read_output(out);
+    const SlamdOutput o = read_slamd_output(out);
     ASSERT_FALSE(o.events.empty());
     EXPECT_EQ(o.events.front().mode, mode == "visual" ? 0 : 1);
   }
@@ -175,7 +143,7 @@ TEST_F(SlamdBinary, AReplaySavesItsFinalStateWhateverTheCheckpointPeriod) {
   ASSERT_EQ(replay((dir_ / "final.lcmlog").string(), {"--state-dir", state.string(), "--checkpoint-every", "5"}, &log),
             0)
       << log;
-  const auto files = checkpoints(state);
+  const auto files = checkpoint_files(state);
   ASSERT_FALSE(files.empty());
   std::smatch m;
   ASSERT_TRUE(std::regex_search(log, m, std::regex(R"(of data in .*: (\d+) cycles)"))) << log;
@@ -196,10 +164,10 @@ TEST_F(SlamdBinary, ASecondSlamdOnTheSameStateDirectoryIsRefused) {
   std::string log;
   EXPECT_EQ(replay((dir_ / "second.lcmlog").string(), {"--state-dir", state.string(), "--mode", "tactile"}, &log), 1);
   EXPECT_THAT(log, HasSubstr(state.string() + ": in use by another slamd"));
-  EXPECT_TRUE(checkpoints(state).empty()) << "the refused replay wrote nothing";
+  EXPECT_TRUE(checkpoint_files(state).empty()) << "the refused replay wrote nothing";
   live.signal(SIGTERM);
   EXPECT_EQ(live.wait(30), 0) << live.output();
-  ASSERT_EQ(checkpoints(state).size(), 1u) << "the live one's final checkpoint";
+  ASSERT_EQ(checkpoint_files(state).size(), 1u) << "the live one's final checkpoint";
   // With the directory free again, the same replay resumes from it (same mode) and runs.
   EXPECT_EQ(replay((dir_ / "third.lcmlog").string(), {"--state-dir", state.string()}, &log), 0) << log;
   EXPECT_THAT(log, HasSubstr("resuming from "));
@@ -212,7 +180,7 @@ TEST_F(SlamdBinary, EverySessionResumesFromThePreviousOneAndFreshStartsANewMap) 
   std::string log;
   ASSERT_EQ(replay((dir_ / "s1.lcmlog").string(), args, &log), 0) << log;
   EXPECT_THAT(log, Not(HasSubstr("resuming")));
-  const std::size_t cycles = read_output((dir_ / "s1.lcmlog").string()).events.size();
+  const std::size_t cycles = read_slamd_output((dir_ / "s1.lcmlog").string()).events.size();
   ASSERT_GT(cycles, 0u);
   // Each session goes on from the state the previous one left: its own checkpoints must not be
   // rotated out by the older, higher-numbered files of the session it resumed.
@@ -220,7 +188,7 @@ TEST_F(SlamdBinary, EverySessionResumesFromThePreviousOneAndFreshStartsANewMap) 
     ASSERT_EQ(replay((dir_ / "s.lcmlog").string(), args, &log), 0) << log;
     EXPECT_THAT(log, HasSubstr("(after cycle " + std::to_string((session - 1) * cycles) + ")")) << session;
   }
-  auto files = checkpoints(state);
+  auto files = checkpoint_files(state);
   ASSERT_EQ(files.size(), 2u);
   EXPECT_EQ(slamd::read_checkpoint(files.back().string()).sequence, 3 * cycles);
   // --fresh: a new map, whose checkpoints are the newest from its first cycle on.
@@ -238,19 +206,19 @@ TEST_F(SlamdBinary, AMapOfAnotherModeIsNeitherLoadedNorRotatedOut) {
   fs::remove_all(state);
   std::string log;
   ASSERT_EQ(replay((dir_ / "vita.lcmlog").string(), {"--state-dir", state.string()}, &log), 0) << log;
-  const auto before = checkpoints(state);
+  const auto before = checkpoint_files(state);
   ASSERT_FALSE(before.empty());
   ASSERT_EQ(replay((dir_ / "tactile.lcmlog").string(), {"--state-dir", state.string(), "--mode", "tactile"}, &log), 1);
   EXPECT_THAT(log, HasSubstr("cannot resume from " + before.back().string() + ": "));
   EXPECT_THAT(log, HasSubstr("to keep that map, move it out of " + state.string() + " first; then start with --fresh"));
-  EXPECT_EQ(checkpoints(state), before) << "nothing renamed, nothing rotated out";
+  EXPECT_EQ(checkpoint_files(state), before) << "nothing renamed, nothing rotated out";
 }
 
 TEST_F(SlamdBinary, LocalisesInASavedMapWithoutGrowingIt) {
   const fs::path state = dir_ / "state_map";
   fs::remove_all(state);
   ASSERT_EQ(replay((dir_ / "map.lcmlog").string(), {"--state-dir", state.string(), "--checkpoint-keep", "1"}), 0);
-  const Output built = read_output((dir_ / "map.lcmlog").string());
+  const SlamdOutput built = read_slamd_output((dir_ / "map.lcmlog").string());
   fs::path map_file;
   for (const auto& e : fs::directory_iterator(state)) map_file = e.path();
   ASSERT_FALSE(map_file.empty());
@@ -259,7 +227,7 @@ TEST_F(SlamdBinary, LocalisesInASavedMapWithoutGrowingIt) {
   std::string log;
   ASSERT_EQ(replay(out, {"--map", map_file.string(), "--localise"}, &log), 0) << log;
   EXPECT_THAT(log, HasSubstr("localising without growing it"));
-  const Output o = read_output(out);
+  const SlamdOutput o = read_slamd_output(out);
   ASSERT_FALSE(o.events.empty());
   int relocalisations = 0;
   for (const auto& e : o.events) {
@@ -276,12 +244,12 @@ TEST_F(SlamdBinary, LocalisesInASavedMapWithoutGrowingIt) {
   const fs::path other = dir_ / "state_other";
   fs::remove_all(other);
   ASSERT_EQ(replay((dir_ / "map.lcmlog").string(), {"--state-dir", other.string()}), 0);
-  const auto held = checkpoints(other);
+  const auto held = checkpoint_files(other);
   ASSERT_FALSE(held.empty());
   EXPECT_EQ(replay(out, {"--map", map_file.string(), "--state-dir", other.string()}, &log), 1);
   EXPECT_THAT(log, HasSubstr("the state directory " + other.string() + " holds "));
   EXPECT_THAT(log, HasSubstr("growing --map " + map_file.string() + " would rotate out"));
-  EXPECT_EQ(checkpoints(other), held) << "nothing written, nothing rotated out";
+  EXPECT_EQ(checkpoint_files(other), held) << "nothing written, nothing rotated out";
   EXPECT_EQ(replay(out, {"--map", map_file.string(), "--state-dir", other.string(), "--fresh"}, &log), 0) << log;
 }
 
@@ -337,11 +305,11 @@ TEST_F(SlamdBinary, KilledWithoutWarningItResumesFromItsNewestCheckpoint) {
   ASSERT_TRUE(wait_until([&] { return slamd.output().find("running in vita mode") != std::string::npos; }, 20))
       << slamd.output();
   Subprocess player({"lcm-logplayer", "--speed", "4", sim_log_});
-  ASSERT_TRUE(wait_until([&] { return fs::exists(state) && checkpoints(state).size() >= 3; }, 30)) << slamd.output();
+  ASSERT_TRUE(wait_until([&] { return fs::exists(state) && checkpoint_files(state).size() >= 3; }, 30)) << slamd.output();
   slamd.signal(SIGKILL);
   EXPECT_EQ(slamd.wait(10), 128 + SIGKILL);
   player.stop(5, SIGINT);
-  const auto files = checkpoints(state);
+  const auto files = checkpoint_files(state);
   ASSERT_FALSE(files.empty());
   const slamd::Checkpoint newest = slamd::read_checkpoint(files.back().string());
   EXPECT_GT(newest.sequence, 0u);
@@ -359,7 +327,7 @@ TEST_F(SlamdBinary, KilledWithoutWarningItResumesFromItsNewestCheckpoint) {
 TEST_F(SlamdBinary, LiveRunFedByLcmLogplayerTakesTheSameDecisionsAsReplay) {
   const std::string replayed = (dir_ / "reference.lcmlog").string();
   ASSERT_EQ(replay(replayed), 0);
-  const Output reference = read_output(replayed);
+  const SlamdOutput reference = read_slamd_output(replayed);
 
   LcmBus bus;
   DecodeErrors errors;
@@ -398,7 +366,7 @@ TEST_F(SlamdBinary, LiveRunFedByLcmLogplayerTakesTheSameDecisionsAsReplay) {
   ASSERT_NE(at, std::string::npos);
   const uint64_t cycles = std::stoull(out.substr(at + 14));
   EXPECT_GE(cycles, live.size());
-  const auto files = checkpoints(state);
+  const auto files = checkpoint_files(state);
   ASSERT_FALSE(files.empty());
   EXPECT_EQ(slamd::read_checkpoint(files.back().string()).sequence, cycles) << files.back();
 
