@@ -63,30 +63,6 @@ std::string check_time(const char* name, int64_t utime) {
   return std::string(name) + ": sample time " + std::to_string(utime) + " us is not a plausible epoch time";
 }
 
-// Bytes per pixel of the uncompressed formats we accept; 0 for compressed, -1 for unknown.
-int bytes_per_pixel(int32_t fourcc) {
-  if (fourcc == image_t::PIXEL_FORMAT_GREY) return 1;
-  if (fourcc == image_t::PIXEL_FORMAT_YUYV) return 2;
-  if (fourcc == image_t::PIXEL_FORMAT_RGB24 || fourcc == image_t::PIXEL_FORMAT_BGR24) return 3;
-  if (fourcc == image_t::PIXEL_FORMAT_MJPEG) return 0;
-  return -1;
-}
-
-std::string check_image(const CameraFrame& m) {
-  if (std::string bad = check_time("CAMERA", m.utime); !bad.empty()) return bad;
-  if (m.width <= 0 || m.height <= 0 || m.width > 10000 || m.height > 10000) {
-    return "CAMERA: bad size " + std::to_string(m.width) + "x" + std::to_string(m.height);
-  }
-  const int bpp = bytes_per_pixel(m.pixelformat);
-  if (bpp < 0) return "CAMERA: unsupported pixel format " + std::to_string(m.pixelformat);
-  if (bpp == 0) return !m.data.empty() ? "" : "CAMERA: empty compressed frame";
-  if (m.row_stride < m.width * bpp) return "CAMERA: row_stride " + std::to_string(m.row_stride) + " < width × bytes per pixel";
-  if (static_cast<int64_t>(m.data.size()) < static_cast<int64_t>(m.row_stride) * m.height) {
-    return "CAMERA: " + std::to_string(m.data.size()) + " bytes < row_stride × height";
-  }
-  return "";
-}
-
 std::string check_whisk_cycle(const whisk_cycle_t& m) {
   if (std::string bad = check_time("WHISK_CYCLE", m.utime_start); !bad.empty()) return bad;
   if (std::string bad = check_time("WHISK_CYCLE", m.utime_end); !bad.empty()) return bad;
@@ -165,6 +141,34 @@ bool has_contact(const whisk_cycle_t& m) {
 }
 
 }  // namespace
+
+namespace {
+
+// Bytes per pixel of the uncompressed formats we accept; 0 for compressed, -1 for unknown.
+int bytes_per_pixel(int32_t fourcc) {
+  if (fourcc == image_t::PIXEL_FORMAT_GREY) return 1;
+  if (fourcc == image_t::PIXEL_FORMAT_YUYV) return 2;
+  if (fourcc == image_t::PIXEL_FORMAT_RGB24 || fourcc == image_t::PIXEL_FORMAT_BGR24) return 3;
+  if (fourcc == image_t::PIXEL_FORMAT_MJPEG) return 0;
+  return -1;
+}
+
+}  // namespace
+
+std::string camera_frame_error(const CameraFrame& m) {
+  if (std::string bad = check_time("CAMERA", m.utime); !bad.empty()) return bad;
+  if (m.width <= 0 || m.height <= 0 || m.width > 10000 || m.height > 10000) {
+    return "CAMERA: bad size " + std::to_string(m.width) + "x" + std::to_string(m.height);
+  }
+  const int bpp = bytes_per_pixel(m.pixelformat);
+  if (bpp < 0) return "CAMERA: unsupported pixel format " + std::to_string(m.pixelformat);
+  if (bpp == 0) return !m.data.empty() ? "" : "CAMERA: empty compressed frame";
+  if (m.row_stride < m.width * bpp) return "CAMERA: row_stride " + std::to_string(m.row_stride) + " < width × bytes per pixel";
+  if (static_cast<int64_t>(m.data.size()) < static_cast<int64_t>(m.row_stride) * m.height) {
+    return "CAMERA: " + std::to_string(m.data.size()) + " bytes < row_stride × height";
+  }
+  return "";
+}
 
 std::string whisk_cycle_size_error(std::span<const uint8_t> data) {
   // Fingerprint, then utime, cycle, utime_start, utime_end; then num_whiskers, num_samples, num_missing.
@@ -280,7 +284,7 @@ void SlamNode::on_camera(std::span<const uint8_t> data, const MessageInfo& info)
   CameraFrame frame;
   std::string reason;
   if (!decode_camera_frame(data, frame, &reason)) return decode_errors_.record(info.channel, reason);
-  const std::string err = check_image(frame);
+  const std::string err = camera_frame_error(frame);
   if (!err.empty()) return reject(kCamera, err);
   if (info.data_owner) {
     frame.owner = info.data_owner;  // the bytes outlive this call: keep a view

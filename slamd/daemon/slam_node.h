@@ -45,6 +45,11 @@ std::string whisk_cycle_size_error(std::span<const uint8_t> data);
 // before it was rejected. Within the contract the decoded message is about 1.3× its wire size.
 std::string whisk_cycle_contract_error(std::span<const uint8_t> data);
 
+// Why a CAMERA frame breaks the contract (a sample time that is no epoch time, a size out of range,
+// a pixel format outside docs/lcm-channels.md, pixels that do not fit width, height and row_stride),
+// or "". slamd rejects such a frame; whiskeye-viewer does not show it.
+std::string camera_frame_error(const CameraFrame& m);
+
 // A WHISK_CYCLE message as the core's input (the message is assumed already validated).
 slam::WhiskCycleInput to_core(const whisk_cycle_t& m);
 

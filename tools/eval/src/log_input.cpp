@@ -2,6 +2,7 @@
 #include "log_input.h"
 
 #include "whiskeye/common/bus.h"
+#include "whiskeye/common/wire_names.h"
 
 #include <whiskeye/pose2d_t.hpp>
 #include <whiskeye/sim_fault_t.hpp>
@@ -31,15 +32,6 @@ std::string fault_name(const sim_fault_t& f) {
       return buf;
     }
     default: return "fault_kind_" + std::to_string(f.kind);
-  }
-}
-
-std::string mode_name(int8_t mode) {
-  switch (mode) {
-    case vita_pose_t::MODE_VISUAL: return "visual";
-    case vita_pose_t::MODE_TACTILE: return "tactile";
-    case vita_pose_t::MODE_VITA: return "vita";
-    default: return "unknown";
   }
 }
 

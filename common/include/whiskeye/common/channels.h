@@ -1,0 +1,25 @@
+// The stack's LCM channel names (docs/lcm-channels.md): one home for the defaults. A program that
+// reads or writes a channel names it from here, so a reader cannot silently disagree with its
+// writer about a spelling. (Older code still spells some names as literals or configurable strings:
+// issue 26 moves them here.)
+#pragma once
+
+namespace whiskeye::channels {
+
+inline constexpr const char* kWhiskerSample = "WHISKER_SAMPLE";
+inline constexpr const char* kRcpState = "RCP_STATE";
+inline constexpr const char* kWhiskCycle = "WHISK_CYCLE";
+inline constexpr const char* kCamera = "CAMERA";
+inline constexpr const char* kOdometry = "ODOMETRY";
+inline constexpr const char* kBaseCmd = "BASE_CMD";
+inline constexpr const char* kGroundTruth = "GROUND_TRUTH";
+inline constexpr const char* kSimContactTruth = "SIM_CONTACT_TRUTH";
+inline constexpr const char* kSimFault = "SIM_FAULT";
+inline constexpr const char* kVitaPose = "VITA_POSE";
+inline constexpr const char* kVitaEvent = "VITA_EVENT";
+inline constexpr const char* kVitaMatch = "VITA_MATCH";
+inline constexpr const char* kVitaMap = "VITA_MAP";
+inline constexpr const char* kDriverStatus = "DRIVER_STATUS";
+inline constexpr const char* kSlamStatus = "SLAM_STATUS";
+
+}  // namespace whiskeye::channels
