@@ -210,7 +210,10 @@ function renderStatus() {
     for (const [k, v] of d.counters.concat(d.stats)) {
       const dt = document.createElement('dt'); dt.textContent = k;
       const dd = document.createElement('dd'); dd.textContent = Number.isInteger(v) ? v : fmt(v, 2);
-      if (v && /error|drop|overflow|without|jump|out_of_order|superseded|miss|stale|gap/.test(k)) dd.className = 'nonzero';
+      // Counters of something that went wrong are amber when not 0; a cycle without contact is normal.
+      if (v && k !== 'cycles_without_contact' && /error|drop|overflow|without|jump|out_of_order|superseded|miss|stale|gap/.test(k)) {
+        dd.className = 'nonzero';
+      }
       dl.append(dt, dd);
     }
     card.append(dl);
