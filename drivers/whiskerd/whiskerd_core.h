@@ -28,8 +28,7 @@ struct driver_status_t;
 
 namespace whiskeye::whiskerd {
 
-static_assert(wp::kNumWhiskers == rcp::kNumWhiskers);
-constexpr int kN = wp::kNumWhiskers;
+constexpr int kN = kNumWhiskers;
 
 struct Params {
   // can
