@@ -5,8 +5,10 @@
 // silent board: retract, then drop enable). The daemon (whiskerd_main.cpp) is the thin wiring around it.
 #pragma once
 
+#include <whiskeye/common/channels.h>
 #include <whiskeye/common/params.h>
 #include <whiskeye/rcp/controller.h>
+#include <whiskeye/rcp/lcm.h>  // WHISK_CYCLE: rcp::to_lcm(const rcp::WhiskCycle&, whisk_cycle_t&)
 
 #include <array>
 #include <cstdint>
@@ -20,9 +22,6 @@
 #include "whiskeye/drivers/whisker_protocol.h"
 
 namespace whiskeye {
-struct whisker_sample_t;
-struct rcp_state_t;
-struct whisk_cycle_t;
 struct driver_status_t;
 }  // namespace whiskeye
 
@@ -201,9 +200,9 @@ struct StatusSnapshot {
   bool rt_scheduling = false;
 };
 
-// LCM conversions (daemon side).
+// LCM conversions (daemon side): the period's WHISKER_SAMPLE and RCP_STATE, and DRIVER_STATUS. A
+// completed cycle goes out through rcp::to_lcm (whiskeye/rcp/lcm.h), as vita-sim's do.
 void to_lcm(const PeriodOutput& in, whisker_sample_t& sample, rcp_state_t& state);
-void to_lcm(const rcp::WhiskCycle& in, whisk_cycle_t& out);
 void to_lcm(const StatusSnapshot& in, driver_status_t& out);
 
 }  // namespace whiskeye::whiskerd
