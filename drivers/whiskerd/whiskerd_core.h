@@ -50,10 +50,10 @@ struct Params {
   bool lock_memory = true;
   // lcm
   std::string lcm_url;
-  std::string channel_sample = "WHISKER_SAMPLE";
-  std::string channel_state = "RCP_STATE";
-  std::string channel_cycle = "WHISK_CYCLE";
-  std::string channel_status = "DRIVER_STATUS";
+  std::string channel_sample = channels::kWhiskerSample;
+  std::string channel_state = channels::kRcpState;
+  std::string channel_cycle = channels::kWhiskCycle;
+  std::string channel_status = channels::kDriverStatus;
   double status_period_s = 1.0;
   // the whisking controller (section `rcp`: pattern, detector, rcp)
   rcp::ControllerParams controller;
