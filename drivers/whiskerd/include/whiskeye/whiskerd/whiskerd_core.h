@@ -17,7 +17,7 @@
 #include <span>
 #include <string>
 
-#include "latency_stats.h"
+#include "whiskeye/common/latency_stats.h"
 #include "whiskeye/drivers/motor_lines.h"
 #include "whiskeye/drivers/whisker_protocol.h"
 

@@ -1,5 +1,5 @@
 // whiskerd's control core (see whiskerd_core.h).
-#include "whiskerd_core.h"
+#include "whiskeye/whiskerd/whiskerd_core.h"
 
 #include <whiskeye/driver_status_t.hpp>
 
