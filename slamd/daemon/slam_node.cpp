@@ -76,14 +76,15 @@ std::string check_whisk_cycle(const whisk_cycle_t& m) {
   }
   int missing_samples = 0;
   for (int s = 0; s < m.num_samples; ++s) {
-    const std::string at = " at sample " + std::to_string(s);
+    // The words of an error are built only for an error (a valid cycle is ~5,000 samples × 24).
+    const auto at = [s] { return " at sample " + std::to_string(s); };
     // Within the cycle (so no difference of sample times can overflow), in order.
     if (m.sample_utime[s] < m.utime_start || m.sample_utime[s] > m.utime_end) {
-      return "WHISK_CYCLE: sample time " + std::to_string(m.sample_utime[s]) + at + " is outside the cycle";
+      return "WHISK_CYCLE: sample time " + std::to_string(m.sample_utime[s]) + at() + " is outside the cycle";
     }
-    if (s > 0 && m.sample_utime[s] < m.sample_utime[s - 1]) return "WHISK_CYCLE: sample times go backwards" + at;
+    if (s > 0 && m.sample_utime[s] < m.sample_utime[s - 1]) return "WHISK_CYCLE: sample times go backwards" + at();
     if (m.sample_valid[s] != 0 && m.sample_valid[s] != 1) {
-      return "WHISK_CYCLE: sample_valid " + std::to_string(m.sample_valid[s]) + at + " (0 or 1)";
+      return "WHISK_CYCLE: sample_valid " + std::to_string(m.sample_valid[s]) + at() + " (0 or 1)";
     }
     if (!m.sample_valid[s]) {
       ++missing_samples;
@@ -93,13 +94,13 @@ std::string check_whisk_cycle(const whisk_cycle_t& m) {
       const double theta = m.theta[s][w], dx = m.deflection_x[s][w], dy = m.deflection_y[s][w];
       // A whisker not measured in a sample is NaN in all three values (docs/lcm-channels.md).
       if (std::isnan(theta) && std::isnan(dx) && std::isnan(dy)) continue;
-      const std::string whisker = at + ", whisker " + std::to_string(w);
-      if (!finite(theta) || !finite(dx) || !finite(dy)) return "WHISK_CYCLE: non-finite value" + whisker;
+      const auto whisker = [&at, w] { return at() + ", whisker " + std::to_string(w); };
+      if (!finite(theta) || !finite(dx) || !finite(dy)) return "WHISK_CYCLE: non-finite value" + whisker();
       if (std::abs(theta) > kMaxWhiskerAngle) {
-        return "WHISK_CYCLE: theta " + std::to_string(theta) + " rad" + whisker + " (beyond ±pi)";
+        return "WHISK_CYCLE: theta " + std::to_string(theta) + " rad" + whisker() + " (beyond ±pi)";
       }
       if (std::abs(dx) > kMaxDeflection || std::abs(dy) > kMaxDeflection) {
-        return "WHISK_CYCLE: deflection (" + std::to_string(dx) + ", " + std::to_string(dy) + ")" + whisker +
+        return "WHISK_CYCLE: deflection (" + std::to_string(dx) + ", " + std::to_string(dy) + ")" + whisker() +
                " (calibrated -1..1)";
       }
     }
