@@ -281,6 +281,16 @@ void SlamNode::warn(const std::string& key, const std::string& line) {
   if (auto admitted = throttle_.admit(key, line, log_clock_())) logger_(*admitted);
 }
 
+void SlamNode::sequence(Input input, int64_t seq) {
+  const int64_t missing = gaps_[input].add(seq);
+  if (missing == 0) return;
+  counters_.input_gaps += missing;
+  static constexpr const char* kWhat[] = {"CAMERA: frames", "ODOMETRY: samples", "WHISK_CYCLE: cycles"};
+  warn(std::string("gap-") + kWhat[input],
+       std::string(kWhat[input]) + " missing by the sequence numbers: " + std::to_string(missing) + " before " +
+           std::to_string(seq) + " (lost on the way: LCM, the network or a recording)");
+}
+
 void SlamNode::on_camera(std::span<const uint8_t> data, const MessageInfo& info) {
   CameraFrame frame;
   std::string reason;
@@ -292,8 +302,10 @@ void SlamNode::on_camera(std::span<const uint8_t> data, const MessageInfo& info)
   } else {
     own_pixels(frame);
   }
+  const int64_t seq = frame.seq;
   if (const std::string why = sync_.add_camera(std::move(frame)); !why.empty()) return reject(kCamera, why);
   accepted(kCamera);
+  sequence(kCamera, seq);
   process(sync_.take_ready());
 }
 
@@ -302,6 +314,7 @@ void SlamNode::on_whisk_cycle(const whisk_cycle_t& msg) {
   if (!err.empty()) return reject(kWhisk, err);
   if (const std::string why = sync_.add_whisk_cycle(msg); !why.empty()) return reject(kWhisk, why);
   accepted(kWhisk);
+  sequence(kWhisk, msg.cycle);
   process(sync_.take_ready());
 }
 
@@ -312,6 +325,7 @@ void SlamNode::on_odometry(const odometry_t& msg) {
   const int64_t overflow_before = sync_.counters().odometry_overflow;
   if (const std::string why = sync_.add_odometry(msg); !why.empty()) return reject(kOdometry, why);
   accepted(kOdometry);
+  sequence(kOdometry, msg.seq);
   // Logged at the first dropped sample of each stretch without whisk cycles, not at every one.
   if (sync_.counters().odometry_overflow != overflow_before && !odometry_overflowing_) {
     odometry_overflowing_ = true;
@@ -491,6 +505,7 @@ slam_status_t SlamNode::status(int64_t utime, int64_t window_now_us) {
   s.odometry_overflow = sync.odometry_overflow;
   s.cycles_without_camera = counters_.cycles_without_camera;
   s.cycles_without_contact = counters_.cycles_without_contact;
+  s.input_gaps = counters_.input_gaps;
   constexpr int64_t kWindow = 10 * kUtimePerSecond;
   const bool rejecting =
       recent_errors_.changed_within(s.decode_errors + s.validation_errors, window_now_us, kWindow);

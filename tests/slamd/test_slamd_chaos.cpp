@@ -461,6 +461,7 @@ TEST(SlamdChaos, SurvivesKillsHostileMessagesAFloodAndAFullDiskAndKeepsTheMapOfA
       EXPECT_EQ(st.validation_errors, hostile_rejected + stale_published);
       EXPECT_EQ(st.out_of_order, stale_published);
       EXPECT_EQ(st.lcm_receive_drops, 0) << "session " << session;
+      EXPECT_EQ(st.input_gaps, 0) << "session " << session << ": input lost on the way";
       EXPECT_EQ(st.checkpoint_errors > 0, disk_freed) << "checkpoints failed only while the disk was full";
       max_rss_kb = std::max(max_rss_kb, vm_hwm_kb(slamd->pid()));
       EXPECT_EQ(lcm_internal_drops(slamd->output()), "") << "session " << session;
@@ -569,6 +570,7 @@ TEST(SlamdChaos, SurvivesKillsHostileMessagesAFloodAndAFullDiskAndKeepsTheMapOfA
   EXPECT_EQ(st.decode_errors, hostile_undecodable);
   EXPECT_EQ(st.validation_errors, hostile_rejected + stale_published);
   EXPECT_EQ(st.lcm_receive_drops, 0);
+  EXPECT_EQ(st.input_gaps, 0);
   max_rss_kb = std::max(max_rss_kb, vm_hwm_kb(slamd->pid()));
   EXPECT_EQ(lcm_internal_drops(slamd->output()), "");
   EXPECT_EQ(slamd->stop(20, SIGTERM), 0) << slamd->output();
