@@ -1,10 +1,13 @@
 // vita-eval: the paper's Table I metrics (LEM, ExM, EnM; ../shared/design/metrics.md) from one or
-// more slamd output logs that carry GROUND_TRUTH. Prints the table, optionally writes JSON and PNGs.
+// more slamd output logs. Prints the table, optionally writes JSON, plots (PNG and SVG, optionally
+// over a vita-sim world) and per-cycle traces. A log without GROUND_TRUTH (a real robot's run) is
+// drawn and counted; what needs truth is reported as unavailable.
 #include "log_input.h"
 #include "plots.h"
 #include "report.h"
 
 #include "whiskeye/eval/metrics.h"
+#include "whiskeye/sim/world.h"
 
 #include <CLI/CLI.hpp>
 
@@ -28,6 +31,15 @@ bool parse_centre(const std::string& text, double& x, double& y) {
   return static_cast<bool>(in >> x >> comma >> y) && comma == ',' && (in >> std::ws).eof();
 }
 
+bool parse_start(const std::string& text, Pose2& pose) {
+  std::istringstream in(text);
+  char c1 = 0, c2 = 0;
+  double deg = 0.0;
+  if (!(in >> pose.x >> c1 >> pose.y >> c2 >> deg) || c1 != ',' || c2 != ',' || !(in >> std::ws).eof()) return false;
+  pose.theta = wrap_angle(deg_to_rad(deg));
+  return true;
+}
+
 // Writes `text` to `path`; throws naming the file if it cannot.
 void write_text(const std::string& path, const std::string& text) {
   std::ofstream out(path);
@@ -37,11 +49,14 @@ void write_text(const std::string& path, const std::string& text) {
 
 int run(int argc, char** argv) {
   CLI::App app{"vita-eval: LEM, ExM (ARR, ARCR, valid fraction) and EnM of slamd output logs against "
-               "their GROUND_TRUTH, as in the paper's Table I (see docs/evaluation.md)"};
+               "their GROUND_TRUTH, as in the paper's Table I, and plots of any run, with or without ground "
+               "truth (see docs/evaluation.md)"};
   std::vector<std::string> inputs;
   std::string json_path;
   std::string plots_dir;
   std::string trace_dir;
+  std::string world_path;
+  std::string start_text;
   std::vector<std::string> paper_names;
   std::string centre = "0,0";
   double position_threshold_m = 0.08;
@@ -49,7 +64,14 @@ int run(int argc, char** argv) {
   double base_duration_s = -1.0;
   app.add_option("--input", inputs, "slamd output log (repeat for a multi-row table)")->required();
   app.add_option("--json", json_path, "write all results as JSON to this file");
-  app.add_option("--plots", plots_dir, "write PNG plots into this directory (created if missing)");
+  app.add_option("--plots", plots_dir,
+                 "write plots (PNG and SVG) into this directory (created if missing): per run the experience map, "
+                 "the pose trail and the re-localisations; with several runs the maps side by side");
+  app.add_option("--world", world_path,
+                 "a vita-sim world file (config/worlds/*.yaml): its walls and landmarks drawn under the plots");
+  app.add_option("--start", start_text,
+                 "X,Y,THETA_DEG: where the first pose lies in the world, for a run without ground truth "
+                 "(default with --world: the world's start pose)");
   app.add_option("--trace", trace_dir,
                  "write a CSV per run into this directory: every cycle's event, its re-localisation's error against "
                  "ground truth and its template match (created if missing)");
@@ -80,6 +102,26 @@ int run(int argc, char** argv) {
     return 2;
   }
   if (base_duration_s > 0) params.base_duration_s = base_duration_s;
+  PlotScene scene;
+  scene.params = params;
+  Pose2 start;
+  if (!start_text.empty()) {
+    if (!parse_start(start_text, start)) {
+      std::cerr << "vita-eval: --start must be X,Y,THETA_DEG (m, m, degrees), got '" << start_text << "'\n";
+      return 2;
+    }
+    scene.start = start;
+  }
+  std::optional<sim::World> world;
+  if (!world_path.empty()) {
+    try {
+      world = sim::load_world_file(world_path);
+    } catch (const std::exception& e) {
+      std::cerr << "vita-eval: --world " << world_path << ": " << e.what() << "\n";
+      return 2;
+    }
+    scene.world = &*world;
+  }
 
   std::vector<RunReport> reports;
   std::vector<EvalInput> loaded_inputs;
@@ -105,8 +147,13 @@ int run(int argc, char** argv) {
     for (const auto& [ch, n] : run.decode_errors) {
       std::cerr << "vita-eval: " << path << ": " << n << " undecodable messages on " << ch << "\n";
     }
-    if (!r.result.alignment.valid) std::cerr << "vita-eval: " << path << ": " << r.result.alignment.reason << "\n";
-    if (!r.result.exm.base_end_found) {
+    if (!r.result.ground_truth) {
+      std::cerr << "vita-eval: " << path
+                << ": no GROUND_TRUTH: the metrics that need it (EnM, ARCR, LEM, valid fraction) are unavailable\n";
+    } else if (!r.result.alignment.valid) {
+      std::cerr << "vita-eval: " << path << ": " << r.result.alignment.reason << "\n";
+    }
+    if (r.result.ground_truth && !r.result.exm.base_end_found) {
       std::cerr << "vita-eval: " << path
                 << ": ground truth never completes a revolution around the centre; every experience is in "
                    "the base set (use --centre or --base-duration)\n";
@@ -123,18 +170,17 @@ int run(int argc, char** argv) {
   if (!json_path.empty()) write_text(json_path, to_json(reports, params, paper).dump(2) + "\n");
   if (!plots_dir.empty()) {
     std::filesystem::create_directories(plots_dir);
+    std::vector<PlotRun> runs;
     for (std::size_t i = 0; i < reports.size(); ++i) {
-      const std::string base = (std::filesystem::path(plots_dir) / reports[i].label).string();
-      plot_experience_map(base + "_experience_map.png", reports[i].label + ": experience map (aligned) over ground truth",
-                          loaded_inputs[i], reports[i].result);
-      plot_relocalisations(base + "_relocalisations.png", reports[i].label + ": re-localisations",
-                           loaded_inputs[i], reports[i].result, params);
+      runs.push_back({reports[i].label, &loaded_inputs[i], &reports[i].result});
+      plot_run(plots_dir, runs.back(), scene);
     }
+    if (runs.size() > 1) plot_comparison(plots_dir, runs, scene);
   }
   if (!trace_dir.empty()) {
     std::filesystem::create_directories(trace_dir);
     for (std::size_t i = 0; i < reports.size(); ++i) {
-      write_text((std::filesystem::path(trace_dir) / (reports[i].label + "_trace.csv")).string(),
+      write_text((std::filesystem::path(trace_dir) / (plot_stem(reports[i].label) + "_trace.csv")).string(),
                  format_trace_csv(trace_cycles(loaded_inputs[i], reports[i].result.exm)));
     }
   }
