@@ -4,6 +4,7 @@
 #include "plots.h"
 #include "report.h"
 
+#include "whiskeye/common/cli.h"
 #include "whiskeye/eval/metrics.h"
 
 #include <CLI/CLI.hpp>
@@ -36,8 +37,10 @@ void write_text(const std::string& path, const std::string& text) {
 }
 
 int run(int argc, char** argv) {
-  CLI::App app{"vita-eval: LEM, ExM (ARR, ARCR, valid fraction) and EnM of slamd output logs against "
-               "their GROUND_TRUTH, as in the paper's Table I (see docs/evaluation.md)"};
+  cli::Program program("vita-eval",
+                       "vita-eval: LEM, ExM (ARR, ARCR, valid fraction) and EnM of slamd output logs against "
+                       "their GROUND_TRUTH, as in the paper's Table I (see docs/evaluation.md)");
+  CLI::App& app = program.app();
   std::vector<std::string> inputs;
   std::string json_path;
   std::string plots_dir;
@@ -66,88 +69,77 @@ int run(int argc, char** argv) {
   app.add_option("--angle-threshold-deg", angle_threshold_deg, "ExM: and within this heading (deg)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e);
-  }
-
-  EvalParams params;
-  params.correct_position_m = position_threshold_m;
-  params.correct_angle_rad = deg_to_rad(angle_threshold_deg);
-  if (!parse_centre(centre, params.centre_x, params.centre_y)) {
-    std::cerr << "vita-eval: --centre must be X,Y in metres, got '" << centre << "'\n";
-    return 2;
-  }
-  if (base_duration_s > 0) params.base_duration_s = base_duration_s;
-
-  std::vector<RunReport> reports;
-  std::vector<EvalInput> loaded_inputs;
-  std::set<std::string> labels;
-  for (const std::string& path : inputs) {
-    LoadedRun run = load_run(path);
-    RunReport r;
-    r.label = run.mode;
-    for (int n = 2; labels.count(r.label) > 0; ++n) r.label = run.mode + "#" + std::to_string(n);
-    labels.insert(r.label);
-    r.path = path;
-    r.mode = run.mode;
-    r.pose_samples = run.input.estimate.size();
-    r.events = run.input.events.size();
-    r.map_experiences = run.input.map.experiences.size();
-    r.map_links = run.input.map.links.size();
-    r.ground_truth_samples = run.input.ground_truth.size();
-    r.decode_errors = run.decode_errors;
-    r.log_damage = run.log_damage;
-    r.faults = run.input.faults;
-    if (!r.log_damage.empty()) std::cerr << "vita-eval: " << r.log_damage << " (evaluated what could be read)\n";
-    r.result = evaluate(run.input, params);
-    for (const auto& [ch, n] : run.decode_errors) {
-      std::cerr << "vita-eval: " << path << ": " << n << " undecodable messages on " << ch << "\n";
+  return program.run(argc, argv, [&] {
+    EvalParams params;
+    params.correct_position_m = position_threshold_m;
+    params.correct_angle_rad = deg_to_rad(angle_threshold_deg);
+    if (!parse_centre(centre, params.centre_x, params.centre_y)) {
+      std::cerr << "vita-eval: --centre must be X,Y in metres, got '" << centre << "'\n";
+      return 2;
     }
-    if (!r.result.alignment.valid) std::cerr << "vita-eval: " << path << ": " << r.result.alignment.reason << "\n";
-    if (!r.result.exm.base_end_found) {
-      std::cerr << "vita-eval: " << path
-                << ": ground truth never completes a revolution around the centre; every experience is in "
-                   "the base set (use --centre or --base-duration)\n";
-    }
-    reports.push_back(std::move(r));
-    loaded_inputs.push_back(std::move(run.input));
-  }
+    if (base_duration_s > 0) params.base_duration_s = base_duration_s;
 
-  std::vector<PaperRow> paper;
-  for (const std::string& name : paper_names) paper.push_back(*paper_row(name));
-
-  std::cout << format_table(reports, paper);
-
-  if (!json_path.empty()) write_text(json_path, to_json(reports, params, paper).dump(2) + "\n");
-  if (!plots_dir.empty()) {
-    std::filesystem::create_directories(plots_dir);
-    for (std::size_t i = 0; i < reports.size(); ++i) {
-      const std::string base = (std::filesystem::path(plots_dir) / reports[i].label).string();
-      plot_experience_map(base + "_experience_map.png", reports[i].label + ": experience map (aligned) over ground truth",
-                          loaded_inputs[i], reports[i].result);
-      plot_relocalisations(base + "_relocalisations.png", reports[i].label + ": re-localisations",
-                           loaded_inputs[i], reports[i].result, params);
+    std::vector<RunReport> reports;
+    std::vector<EvalInput> loaded_inputs;
+    std::set<std::string> labels;
+    for (const std::string& path : inputs) {
+      LoadedRun run = load_run(path);
+      RunReport r;
+      r.label = run.mode;
+      for (int n = 2; labels.count(r.label) > 0; ++n) r.label = run.mode + "#" + std::to_string(n);
+      labels.insert(r.label);
+      r.path = path;
+      r.mode = run.mode;
+      r.pose_samples = run.input.estimate.size();
+      r.events = run.input.events.size();
+      r.map_experiences = run.input.map.experiences.size();
+      r.map_links = run.input.map.links.size();
+      r.ground_truth_samples = run.input.ground_truth.size();
+      r.decode_errors = run.decode_errors;
+      r.log_damage = run.log_damage;
+      r.faults = run.input.faults;
+      if (!r.log_damage.empty()) std::cerr << "vita-eval: " << r.log_damage << " (evaluated what could be read)\n";
+      r.result = evaluate(run.input, params);
+      for (const auto& [ch, n] : run.decode_errors) {
+        std::cerr << "vita-eval: " << path << ": " << n << " undecodable messages on " << ch << "\n";
+      }
+      if (!r.result.alignment.valid) std::cerr << "vita-eval: " << path << ": " << r.result.alignment.reason << "\n";
+      if (!r.result.exm.base_end_found) {
+        std::cerr << "vita-eval: " << path
+                  << ": ground truth never completes a revolution around the centre; every experience is in "
+                     "the base set (use --centre or --base-duration)\n";
+      }
+      reports.push_back(std::move(r));
+      loaded_inputs.push_back(std::move(run.input));
     }
-  }
-  if (!trace_dir.empty()) {
-    std::filesystem::create_directories(trace_dir);
-    for (std::size_t i = 0; i < reports.size(); ++i) {
-      write_text((std::filesystem::path(trace_dir) / (reports[i].label + "_trace.csv")).string(),
-                 format_trace_csv(trace_cycles(loaded_inputs[i], reports[i].result.exm)));
+
+    std::vector<PaperRow> paper;
+    for (const std::string& name : paper_names) paper.push_back(*paper_row(name));
+
+    std::cout << format_table(reports, paper);
+
+    if (!json_path.empty()) write_text(json_path, to_json(reports, params, paper).dump(2) + "\n");
+    if (!plots_dir.empty()) {
+      std::filesystem::create_directories(plots_dir);
+      for (std::size_t i = 0; i < reports.size(); ++i) {
+        const std::string base = (std::filesystem::path(plots_dir) / reports[i].label).string();
+        plot_experience_map(base + "_experience_map.png", reports[i].label + ": experience map (aligned) over ground truth",
+                            loaded_inputs[i], reports[i].result);
+        plot_relocalisations(base + "_relocalisations.png", reports[i].label + ": re-localisations",
+                             loaded_inputs[i], reports[i].result, params);
+      }
     }
-  }
-  return 0;
+    if (!trace_dir.empty()) {
+      std::filesystem::create_directories(trace_dir);
+      for (std::size_t i = 0; i < reports.size(); ++i) {
+        write_text((std::filesystem::path(trace_dir) / (reports[i].label + "_trace.csv")).string(),
+                   format_trace_csv(trace_cycles(loaded_inputs[i], reports[i].result.exm)));
+      }
+    }
+    return 0;
+  });
 }
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& e) {
-    std::cerr << "vita-eval: " << e.what() << "\n";
-    return 1;
-  }
-}
+int main(int argc, char** argv) { return run(argc, argv); }
