@@ -6,6 +6,7 @@
 #include "plots.h"
 #include "report.h"
 
+#include "whiskeye/common/cli.h"
 #include "whiskeye/eval/metrics.h"
 #include "whiskeye/sim/world.h"
 
@@ -48,9 +49,11 @@ void write_text(const std::string& path, const std::string& text) {
 }
 
 int run(int argc, char** argv) {
-  CLI::App app{"vita-eval: LEM, ExM (ARR, ARCR, valid fraction) and EnM of slamd output logs against "
-               "their GROUND_TRUTH, as in the paper's Table I, and plots of any run, with or without ground "
-               "truth (see docs/evaluation.md)"};
+  cli::Program program("vita-eval",
+                       "vita-eval: LEM, ExM (ARR, ARCR, valid fraction) and EnM of slamd output logs against "
+                       "their GROUND_TRUTH, as in the paper's Table I, and plots of any run, with or without ground "
+                       "truth (see docs/evaluation.md)");
+  CLI::App& app = program.app();
   std::vector<std::string> inputs;
   std::string json_path;
   std::string plots_dir;
@@ -88,112 +91,101 @@ int run(int argc, char** argv) {
   app.add_option("--angle-threshold-deg", angle_threshold_deg, "ExM: and within this heading (deg)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e);
-  }
-
-  EvalParams params;
-  params.correct_position_m = position_threshold_m;
-  params.correct_angle_rad = deg_to_rad(angle_threshold_deg);
-  if (!parse_centre(centre, params.centre_x, params.centre_y)) {
-    std::cerr << "vita-eval: --centre must be X,Y in metres, got '" << centre << "'\n";
-    return 2;
-  }
-  if (base_duration_s > 0) params.base_duration_s = base_duration_s;
-  PlotScene scene;
-  scene.params = params;
-  Pose2 start;
-  if (!start_text.empty()) {
-    if (!parse_start(start_text, start)) {
-      std::cerr << "vita-eval: --start must be X,Y,THETA_DEG (m, m, degrees), got '" << start_text << "'\n";
+  return program.run(argc, argv, [&] {
+    EvalParams params;
+    params.correct_position_m = position_threshold_m;
+    params.correct_angle_rad = deg_to_rad(angle_threshold_deg);
+    if (!parse_centre(centre, params.centre_x, params.centre_y)) {
+      std::cerr << "vita-eval: --centre must be X,Y in metres, got '" << centre << "'\n";
       return 2;
     }
-    scene.start = start;
-  }
-  std::optional<sim::World> world;
-  if (!world_path.empty()) {
-    try {
-      world = sim::load_world_file(world_path);
-    } catch (const std::exception& e) {
-      std::cerr << "vita-eval: --world " << world_path << ": " << e.what() << "\n";
-      return 2;
+    if (base_duration_s > 0) params.base_duration_s = base_duration_s;
+    PlotScene scene;
+    scene.params = params;
+    Pose2 start;
+    if (!start_text.empty()) {
+      if (!parse_start(start_text, start)) {
+        std::cerr << "vita-eval: --start must be X,Y,THETA_DEG (m, m, degrees), got '" << start_text << "'\n";
+        return 2;
+      }
+      scene.start = start;
     }
-    scene.world = &*world;
-  }
+    std::optional<sim::World> world;
+    if (!world_path.empty()) {
+      try {
+        world = sim::load_world_file(world_path);
+      } catch (const std::exception& e) {
+        std::cerr << "vita-eval: --world " << world_path << ": " << e.what() << "\n";
+        return 2;
+      }
+      scene.world = &*world;
+    }
 
-  std::vector<RunReport> reports;
-  std::vector<EvalInput> loaded_inputs;
-  std::set<std::string> labels;
-  for (const std::string& path : inputs) {
-    LoadedRun run = load_run(path);
-    RunReport r;
-    r.label = run.mode;
-    for (int n = 2; labels.count(r.label) > 0; ++n) r.label = run.mode + "#" + std::to_string(n);
-    labels.insert(r.label);
-    r.path = path;
-    r.mode = run.mode;
-    r.pose_samples = run.input.estimate.size();
-    r.events = run.input.events.size();
-    r.map_experiences = run.input.map.experiences.size();
-    r.map_links = run.input.map.links.size();
-    r.ground_truth_samples = run.input.ground_truth.size();
-    r.decode_errors = run.decode_errors;
-    r.log_damage = run.log_damage;
-    r.faults = run.input.faults;
-    if (!r.log_damage.empty()) std::cerr << "vita-eval: " << r.log_damage << " (evaluated what could be read)\n";
-    r.result = evaluate(run.input, params);
-    for (const auto& [ch, n] : run.decode_errors) {
-      std::cerr << "vita-eval: " << path << ": " << n << " undecodable messages on " << ch << "\n";
+    std::vector<RunReport> reports;
+    std::vector<EvalInput> loaded_inputs;
+    std::set<std::string> labels;
+    for (const std::string& path : inputs) {
+      LoadedRun run = load_run(path);
+      RunReport r;
+      r.label = run.mode;
+      for (int n = 2; labels.count(r.label) > 0; ++n) r.label = run.mode + "#" + std::to_string(n);
+      labels.insert(r.label);
+      r.path = path;
+      r.mode = run.mode;
+      r.pose_samples = run.input.estimate.size();
+      r.events = run.input.events.size();
+      r.map_experiences = run.input.map.experiences.size();
+      r.map_links = run.input.map.links.size();
+      r.ground_truth_samples = run.input.ground_truth.size();
+      r.decode_errors = run.decode_errors;
+      r.log_damage = run.log_damage;
+      r.faults = run.input.faults;
+      if (!r.log_damage.empty()) std::cerr << "vita-eval: " << r.log_damage << " (evaluated what could be read)\n";
+      r.result = evaluate(run.input, params);
+      for (const auto& [ch, n] : run.decode_errors) {
+        std::cerr << "vita-eval: " << path << ": " << n << " undecodable messages on " << ch << "\n";
+      }
+      if (!r.result.ground_truth) {
+        std::cerr << "vita-eval: " << path
+                  << ": no GROUND_TRUTH: the metrics that need it (EnM, ARCR, LEM, valid fraction) are unavailable\n";
+      } else if (!r.result.alignment.valid) {
+        std::cerr << "vita-eval: " << path << ": " << r.result.alignment.reason << "\n";
+      }
+      if (r.result.ground_truth && !r.result.exm.base_end_found) {
+        std::cerr << "vita-eval: " << path
+                  << ": ground truth never completes a revolution around the centre; every experience is in "
+                     "the base set (use --centre or --base-duration)\n";
+      }
+      reports.push_back(std::move(r));
+      loaded_inputs.push_back(std::move(run.input));
     }
-    if (!r.result.ground_truth) {
-      std::cerr << "vita-eval: " << path
-                << ": no GROUND_TRUTH: the metrics that need it (EnM, ARCR, LEM, valid fraction) are unavailable\n";
-    } else if (!r.result.alignment.valid) {
-      std::cerr << "vita-eval: " << path << ": " << r.result.alignment.reason << "\n";
-    }
-    if (r.result.ground_truth && !r.result.exm.base_end_found) {
-      std::cerr << "vita-eval: " << path
-                << ": ground truth never completes a revolution around the centre; every experience is in "
-                   "the base set (use --centre or --base-duration)\n";
-    }
-    reports.push_back(std::move(r));
-    loaded_inputs.push_back(std::move(run.input));
-  }
 
-  std::vector<PaperRow> paper;
-  for (const std::string& name : paper_names) paper.push_back(*paper_row(name));
+    std::vector<PaperRow> paper;
+    for (const std::string& name : paper_names) paper.push_back(*paper_row(name));
 
-  std::cout << format_table(reports, paper);
+    std::cout << format_table(reports, paper);
 
-  if (!json_path.empty()) write_text(json_path, to_json(reports, params, paper).dump(2) + "\n");
-  if (!plots_dir.empty()) {
-    std::filesystem::create_directories(plots_dir);
-    std::vector<PlotRun> runs;
-    for (std::size_t i = 0; i < reports.size(); ++i) {
-      runs.push_back({reports[i].label, &loaded_inputs[i], &reports[i].result});
-      plot_run(plots_dir, runs.back(), scene);
+    if (!json_path.empty()) write_text(json_path, to_json(reports, params, paper).dump(2) + "\n");
+    if (!plots_dir.empty()) {
+      std::filesystem::create_directories(plots_dir);
+      std::vector<PlotRun> runs;
+      for (std::size_t i = 0; i < reports.size(); ++i) {
+        runs.push_back({reports[i].label, &loaded_inputs[i], &reports[i].result});
+        plot_run(plots_dir, runs.back(), scene);
+      }
+      if (runs.size() > 1) plot_comparison(plots_dir, runs, scene);
     }
-    if (runs.size() > 1) plot_comparison(plots_dir, runs, scene);
-  }
-  if (!trace_dir.empty()) {
-    std::filesystem::create_directories(trace_dir);
-    for (std::size_t i = 0; i < reports.size(); ++i) {
-      write_text((std::filesystem::path(trace_dir) / (plot_stem(reports[i].label) + "_trace.csv")).string(),
-                 format_trace_csv(trace_cycles(loaded_inputs[i], reports[i].result.exm)));
+    if (!trace_dir.empty()) {
+      std::filesystem::create_directories(trace_dir);
+      for (std::size_t i = 0; i < reports.size(); ++i) {
+        write_text((std::filesystem::path(trace_dir) / (plot_stem(reports[i].label) + "_trace.csv")).string(),
+                   format_trace_csv(trace_cycles(loaded_inputs[i], reports[i].result.exm)));
+      }
     }
-  }
-  return 0;
+    return 0;
+  });
 }
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& e) {
-    std::cerr << "vita-eval: " << e.what() << "\n";
-    return 1;
-  }
-}
+int main(int argc, char** argv) { return run(argc, argv); }
