@@ -133,7 +133,9 @@ int64_t udp_receive_drops() {
 // ---- LcmBus ----
 
 struct LcmBus::Adapter {
+  std::string channel;
   RawHandler handler;
+  lcm::Subscription* subscription = nullptr;
   void handle(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
     const MessageInfo info{channel, rbuf->recv_utime, nullptr};
     handler(std::span<const uint8_t>(static_cast<const uint8_t*>(rbuf->data), rbuf->data_size), info);
@@ -163,8 +165,20 @@ void LcmBus::publish_raw(const std::string& channel, std::span<const uint8_t> da
 }
 
 void LcmBus::subscribe_raw(const std::string& channel, RawHandler handler) {
-  adapters_.push_back(std::make_unique<Adapter>(Adapter{std::move(handler)}));
-  lcm_->subscribe(channel, &Adapter::handle, adapters_.back().get());
+  adapters_.push_back(std::make_unique<Adapter>(Adapter{channel, std::move(handler), nullptr}));
+  Adapter& adapter = *adapters_.back();
+  adapter.subscription = lcm_->subscribe(channel, &Adapter::handle, &adapter);
+  if (const auto it = queue_capacity_.find(channel); it != queue_capacity_.end() && adapter.subscription != nullptr) {
+    adapter.subscription->setQueueCapacity(it->second);
+  }
+}
+
+void LcmBus::set_queue_capacity(const std::string& channel, int messages) {
+  if (messages < 0) throw std::invalid_argument("LcmBus::set_queue_capacity: negative capacity for " + channel);
+  queue_capacity_[channel] = messages;
+  for (const auto& adapter : adapters_) {
+    if (adapter->channel == channel && adapter->subscription != nullptr) adapter->subscription->setQueueCapacity(messages);
+  }
 }
 
 int LcmBus::handle_timeout(int timeout_ms) { return lcm_->handleTimeout(timeout_ms); }

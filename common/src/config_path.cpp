@@ -1,6 +1,8 @@
 // Default config files found from the program's own location (common/config_path.h).
 #include "whiskeye/common/config_path.h"
 
+#include "whiskeye/common/params.h"
+
 #include <stdexcept>
 
 #ifndef WHISKEYE_BUILD_DIR
@@ -49,14 +51,14 @@ fs::path find_config(std::string_view name, const std::vector<fs::path>& dirs, s
     if (!tried.empty()) tried += ", ";
     tried += candidate.string();
   }
-  throw std::runtime_error(no_default(name) + "tried " + tried + "; give one with " + std::string(option));
+  throw ParamError(no_default(name) + "tried " + tried + "; give one with " + std::string(option));
 }
 
 fs::path default_config_path(std::string_view name, std::string_view option) {
   std::error_code ec;
   const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
   if (ec) {
-    throw std::runtime_error(no_default(name) + "cannot read /proc/self/exe (" + ec.message() + "); give one with " +
+    throw ParamError(no_default(name) + "cannot read /proc/self/exe (" + ec.message() + "); give one with " +
                              std::string(option));
   }
   // /proc/self/exe is canonical; the compiled-in build tree may have been named through a symbolic link.

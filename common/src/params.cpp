@@ -47,6 +47,7 @@ struct ParamNode::State {
   std::set<std::string> leaves;    // keys read as values: their whole subtree is known
   std::set<std::string> sections;  // maps and lists descended into: their children are checked
   std::vector<std::string> dump_lines;
+  std::map<std::string, std::pair<std::string, std::string>> overrides;  // path -> (value, option)
 };
 
 ParamNode::ParamNode(std::shared_ptr<State> state, const YAML::Node& node, std::string prefix)
@@ -90,7 +91,14 @@ std::string ParamNode::path_of(const std::string& key) const {
   return prefix_.empty() ? key : prefix_ + "." + key;
 }
 
+void ParamNode::set_override(const std::string& path, const std::string& value, const std::string& option) {
+  state_->overrides[path] = {value, option};
+}
+
 YAML::Node ParamNode::lookup(const std::string& key) const {
+  if (const auto it = state_->overrides.find(path_of(key)); it != state_->overrides.end()) {
+    return YAML::Node(it->second.first);
+  }
   const YAML::Node& const_node = *node_;  // const: a lookup must not insert the key
   if (!const_node || !const_node.IsMap()) return YAML::Node();
   return const_node[key];
@@ -117,13 +125,19 @@ std::string ParamNode::describe(const YAML::Node& node) {
 }
 
 void ParamNode::fail(const std::string& key, const std::string& what) const {
-  throw ParamError(state_->source + ": '" + path_of(key) + "' " + what);
+  const auto it = state_->overrides.find(path_of(key));
+  const std::string& source = it == state_->overrides.end() ? state_->source : it->second.second;
+  throw ParamError(source + ": '" + path_of(key) + "' " + what);
 }
 
 void ParamNode::mark_leaf(const std::string& key, const std::string& value, bool from_file) const {
   const std::string path = path_of(key);
   state_->leaves.insert(path);
-  state_->dump_lines.push_back(path + ": " + value + (from_file ? "" : "  (default)"));
+  const auto it = state_->overrides.find(path);
+  const std::string tag = it != state_->overrides.end() ? "  (" + it->second.second + ")"
+                          : from_file                     ? ""
+                                                          : "  (default)";
+  state_->dump_lines.push_back(path + ": " + value + tag);
 }
 
 ParamNode ParamNode::section(const std::string& key) const {
@@ -180,6 +194,11 @@ void check_node(const YAML::Node& node, const std::string& path, const std::set<
 
 void ParamNode::check_no_unknown_keys() const {
   check_node(state_->root, "", state_->leaves, state_->sections, state_->source);
+  for (const auto& [path, given] : state_->overrides) {
+    if (!state_->leaves.count(path)) {
+      throw std::logic_error(given.second + " overrides '" + path + "', which no loader read");
+    }
+  }
 }
 
 std::string ParamNode::dump() const {

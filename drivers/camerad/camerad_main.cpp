@@ -12,6 +12,7 @@
 
 #include <whiskeye/common/bus.h>
 #include <whiskeye/common/channels.h>
+#include <whiskeye/common/cli.h>
 #include <whiskeye/common/clock.h>
 #include <whiskeye/common/params.h>
 #include <whiskeye/common/service.h>
@@ -68,37 +69,8 @@ void load(const ParamNode& root, Params& p) {
   root.check_no_unknown_keys();
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  CLI::App app{"camerad: V4L2 camera capture (mmap streaming) published as CAMERA over LCM"};
-  std::string config_path, device;
-  bool print_config = false;
-  app.add_option("-c,--config", config_path, "camerad YAML (config/camerad.yaml); defaults without it");
-  app.add_option("-d,--device", device, "video device, overrides camera.device");
-  app.add_flag("--print-config", print_config, "print every parameter and exit");
-  CLI11_PARSE(app, argc, argv);
-
-  Params p;
-  std::unique_ptr<ServiceNotifier> service;
-  try {
-    service = std::make_unique<ServiceNotifier>("camerad", monotonic_us());
-    const ParamNode root = config_path.empty() ? ParamNode::empty() : ParamNode::from_file(config_path);
-    load(root, p);
-    if (print_config) {
-      std::cout << root.dump();
-      return 0;
-    }
-    std::cerr << root.dump();
-  } catch (const std::exception& e) {
-    std::cerr << "camerad: bad config: " << e.what() << "\n";
-    return 2;
-  }
-  if (!device.empty()) {
-    p.capture.device = device;
-    p.capture.match_card.clear();
-  }
-
+int run(const Params& p) {
+  ServiceNotifier service("camerad", monotonic_us());  // a malformed WHISKEYE_FAULT_INJECT: exit 1
   std::unique_ptr<LcmBus> bus;
   try {
     bus = std::make_unique<LcmBus>(p.lcm_url);
@@ -167,7 +139,7 @@ int main(int argc, char** argv) {
         next_open_us = now + static_cast<int64_t>(backoff.next() * 1e6);
       }
       if (!ready_sent) {
-        service->ready();  // ready = running its loop; a missing camera is a status, not a failure
+        service.ready();  // ready = running its loop; a missing camera is a status, not a failure
         ready_sent = true;
       }
     }
@@ -254,11 +226,41 @@ int main(int argc, char** argv) {
       interval_frames = 0;
       interval_latency_sum_us = interval_latency_max_us = 0;
     }
-    service->keep_alive(t);
+    service.keep_alive(t);
     // Test-only (WHISKEYE_FAULT_INJECT): a stuck capture loop, to prove the watchdog notices.
-    service->stall_if_injected(t, [] { return g_stop.load(); });
+    service.stall_if_injected(t, [] { return g_stop.load(); });
   }
-  service->stopping();
+  service.stopping();
   std::cerr << "camerad: stopped after " << frames << " frames\n";
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  cli::Program program("camerad", "camerad: V4L2 camera capture (mmap streaming) published as CAMERA over LCM");
+  CLI::App& app = program.app();
+  std::string config_path, device, lcm_url;
+  bool print_config = false;
+  program.add_config(config_path, "camerad YAML (config/camerad.yaml); defaults without it");
+  app.add_option("-d,--device", device, "video device, overrides camera.device (and clears camera.match_card)");
+  program.add_lcm_url(lcm_url)->description("LCM URL, overrides lcm.url (default: $LCM_DEFAULT_URL, or LCM's default)");
+  program.add_print_config(print_config);
+  return program.run(argc, argv, [&] {
+    // The file, then the command line's overrides: what is printed is what runs.
+    ParamNode root = config_path.empty() ? ParamNode::empty() : ParamNode::from_file(config_path);
+    if (!device.empty()) {
+      root.set_override("camera.device", device, "--device");
+      root.set_override("camera.match_card", "", "--device");
+    }
+    if (!lcm_url.empty()) root.set_override("lcm.url", lcm_url, "--lcm-url");
+    Params p;
+    load(root, p);  // a ParamError: exit 2
+    if (print_config) {
+      std::cout << root.dump();
+      return 0;
+    }
+    std::cerr << root.dump();
+    return run(p);
+  });
 }

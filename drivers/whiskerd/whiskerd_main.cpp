@@ -23,6 +23,7 @@
 #include <variant>
 
 #include <whiskeye/common/bus.h>
+#include <whiskeye/common/cli.h>
 #include <whiskeye/common/clock.h>
 #include <whiskeye/common/service.h>
 #include <whiskeye/driver_status_t.hpp>
@@ -346,38 +347,8 @@ void publisher_thread(const Params& p, Bus& bus, Shared& shared, ServiceNotifier
   }
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  CLI::App app{"whiskerd: whisker sensors and motors over SocketCAN, RCP whisking control loop, LCM publisher"};
-  std::string config_path;
-  std::string interface;
-  bool no_gpio = false;
-  bool print_config = false;
-  app.add_option("-c,--config", config_path, "whiskerd YAML (config/whiskerd.yaml); defaults without it");
-  app.add_option("-i,--interface", interface, "CAN interface, overrides can.interface");
-  app.add_flag("--no-gpio", no_gpio, "run without motor enable / fault lines (rigs without GPIO)");
-  app.add_flag("--print-config", print_config, "print every parameter and exit");
-  CLI11_PARSE(app, argc, argv);
-
-  Params params;
-  std::unique_ptr<ServiceNotifier> service;
-  try {
-    service = std::make_unique<ServiceNotifier>("whiskerd", monotonic_us());
-    const ParamNode root = config_path.empty() ? ParamNode::empty() : ParamNode::from_file(config_path);
-    load(root, params);
-    if (print_config) {
-      std::cout << root.dump();
-      return 0;
-    }
-    std::cerr << root.dump();
-  } catch (const std::exception& e) {
-    std::cerr << "whiskerd: bad config: " << e.what() << "\n";
-    return 2;
-  }
-  if (!interface.empty()) params.interface = interface;
-  if (no_gpio) params.gpio = false;
-
+int run(const Params& params) {
+  ServiceNotifier service("whiskerd", monotonic_us());  // a malformed WHISKEYE_FAULT_INJECT: exit 1
   std::unique_ptr<can::Socket> sock;
   std::unique_ptr<gpio::MotorLines> lines;
   std::unique_ptr<LcmBus> bus;
@@ -410,12 +381,46 @@ int main(int argc, char** argv) {
   sigaction(SIGINT, &sa, nullptr);
 
   auto shared = std::make_unique<Shared>();
-  std::thread control([&] { control_thread(params, std::move(sock), *lines, *shared, *service); });
-  std::thread publisher([&] { publisher_thread(params, *bus, *shared, *service); });
-  service->ready();
+  std::thread control([&] { control_thread(params, std::move(sock), *lines, *shared, service); });
+  std::thread publisher([&] { publisher_thread(params, *bus, *shared, service); });
+  service.ready();
   control.join();
   publisher.join();
-  service->stopping();
+  service.stopping();
   std::cerr << "whiskerd: stopped, motors disabled\n";
   return shared->exit_code.load();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  cli::Program program("whiskerd",
+                       "whiskerd: whisker sensors and motors over SocketCAN, RCP whisking control loop, LCM publisher");
+  CLI::App& app = program.app();
+  std::string config_path;
+  std::string interface;
+  std::string lcm_url;
+  bool no_gpio = false;
+  bool print_config = false;
+  program.add_config(config_path, "whiskerd YAML (config/whiskerd.yaml); defaults without it");
+  app.add_option("-i,--interface", interface, "CAN interface, overrides can.interface");
+  app.add_flag("--no-gpio", no_gpio,
+               "run without motor enable / fault lines (rigs without GPIO), overrides gpio.enabled");
+  program.add_lcm_url(lcm_url)->description("LCM URL, overrides lcm.url (default: $LCM_DEFAULT_URL, or LCM's default)");
+  program.add_print_config(print_config);
+  return program.run(argc, argv, [&] {
+    // The file, then the command line's overrides: what is printed is what runs.
+    ParamNode root = config_path.empty() ? ParamNode::empty() : ParamNode::from_file(config_path);
+    if (!interface.empty()) root.set_override("can.interface", interface, "--interface");
+    if (no_gpio) root.set_override("gpio.enabled", "false", "--no-gpio");
+    if (!lcm_url.empty()) root.set_override("lcm.url", lcm_url, "--lcm-url");
+    Params params;
+    load(root, params);  // a ParamError: exit 2
+    if (print_config) {
+      std::cout << root.dump();
+      return 0;
+    }
+    std::cerr << root.dump();
+    return run(params);
+  });
 }

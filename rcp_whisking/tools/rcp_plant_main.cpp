@@ -1,6 +1,7 @@
 // rcp-plant: runs the whisking controller against the whisker plant model for N cycles with an
 // obstacle and prints JSON (contact rate, peak base deflection with and without RCP, reaction
 // latency, false contacts) — how a user tunes RCP without a robot. See docs/rcp-whisking.md.
+#include <whiskeye/common/cli.h>
 #include <whiskeye/rcp/experiment.h>
 
 #include <CLI/CLI.hpp>
@@ -51,7 +52,7 @@ std::vector<int> parse_whiskers(const std::string& text) {
       used = 0;
     }
     if (used != item.size() || w < 0 || w >= kNumWhiskers) {
-      throw std::invalid_argument("--whiskers: '" + item + "' is not a whisker index 0..23");
+      throw cli::UsageError("--whiskers: '" + item + "' is not a whisker index 0..23");
     }
     out.push_back(w);
   }
@@ -61,10 +62,11 @@ std::vector<int> parse_whiskers(const std::string& text) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{
-      "rcp-plant: run the whisking controller (pattern, contact detection, RCP) against the whisker "
-      "plant model with an obstacle and print JSON figures: contact rate, peak base deflection with "
-      "and without RCP, reaction latency, false contacts."};
+  cli::Program program("rcp-plant",
+                       "rcp-plant: run the whisking controller (pattern, contact detection, RCP) against the whisker "
+                       "plant model with an obstacle and print JSON figures: contact rate, peak base deflection with "
+                       "and without RCP, reaction latency, false contacts.");
+  CLI::App& app = program.app();
   std::string config_path;
   std::string scenario_path;
   int cycles = 20;
@@ -74,32 +76,33 @@ int main(int argc, char** argv) {
   std::optional<double> contact_angle_deg;
   std::optional<double> radial_distance;
   std::optional<double> stiffness;
-  std::optional<std::string> law;
-  std::optional<double> noise;
-  std::optional<double> frequency;
+  // Overrides of config keys: the text as given, read by the key's loader (its type and range checks).
+  std::string law;
+  std::string noise;
+  std::string frequency;
   bool no_compare = false;
+  bool print_config = false;
   bool print_params = false;
-  app.add_option("--config", config_path, "controller parameters YAML (sections pattern, detector, rcp; e.g. config/rcp.yaml)")
-      ->check(CLI::ExistingFile);
+  program.add_config(config_path, "controller parameters YAML (sections pattern, detector, rcp; e.g. config/rcp.yaml)");
   app.add_option("--scenario", scenario_path,
                  "scenario YAML: sections plant (PlantParams), run (cycles, warmup_cycles, seed), list obstacles "
                  "(whiskers, contact_angle_deg, radial_distance, stiffness_scale, deflection_direction_deg)")
       ->check(CLI::ExistingFile);
-  app.add_option("--cycles", cycles, "whisk cycles to run")->check(CLI::Range(2, 100000));
-  app.add_option("--warmup", warmup, "first cycles left out of the figures")->check(CLI::Range(0, 1000));
-  app.add_option("--seed", seed, "plant noise seed");
+  app.add_option("--cycles", cycles, "whisk cycles to run, overrides run.cycles (default 20)")->check(CLI::Range(2, 100000));
+  app.add_option("--warmup", warmup, "first cycles left out of the figures, overrides run.warmup_cycles (default 1)")
+      ->check(CLI::Range(0, 1000));
+  app.add_option("--seed", seed, "plant noise seed, overrides run.seed (default 1)");
   app.add_option("--whiskers", whiskers_text, "whiskers with the flag obstacle: 'all' or e.g. 0,6,12 (default all)");
   app.add_option("--contact-angle-deg", contact_angle_deg, "obstacle: protraction angle of first touch, deg (default 10)");
   app.add_option("--radial-distance", radial_distance, "obstacle: radial contact distance from the base, m (default 0.05)");
   app.add_option("--stiffness", stiffness, "obstacle: stiffness scale (default 1)");
-  app.add_option("--law", law, "override rcp.law")->check(CLI::IsMember({"whiskeye", "rate_limited", "off"}));
-  app.add_option("--noise", noise, "override plant noise_sigma (Hall x/y, calibrated units)");
-  app.add_option("--frequency-hz", frequency, "override pattern.frequency_hz");
+  app.add_option("--law", law, "overrides rcp.law")->check(CLI::IsMember({"whiskeye", "rate_limited", "off"}));
+  app.add_option("--noise", noise, "overrides plant.noise_sigma (Hall x/y, calibrated units)");
+  app.add_option("--frequency-hz", frequency, "overrides pattern.frequency_hz");
   app.add_flag("--no-compare", no_compare, "skip the run without RCP");
-  app.add_flag("--print-params", print_params, "print every parameter used to stderr");
-  CLI11_PARSE(app, argc, argv);
-
-  try {
+  program.add_print_config(print_config);
+  app.add_flag("--print-params", print_params, "print every parameter in use to stderr, then run");
+  return program.run(argc, argv, [&] {
     ControllerParams cp;
     PlantParams pp;
     ExperimentSpec spec;
@@ -107,56 +110,68 @@ int main(int argc, char** argv) {
     spec.warmup_cycles = warmup;
     spec.seed = seed;
 
-    const ParamNode config = config_path.empty() ? ParamNode::empty() : ParamNode::from_file(config_path);
-    load(config, cp);
+    // The files, then the command line's overrides: --print-config shows what a run uses.
+    ParamNode config = config_path.empty() ? ParamNode::empty() : ParamNode::from_file(config_path);
+    if (!law.empty()) config.set_override("rcp.law", law, "--law");
+    if (!frequency.empty()) config.set_override("pattern.frequency_hz", frequency, "--frequency-hz");
+    load(config, cp);  // validates the overrides too
     config.check_no_unknown_keys();
-    if (law) cp.rcp.law = *law == "whiskeye" ? RcpLaw::Whiskeye : *law == "rate_limited" ? RcpLaw::RateLimited : RcpLaw::Off;
-    if (frequency) cp.pattern.frequency_hz = *frequency;
-    validate(cp);  // the overrides too
 
+    ParamNode scenario = scenario_path.empty() ? ParamNode::empty("<no --scenario>") : ParamNode::from_file(scenario_path);
+    if (!noise.empty()) scenario.set_override("plant.noise_sigma", noise, "--noise");
+    if (app.count("--cycles")) scenario.set_override("run.cycles", std::to_string(cycles), "--cycles");
+    if (app.count("--warmup")) scenario.set_override("run.warmup_cycles", std::to_string(warmup), "--warmup");
+    if (app.count("--seed")) scenario.set_override("run.seed", std::to_string(seed), "--seed");
+    load(scenario.section("plant"), pp);
+    const ParamNode run = scenario.section("run");
+    run.get("cycles", spec.cycles, 2, 100000);
+    run.get("warmup_cycles", spec.warmup_cycles, 0, 1000);
+    run.get("seed", spec.seed);
+    for (const ParamNode& item : scenario.list("obstacles")) {
+      std::vector<int> ws;
+      item.require("whiskers", ws);
+      Obstacle o;
+      double angle_deg = 10.0;
+      item.require("contact_angle_deg", angle_deg);
+      o.contact_angle = deg_to_rad(angle_deg);
+      item.require("radial_distance", o.radial_distance);
+      item.get("stiffness_scale", o.stiffness_scale, 0.0, 100.0);
+      double dir_deg = 180.0;
+      item.get("deflection_direction_deg", dir_deg, -360.0, 360.0);
+      o.deflection_direction = deg_to_rad(dir_deg);
+      for (int w : ws) {
+        if (w < 0 || w >= kNumWhiskers) throw ParamError(scenario_path + ": 'obstacles.whiskers' index " + std::to_string(w) + " is not 0..23");
+        spec.obstacles[w] = o;
+      }
+    }
+    scenario.check_no_unknown_keys();
+
+    // The obstacle the flags describe: on every whisker without a scenario, else on --whiskers.
     Obstacle flag_obstacle;
     flag_obstacle.contact_angle = deg_to_rad(10.0);
-    bool flag_obstacles = scenario_path.empty() || !whiskers_text.empty() || contact_angle_deg || radial_distance || stiffness;
-    if (!scenario_path.empty()) {
-      const ParamNode scenario = ParamNode::from_file(scenario_path);
-      load(scenario.section("plant"), pp);
-      const ParamNode run = scenario.section("run");
-      run.get("cycles", spec.cycles, 2, 100000);
-      run.get("warmup_cycles", spec.warmup_cycles, 0, 1000);
-      run.get("seed", spec.seed);
-      if (app.count("--cycles")) spec.cycles = cycles;
-      if (app.count("--warmup")) spec.warmup_cycles = warmup;
-      if (app.count("--seed")) spec.seed = seed;
-      for (const ParamNode& item : scenario.list("obstacles")) {
-        std::vector<int> ws;
-        item.require("whiskers", ws);
-        Obstacle o;
-        double angle_deg = 10.0;
-        item.require("contact_angle_deg", angle_deg);
-        o.contact_angle = deg_to_rad(angle_deg);
-        item.require("radial_distance", o.radial_distance);
-        item.get("stiffness_scale", o.stiffness_scale, 0.0, 100.0);
-        double dir_deg = 180.0;
-        item.get("deflection_direction_deg", dir_deg, -360.0, 360.0);
-        o.deflection_direction = deg_to_rad(dir_deg);
-        for (int w : ws) {
-          if (w < 0 || w >= kNumWhiskers) throw ParamError(scenario_path + ": 'obstacles.whiskers' index " + std::to_string(w) + " is not 0..23");
-          spec.obstacles[w] = o;
-        }
-      }
-      scenario.check_no_unknown_keys();
-      if (print_params) std::cerr << scenario.dump();
-    }
-    if (noise) pp.noise_sigma = *noise;
+    const bool flag_obstacles =
+        scenario_path.empty() || !whiskers_text.empty() || contact_angle_deg || radial_distance || stiffness;
+    std::string flags_dump;
     if (flag_obstacles) {
       if (contact_angle_deg) flag_obstacle.contact_angle = deg_to_rad(*contact_angle_deg);
       if (radial_distance) flag_obstacle.radial_distance = *radial_distance;
       if (stiffness) flag_obstacle.stiffness_scale = *stiffness;
-      for (int w : parse_whiskers(whiskers_text.empty() ? "all" : whiskers_text)) spec.obstacles[w] = flag_obstacle;
+      const std::string whiskers = whiskers_text.empty() ? "all" : whiskers_text;
+      for (int w : parse_whiskers(whiskers)) spec.obstacles[w] = flag_obstacle;
+      std::ostringstream line;
+      line << "flag obstacle: whiskers " << whiskers << ", contact_angle_deg " << rad_to_deg(flag_obstacle.contact_angle)
+           << ", radial_distance " << flag_obstacle.radial_distance << ", stiffness_scale "
+           << flag_obstacle.stiffness_scale << "\n";
+      flags_dump = line.str();
     }
-    if (spec.cycles <= spec.warmup_cycles) throw std::invalid_argument("--cycles must exceed --warmup");
+    if (spec.cycles <= spec.warmup_cycles) throw cli::UsageError("--cycles must exceed --warmup");
     spec.compare_without_rcp = !no_compare;
-    if (print_params) std::cerr << config.dump();
+    const std::string dump = config.dump() + scenario.dump() + flags_dump;
+    if (print_config) {
+      std::cout << dump;
+      return 0;
+    }
+    if (print_params) std::cerr << dump;
 
     const ExperimentResult r = run_experiment(cp, pp, spec);
     std::cout.precision(6);
@@ -169,9 +184,6 @@ int main(int argc, char** argv) {
       std::cout << ",\n  \"peak_reduction\": " << r.peak_reduction;
     }
     std::cout << "\n}\n";
-  } catch (const std::exception& e) {
-    std::cerr << "rcp-plant: " << e.what() << "\n";
-    return 1;
-  }
-  return 0;
+    return 0;
+  });
 }

@@ -5,6 +5,7 @@
 // writes the whisker boards' CAN traffic for the same samples as a `candump -l` log (--candump) for
 // can-utils' canplayer, using whiskerd's config for the bus mode, ids and (inverted) calibration.
 #include "whiskeye/common/bus.h"
+#include "whiskeye/common/cli.h"
 #include "whiskeye/common/config_path.h"
 #include "whiskeye/sim/can_log.h"
 #include "whiskeye/sim/lcm_sink.h"
@@ -255,7 +256,9 @@ const std::string kDefaultConfigDirs =
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"vita-sim: simulated WhiskEye in a YAML world -> LCM log (drivers' channels + GROUND_TRUTH)"};
+  cli::Program program("vita-sim",
+                       "vita-sim: simulated WhiskEye in a YAML world -> LCM log (drivers' channels + GROUND_TRUTH)");
+  CLI::App& app = program.app();
   std::string world_path;
   std::string output;
   // The three configs given by no option are found by default_config_path (common/config_path.h).
@@ -301,7 +304,7 @@ int main(int argc, char** argv) {
                  "slamd config whose visual template and match threshold the check uses (default: slam.yaml" +
                      kDefaultConfigDirs);
   for (RangeOption& r : gen_ranges) app.add_option(r.name, r.text, r.help);
-  app.add_option("--output,-o", output, "LCM log to write");
+  program.add_output(output, "LCM log to write");
   app.add_option("--candump", candump_path,
                  "Also (or only) write the whisker boards' CAN frames as a candump -l log, for canplayer");
   app.add_option("--whiskerd-config", whiskerd_config,
@@ -329,9 +332,8 @@ int main(int argc, char** argv) {
   app.add_option("--frames-dir", frames_dir, "Also save camera frames as PNG in this directory");
   app.add_option("--frames-every", frames_every, "Save every N-th camera frame")->check(CLI::PositiveNumber);
   app.add_flag("--quiet,-q", quiet, "No progress output");
-  CLI11_PARSE(app, argc, argv);
-
-  try {
+  // A ParamError (a config or world that is missing or wrong): exit 2; any other failure: exit 1.
+  return program.run(argc, argv, [&] {
     RobotGeometry robot = default_robot_geometry();
     {
       if (robot_path.empty()) robot_path = default_config_path("robot.yaml", "--robot");
@@ -504,9 +506,6 @@ int main(int argc, char** argv) {
       std::cerr << "  contact onsets on " << world.solids[i].name << ": " << sim.onsets_per_solid()[i] << "\n";
     }
     for (const FaultRecord& f : sim.faults()) std::cerr << "  " << fault_summary(f, params.start_utime) << "\n";
-  } catch (const std::exception& e) {
-    std::cerr << "vita-sim: " << e.what() << "\n";
-    return 1;
-  }
-  return 0;
+    return 0;
+  });
 }

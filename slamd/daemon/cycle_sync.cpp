@@ -31,6 +31,7 @@ bool decode_camera_frame(std::span<const uint8_t> bytes, CameraFrame& out, std::
   }
   if (bytes.size() - kHeader != static_cast<std::size_t>(size)) return fail(" (trailing bytes)");
   out.utime = read_be_i64(p);
+  out.seq = read_be_i64(p + 8);
   out.width = read_be_i32(p + 16);
   out.height = read_be_i32(p + 20);
   out.row_stride = read_be_i32(p + 24);
@@ -46,7 +47,7 @@ void own_pixels(CameraFrame& frame) {
 }
 
 CameraFrame camera_frame(const image_t& image) {
-  CameraFrame f{image.utime, image.width, image.height, image.row_stride, image.pixelformat,
+  CameraFrame f{image.utime, image.seq, image.width, image.height, image.row_stride, image.pixelformat,
                 std::span<const uint8_t>(image.data.data(), image.data.size()), nullptr};
   own_pixels(f);
   return f;

@@ -45,6 +45,7 @@ namespace whiskeye::slamd {
 // handing out frames never copies pixels.
 struct CameraFrame {
   int64_t utime = 0;
+  int64_t seq = 0;  // the driver's frame number
   int32_t width = 0;
   int32_t height = 0;
   int32_t row_stride = 0;

@@ -1,12 +1,13 @@
 // slamd: the ViTa-SLAM daemon.
-//   live:    slamd [--mode M] [--config FILE] [--state-dir DIR]       (LCM in and out)
-//   offline: slamd --replay IN.lcmlog --output OUT.lcmlog [--mode M]  (reads the log directly)
+//   live:    slamd [--mode M] [-c FILE] [--state-dir DIR]         (LCM in and out)
+//   offline: slamd --replay IN.lcmlog -o OUT.lcmlog [--mode M]    (reads the log directly)
 // See docs/slamd.md.
 #include "checkpoint_store.h"
 #include "checkpoint_writer.h"
 #include "slam_node.h"
 
 #include "whiskeye/common/bus.h"
+#include "whiskeye/common/cli.h"
 #include "whiskeye/common/clock.h"
 #include "whiskeye/common/log_throttle.h"
 #include "whiskeye/common/params.h"
@@ -24,12 +25,19 @@
 #include <iostream>
 #include <optional>
 #include <unistd.h>
+#include <utility>
 
 namespace {
 
 using namespace whiskeye;
 
 std::atomic<bool> g_stop{false};
+
+// Messages LCM may hold for slamd's loop per input: a minute of odometry and whisk cycles at their
+// nominal rates (50 Hz, about 1 Hz; ~0.3 MB and ~10 MB), ten seconds of camera frames at 5 fps
+// (~30 MB of 640x480 YUYV). A burst beyond them is lost as before, but only a burst that long.
+constexpr std::pair<const char*, int> kInputQueues[] = {{"ODOMETRY", 3000}, {"WHISK_CYCLE", 60}, {"CAMERA", 50}};
+
 void on_signal(int) { g_stop = true; }
 
 void log_line(const std::string& line) { std::fprintf(stderr, "slamd: %s\n", line.c_str()); }
@@ -58,17 +66,19 @@ struct Loaded {
   std::string dump;
 };
 
+// The parameters in use: the files, then the command line's overrides (--mode), so that
+// --print-config shows what a run would use.
 Loaded load_config(const Options& o) {
   Loaded l;
   ParamNode root = o.config.empty() ? ParamNode::empty() : ParamNode::from_file(o.config);
+  if (!o.mode.empty()) root.set_override("slam.mode", o.mode, "--mode");
   slam::load(root.section("slam"), l.slam);
   slamd::load(root.section("slamd"), l.node);
   root.check_no_unknown_keys();
   ParamNode robot = o.robot.empty() ? ParamNode::empty() : ParamNode::from_file(o.robot);
   load(robot.section("robot"), l.robot);
   robot.check_no_unknown_keys();
-  if (!o.mode.empty()) l.slam.mode = slam::parse_mode(o.mode);  // throws naming the bad value
-  l.dump = root.dump() + robot.dump() + "mode: " + slam::to_string(l.slam.mode) + "\n";
+  l.dump = root.dump() + robot.dump();
   return l;
 }
 
@@ -244,6 +254,10 @@ int run_live(const Loaded& cfg, const Options& o) {
   LcmBus bus(o.lcm_url);
   DecodeErrors errors;  // logged by the node, rate-limited
   slamd::SlamNode node(bus, bus, make_slam(cfg, o, store ? &*store : nullptr), cfg.node, errors);
+  // LCM keeps at most 30 unhandled messages per subscription and drops the rest without a trace: a
+  // burst of input (a sender catching up, a busy cycle) then cost the map odometry and frames that a
+  // replay of the same messages had (docs/slamd.md, "Input queues").
+  for (const auto& [channel, messages] : kInputQueues) bus.set_queue_capacity(channel, messages);
   node.set_logger(log_line);
   node.set_latency_clock(monotonic_us);
   // The loop only copies the state out; the checksum and the disk are the writer thread's work.
@@ -319,12 +333,13 @@ int run_live(const Loaded& cfg, const Options& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"slamd: ViTa-SLAM daemon (visuo-tactile SLAM for the WhiskEye robot)"};
+  cli::Program program("slamd", "slamd: ViTa-SLAM daemon (visuo-tactile SLAM for the WhiskEye robot)");
+  CLI::App& app = program.app();
   Options o;
-  app.add_option("--config", o.config, "SLAM parameters (YAML: slam:, slamd: sections)")->check(CLI::ExistingFile);
+  program.add_config(o.config, "SLAM parameters (YAML: slam:, slamd: sections)");
   app.add_option("--robot", o.robot, "robot geometry (YAML: robot: section)")->check(CLI::ExistingFile);
-  app.add_option("--mode", o.mode, "visual | tactile | vita (overrides the config)");
-  app.add_option("--lcm-url", o.lcm_url, "LCM URL (default: $LCM_DEFAULT_URL)");
+  app.add_option("--mode", o.mode, "visual | tactile | vita (overrides slam.mode)");
+  program.add_lcm_url(o.lcm_url);
   app.add_option("--state-dir", o.state_dir, "checkpoint directory (live default: $STATE_DIRECTORY or /var/lib/slamd)");
   app.add_option("--checkpoint-every", o.checkpoint_every, "checkpoint every N cycles (0: only on exit)")->check(CLI::NonNegativeNumber);
   app.add_option("--checkpoint-keep", o.checkpoint_keep, "checkpoints kept")->check(CLI::PositiveNumber);
@@ -332,31 +347,17 @@ int main(int argc, char** argv) {
   app.add_option("--map", o.map_file, "start from this saved map (a checkpoint file)")->check(CLI::ExistingFile);
   app.add_flag("--localise", o.localise, "with --map: localise in the map without growing it");
   auto* replay = app.add_option("--replay", o.replay_in, "process this LCM log offline")->check(CLI::ExistingFile);
-  app.add_option("--output", o.replay_out, "with --replay: output LCM log")->needs(replay);
+  program.add_output(o.replay_out, "with --replay: output LCM log")->needs(replay);
   app.add_flag("--timing", o.timing, "with --replay: measure latencies into SLAM_STATUS (output no longer byte-identical)");
-  app.add_flag("--print-config", o.print_config, "print every parameter in use and exit");
-  try {
-    app.parse(argc, argv);
-    if (o.localise && o.map_file.empty()) throw CLI::ValidationError("--localise", "needs --map FILE");
-    if (!o.replay_in.empty() && o.replay_out.empty()) throw CLI::ValidationError("--replay", "needs --output FILE");
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e);
-  }
-  Loaded cfg;
-  try {
-    cfg = load_config(o);
-  } catch (const std::exception& e) {  // ParamError, or a --mode it does not know: as the drivers do
-    std::fprintf(stderr, "slamd: bad config: %s\n", e.what());
-    return 2;
-  }
-  try {
+  program.add_print_config(o.print_config);
+  return program.run(argc, argv, [&] {
+    if (o.localise && o.map_file.empty()) throw cli::UsageError("--localise needs --map FILE");
+    if (!o.replay_in.empty() && o.replay_out.empty()) throw cli::UsageError("--replay needs --output FILE");
+    const Loaded cfg = load_config(o);  // a ParamError (a bad file, a --mode it does not know): exit 2
     if (o.print_config) {
       std::cout << cfg.dump;
       return 0;
     }
     return o.replay_in.empty() ? run_live(cfg, o) : run_replay(cfg, o);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "slamd: %s\n", e.what());
-    return 1;
-  }
+  });
 }

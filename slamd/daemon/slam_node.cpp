@@ -85,14 +85,15 @@ std::string check_whisk_cycle(const whisk_cycle_t& m) {
   }
   int missing_samples = 0;
   for (int s = 0; s < m.num_samples; ++s) {
-    const std::string at = " at sample " + std::to_string(s);
+    // The words of an error are built only for an error (a valid cycle is ~5,000 samples × 24).
+    const auto at = [s] { return " at sample " + std::to_string(s); };
     // Within the cycle (so no difference of sample times can overflow), in order.
     if (m.sample_utime[s] < m.utime_start || m.sample_utime[s] > m.utime_end) {
-      return "WHISK_CYCLE: sample time " + std::to_string(m.sample_utime[s]) + at + " is outside the cycle";
+      return "WHISK_CYCLE: sample time " + std::to_string(m.sample_utime[s]) + at() + " is outside the cycle";
     }
-    if (s > 0 && m.sample_utime[s] < m.sample_utime[s - 1]) return "WHISK_CYCLE: sample times go backwards" + at;
+    if (s > 0 && m.sample_utime[s] < m.sample_utime[s - 1]) return "WHISK_CYCLE: sample times go backwards" + at();
     if (m.sample_valid[s] != 0 && m.sample_valid[s] != 1) {
-      return "WHISK_CYCLE: sample_valid " + std::to_string(m.sample_valid[s]) + at + " (0 or 1)";
+      return "WHISK_CYCLE: sample_valid " + std::to_string(m.sample_valid[s]) + at() + " (0 or 1)";
     }
     if (!m.sample_valid[s]) {
       ++missing_samples;
@@ -102,13 +103,13 @@ std::string check_whisk_cycle(const whisk_cycle_t& m) {
       const double theta = m.theta[s][w], dx = m.deflection_x[s][w], dy = m.deflection_y[s][w];
       // A whisker not measured in a sample is NaN in all three values (docs/lcm-channels.md).
       if (std::isnan(theta) && std::isnan(dx) && std::isnan(dy)) continue;
-      const std::string whisker = at + ", whisker " + std::to_string(w);
-      if (!finite(theta) || !finite(dx) || !finite(dy)) return "WHISK_CYCLE: non-finite value" + whisker;
+      const auto whisker = [&at, w] { return at() + ", whisker " + std::to_string(w); };
+      if (!finite(theta) || !finite(dx) || !finite(dy)) return "WHISK_CYCLE: non-finite value" + whisker();
       if (std::abs(theta) > kMaxWhiskerAngle) {
-        return "WHISK_CYCLE: theta " + std::to_string(theta) + " rad" + whisker + " (beyond ±pi)";
+        return "WHISK_CYCLE: theta " + std::to_string(theta) + " rad" + whisker() + " (beyond ±pi)";
       }
       if (std::abs(dx) > kMaxDeflection || std::abs(dy) > kMaxDeflection) {
-        return "WHISK_CYCLE: deflection (" + std::to_string(dx) + ", " + std::to_string(dy) + ")" + whisker +
+        return "WHISK_CYCLE: deflection (" + std::to_string(dx) + ", " + std::to_string(dy) + ")" + whisker() +
                " (calibrated -1..1)";
       }
     }
@@ -289,6 +290,16 @@ void SlamNode::warn(const std::string& key, const std::string& line) {
   if (auto admitted = throttle_.admit(key, line, log_clock_())) logger_(*admitted);
 }
 
+void SlamNode::sequence(Input input, int64_t seq) {
+  const int64_t missing = gaps_[input].add(seq);
+  if (missing == 0) return;
+  counters_.input_gaps += missing;
+  static constexpr const char* kWhat[] = {"CAMERA: frames", "ODOMETRY: samples", "WHISK_CYCLE: cycles"};
+  warn(std::string("gap-") + kWhat[input],
+       std::string(kWhat[input]) + " missing by the sequence numbers: " + std::to_string(missing) + " before " +
+           std::to_string(seq) + " (lost on the way: LCM, the network or a recording)");
+}
+
 void SlamNode::on_camera(std::span<const uint8_t> data, const MessageInfo& info) {
   CameraFrame frame;
   std::string reason;
@@ -300,8 +311,10 @@ void SlamNode::on_camera(std::span<const uint8_t> data, const MessageInfo& info)
   } else {
     own_pixels(frame);
   }
+  const int64_t seq = frame.seq;
   if (const std::string why = sync_.add_camera(std::move(frame)); !why.empty()) return reject(kCamera, why);
   accepted(kCamera);
+  sequence(kCamera, seq);
   process(sync_.take_ready());
 }
 
@@ -310,6 +323,7 @@ void SlamNode::on_whisk_cycle(const whisk_cycle_t& msg) {
   if (!err.empty()) return reject(kWhisk, err);
   if (const std::string why = sync_.add_whisk_cycle(msg); !why.empty()) return reject(kWhisk, why);
   accepted(kWhisk);
+  sequence(kWhisk, msg.cycle);
   process(sync_.take_ready());
 }
 
@@ -320,6 +334,7 @@ void SlamNode::on_odometry(const odometry_t& msg) {
   const int64_t overflow_before = sync_.counters().odometry_overflow;
   if (const std::string why = sync_.add_odometry(msg); !why.empty()) return reject(kOdometry, why);
   accepted(kOdometry);
+  sequence(kOdometry, msg.seq);
   // Logged at the first dropped sample of each stretch without whisk cycles, not at every one.
   if (sync_.counters().odometry_overflow != overflow_before && !odometry_overflowing_) {
     odometry_overflowing_ = true;
@@ -499,6 +514,7 @@ slam_status_t SlamNode::status(int64_t utime, int64_t window_now_us) {
   s.odometry_overflow = sync.odometry_overflow;
   s.cycles_without_camera = counters_.cycles_without_camera;
   s.cycles_without_contact = counters_.cycles_without_contact;
+  s.input_gaps = counters_.input_gaps;
   constexpr int64_t kWindow = 10 * kUtimePerSecond;
   const bool rejecting =
       recent_errors_.changed_within(s.decode_errors + s.validation_errors, window_now_us, kWindow);

@@ -18,6 +18,7 @@
 #include "whiskeye/common/log_throttle.h"
 #include "whiskeye/common/params.h"
 #include "whiskeye/common/se2.h"
+#include "whiskeye/common/sequence_gaps.h"
 #include "whiskeye/slam/vita_slam.h"
 
 #include <whiskeye/slam_status_t.hpp>
@@ -77,6 +78,7 @@ struct NodeCounters {
   int64_t cycles_without_camera = 0;
   int64_t cycles_without_contact = 0;
   int64_t out_of_order = 0;
+  int64_t input_gaps = 0;  // input messages missing by their sequence numbers (all three inputs)
 };
 
 class SlamNode {
@@ -127,6 +129,9 @@ class SlamNode {
   // A repeated warning of kind `key`, through the throttle.
   void warn(const std::string& key, const std::string& line);
   void accepted(Input input) { rejects_in_burst_[input] = 0; }
+  // An accepted message's sequence number (CAMERA.seq, ODOMETRY.seq, WHISK_CYCLE.cycle): messages
+  // missing before it were lost on the way (LCM, the network, a recorder), counted and logged.
+  void sequence(Input input, int64_t seq);
 
   Bus& out_;
   std::unique_ptr<slam::VitaSlam> slam_;
@@ -139,6 +144,7 @@ class SlamNode {
   LogThrottle throttle_;
   std::function<int64_t()> clock_;
   NodeCounters counters_;
+  SequenceGaps gaps_[kInputs];
 
   bool have_cycle_ = false;
   Pose2 odom_at_last_cycle_;  // odometry-frame pose at the last processed cycle's end

@@ -176,7 +176,9 @@ TEST(BasedDaemon, DrivesTheCircleFacingOutwardsAndExitsAfterTheLaps) {
   EXPECT_NE(d.stderr_text().find("circle finished"), std::string::npos) << d.stderr_text();
 }
 
-TEST(BasedDaemon, BadInputExitsNonZeroWithAReason) {
+// A bad URL, circle or config is a usage or configuration error: exit 2 with one line (the unit
+// does not restart on it).
+TEST(BasedDaemon, BadInputExitsTwoWithAOneLineReason) {
   struct Case {
     std::vector<std::string> args;
     std::string says;
@@ -193,8 +195,11 @@ TEST(BasedDaemon, BadInputExitsNonZeroWithAReason) {
     Daemon d(args);
     ASSERT_TRUE(d.started());
     const int rc = d.wait_exit(3.0);
-    EXPECT_GT(rc, 0) << c.says;
-    EXPECT_NE(d.stderr_text().find(c.says), std::string::npos) << d.stderr_text();
+    EXPECT_EQ(rc, 2) << c.says;
+    const std::string err = d.stderr_text();
+    EXPECT_NE(err.find(c.says), std::string::npos) << err;
+    EXPECT_EQ(err.rfind("based: ", 0), 0u) << err;
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
   }
 }
 

@@ -10,6 +10,7 @@ namespace whiskeye {
 namespace {
 
 using ::testing::HasSubstr;
+using ::testing::Not;
 
 struct Example {
   double rate_hz = 50.0;
@@ -161,6 +162,53 @@ TEST(Params, ADuplicateKeyIsRefusedNamingBothLines) {
   } catch (const ParamError& e) {
     EXPECT_THAT(e.what(), HasSubstr(path + ": duplicate key 'cells' on lines 1 and 3"));
   }
+}
+
+// A command-line option over a key (whiskerd -i, slamd --mode): the loader reads it as it would the
+// file's value, and the dump shows the value in use, tagged with the option.
+TEST(Params, AnOverrideIsLoadedAndDumpedWithItsOption) {
+  Example p;
+  auto n = ParamNode::from_string("cells: 30\nname: file\n");
+  n.set_override("name", "cli", "--name");
+  n.set_override("nested.inner", "0.25", "--inner");
+  load(n, p);
+  n.check_no_unknown_keys();
+  EXPECT_EQ(p.name, "cli");
+  EXPECT_EQ(p.inner, 0.25);
+  EXPECT_EQ(p.cells, 30);
+  const std::string d = n.dump();
+  EXPECT_THAT(d, HasSubstr("name: \"cli\"  (--name)\n"));
+  EXPECT_THAT(d, HasSubstr("nested.inner: 0.25  (--inner)\n"));
+  EXPECT_THAT(d, HasSubstr("cells: 30\n"));
+  EXPECT_THAT(d, Not(HasSubstr("file")));
+}
+
+TEST(Params, AnOverrideFailingTheLoadersCheckNamesTheOption) {
+  auto range = ParamNode::empty();
+  range.set_override("rate_hz", "5000", "--rate");
+  try {
+    Example p;
+    load(range, p);
+    FAIL();
+  } catch (const ParamError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("--rate: 'rate_hz' = 5000 is out of range"));
+  }
+  auto type = ParamNode::empty();
+  type.set_override("cells", "many", "--cells");
+  try {
+    Example p;
+    load(type, p);
+    FAIL();
+  } catch (const ParamError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("--cells: 'cells' has the wrong type: 'many'"));
+  }
+}
+
+TEST(Params, AnOverrideNoLoaderReadsIsAProgrammingError) {
+  Example p;
+  auto n = ParamNode::empty();
+  n.set_override("nested.outer", "1", "--outer");
+  EXPECT_THROW(load(n, p), std::logic_error);  // load() ends with check_no_unknown_keys()
 }
 
 TEST(Params, FileErrorsNameTheFile) {

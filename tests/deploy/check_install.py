@@ -7,8 +7,9 @@ Installs with `cmake --install DIR --prefix PREFIX` into a temporary DESTDIR (th
 does not matter: units are configured at install time).
 
 CHECK is one of:
-  layout    `cmake --install` into a DESTDIR puts every binary, unit, config, the jar and the system
-            integration files where docs/deployment.md says, and the units point at them.
+  layout    `cmake --install` into a DESTDIR puts every binary, unit, config, the jar, the Python
+            package (which imports) and the system integration files where docs/deployment.md says,
+            and the units point at them.
   verify    `systemd-analyze verify` accepts every installed unit without a single warning.
   security  `systemd-analyze security --offline=true`: slamd and camerad expose <= 3.0 ("OK" or better);
             whiskerd and based are printed (docs/deployment.md quotes them) and must stay <= 3.0 too;
@@ -32,6 +33,7 @@ DAEMONS = ["whiskerd", "camerad", "based", "slamd", "whiskeye-viewer"]
 TOOLS = ["rcp-plant", "vita-sim", "vita-eval", "whiskeye-lcm-spy", "whiskeye-logcheck"]
 UNITS = [d + ".service" for d in DAEMONS] + ["whiskeye-can0.service", "whiskeye.target"]
 CONFIGS = ["whiskerd.yaml", "camerad.yaml", "based.yaml", "slam.yaml", "robot.yaml", "rcp.yaml"]
+PYTHON_MODULES = ["__init__", "log", "channels", "vita_map_t", "vita_pose_t", "image_t"]
 EXPOSURE_LIMIT = 3.0
 # A daemon that serves HTTP is held to a lower limit.
 EXPOSURE_LIMITS = {"whiskeye-viewer": 2.0}
@@ -56,6 +58,9 @@ def expected_files(prefix, sysconfdir):
               f"{prefix}/lib/udev/rules.d/60-whiskeye-gpio.rules", f"{prefix}/share/java/whiskeye_types.jar",
               f"{prefix}/share/doc/whiskeye/deployment.md", f"{prefix}/share/whiskeye/worlds/aliased_arena.yaml",
               f"{sysconfdir}/default/whiskeye"]
+    # The Python package where Debian's python3 finds it (docs/python.md), and its example.
+    files += [f"{prefix}/lib/python3/dist-packages/whiskeye/{m}.py" for m in PYTHON_MODULES]
+    files += [f"{prefix}/share/doc/whiskeye/examples/plot_run.py"]
     files += [f"{sysconfdir}/whiskeye/{c}" for c in CONFIGS]
     return [rel(f) for f in files]
 
@@ -146,6 +151,15 @@ def check_layout(a, destdir):
         buf = re.search(r"recv_buf_size=(\d+)", url.group(1))
         if not buf or int(buf.group(1)) > int(rmem.group(1)):
             fail("LCM recv_buf_size missing or above net.core.rmem_max")
+    # The installed package imports with the standard library alone (Debian has no python3-lcm).
+    site = os.path.join(destdir, a.prefix.lstrip("/"), "lib/python3/dist-packages")
+    r = run(["/usr/bin/python3", "-c", "import sys; sys.modules['lcm'] = None; import whiskeye, whiskeye.log; "
+             "print(whiskeye.channels.TYPES['VITA_MAP'])"], env=dict(os.environ, PYTHONPATH=site,
+                                                                      PYTHONDONTWRITEBYTECODE="1"))
+    if r.returncode != 0 or r.stdout.strip() != "vita_map_t":
+        fail("the installed Python package does not import: " + (r.stdout + r.stderr).strip()[-300:])
+    if any("__pycache__" in d for d, _, _ in os.walk(site)):
+        fail("__pycache__ installed with the Python package")
     with open(os.path.join(destdir, a.prefix.lstrip("/"), "lib/sysusers.d/whiskeye.conf")) as f:
         if not re.search(r"^u whiskeye ", f.read(), re.M):
             fail("sysusers.d: no whiskeye user")

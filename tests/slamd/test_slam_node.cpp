@@ -532,6 +532,67 @@ TEST_F(SlamNodeTest, RepeatedWarningsAreRateLimitedWithACountOfWhatWasSuppressed
   EXPECT_NE(lines[1].find("(2001 rejected so far); 1999 more like it suppressed"), std::string::npos) << lines[1];
 }
 
+// Messages lost before slamd took them (LCM's subscription queue, a fragment lost on the wire, a
+// recording's gap) show only in the inputs' sequence numbers: counted in input_gaps and logged,
+// rate-limited. A number that goes back is a sender restarting, not a loss; a rejected message
+// (a stale copy, a bad value) is not looked at.
+TEST_F(SlamNodeTest, MessagesMissingByTheirSequenceNumbersAreCountedAndLoggedButARestartIsNot) {
+  std::vector<std::string> lines;
+  int64_t now = 0;
+  node_->set_logger([&](const std::string& l) { lines.push_back(l); });
+  node_->set_log_clock([&] { return now; });
+  int64_t odo_seq = 0, frame_seq = 0;
+  // Seconds 0..5; in second 2 odometry samples 5..7 and one frame never come, and WHISK_CYCLE 3 is
+  // lost; in second 4 the base restarts its numbering (back to 0).
+  for (int sec = 0; sec < 6; ++sec) {
+    for (int k = 1; k <= 50; ++k) {
+      const int64_t t = kT0 + sec * kS + k * 20'000;
+      if (sec == 4 && k == 1) odo_seq = 0;
+      const int64_t seq = odo_seq++;
+      if (!(sec == 2 && k >= 5 && k <= 7)) {
+        odometry_t o{};
+        o.utime = t;
+        o.seq = seq;
+        publish(in_, "ODOMETRY", o);
+      }
+      if (k % 10 == 0) {
+        const int64_t fs = frame_seq++;
+        image_t im = stripes(t, 8);
+        im.seq = fs;
+        if (!(sec == 2 && k == 20)) publish_camera(im);
+      }
+      if (k == 50 && sec != 3) publish(in_, "WHISK_CYCLE", free_cycle(sec, t));
+    }
+    if (sec == 1) {  // a stale copy of an earlier sample: rejected (out of order), not a restart or a gap
+      odometry_t stale{};
+      stale.utime = kT0 + 10'000;
+      stale.seq = 0;
+      publish(in_, "ODOMETRY", stale);
+    }
+  }
+  node_->flush();
+  EXPECT_EQ(node_->counters().input_gaps, 3 + 1 + 1);
+  EXPECT_EQ(node_->status(kT0 + 6 * kS).input_gaps, 5);
+  std::string all;
+  for (const std::string& l : lines) all += l + "\n";
+  EXPECT_NE(all.find("ODOMETRY: samples missing by the sequence numbers: 3 before 107"), std::string::npos) << all;
+  EXPECT_NE(all.find("CAMERA: frames missing by the sequence numbers: 1 before 12"), std::string::npos) << all;
+  EXPECT_NE(all.find("WHISK_CYCLE: cycles missing by the sequence numbers: 1 before 4"), std::string::npos) << all;
+  EXPECT_EQ(all.find("before 0 "), std::string::npos) << "a restart is no loss: " << all;
+
+  // Rate-limited: a gap at every message gives one line per 10 s.
+  lines.clear();
+  now += 20 * kS;
+  for (int i = 0; i < 100; ++i, now += 1000) {
+    odometry_t o{};
+    o.utime = kT0 + 6 * kS + (i + 1) * 20'000;
+    o.seq = 1000 + 2 * i;
+    publish(in_, "ODOMETRY", o);
+  }
+  EXPECT_EQ(node_->counters().input_gaps, 5 + 1000 - 100 + 99);
+  EXPECT_EQ(lines.size(), 1u);
+}
+
 TEST_F(SlamNodeTest, MissingCameraDegradesToTouchAndIsCounted) {
   stream({0, 0, 0});
   node_->flush();

@@ -82,6 +82,37 @@ TEST(Lem, PerfectEstimateGivesZeroLemAndZeroEnm) {
   EXPECT_NEAR(*r.enm.enm, 0.0, 1e-20);
 }
 
+TEST(NoGroundTruth, NothingThatNeedsTruthIsComputedAndTheEventsAreCounted) {
+  EvalInput in;
+  const std::vector<PoseSample> truth = circle_gt(20.0, 10.0);
+  const GroundTruth gt(truth);
+  in.estimate = truth;  // a real robot's run: estimate and map, no GROUND_TRUTH
+  in.map = exact_chain_map(gt, Pose2{}, 20, kSecond / 2);
+  const int64_t t0 = truth.front().utime;
+  for (int i = 0; i < 20; ++i) in.events.push_back({t0 + i * kSecond / 2, i, EventType::kNewExperience, i - 1, i});
+  in.events.push_back({t0 + 12 * kSecond, 40, EventType::kRelocalise, 19, 2});
+  in.events.push_back({t0 + 13 * kSecond, 41, EventType::kRelocalise, 2, 2});  // to the current one: not counted
+  const EvalResult r = evaluate(in, EvalParams{});
+  EXPECT_FALSE(r.ground_truth);
+  EXPECT_FALSE(r.alignment.valid);
+  EXPECT_FALSE(r.lem.has_value());
+  EXPECT_FALSE(r.enm.enm.has_value());
+  EXPECT_FALSE(r.exm.arcr.has_value());
+  EXPECT_FALSE(r.exm.valid_fraction.has_value());
+  EXPECT_FALSE(r.exm.arr.has_value()) << "no base set without truth or --base-duration";
+  EXPECT_EQ(r.exm.experiences_created, 20u);
+  EXPECT_EQ(r.exm.relocalisations_total, 1u);
+  EXPECT_EQ(r.exm.relocalise_to_current, 1u);
+  EXPECT_EQ(r.exm.correct_total, 0u);
+  // A base set of 5 s from the first pose: experiences 0..10; after it 9 new + 1 re-localisation.
+  EvalParams p;
+  p.base_duration_s = 5.0;
+  const EvalResult b = evaluate(in, p);
+  EXPECT_EQ(b.exm.base_set_size, 11u) << "created at or before t0 + 5 s: 0..10";
+  ASSERT_TRUE(b.exm.arr.has_value());
+  EXPECT_NEAR(*b.exm.arr, 1.0 / 10.0, 1e-12);  // after: experiences 11..19 (9) + 1 re-localisation
+}
+
 TEST(Lem, ConstantOffsetEstimateAlignedByFirstExperienceGivesZero) {
   const Pose2 T_world_map{2.0, -1.0, 2.7};
   EvalInput in;

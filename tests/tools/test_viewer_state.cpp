@@ -244,6 +244,7 @@ TEST(ViewerState, StatusColourFollowsTheStateAndTurnsStaleWhenADaemonFallsSilent
   slam.cycles = 42;
   slam.num_experiences = 7;
   slam.lcm_receive_drops = 3;
+  slam.input_gaps = 4;
   ASSERT_TRUE(feed(s, channels::kSlamStatus, slam, kT0));
   json status = s.snapshot()["status"];
   ASSERT_EQ(status.size(), 3u);  // by name: based, camerad, slamd
@@ -259,7 +260,9 @@ TEST(ViewerState, StatusColourFollowsTheStateAndTurnsStaleWhenADaemonFallsSilent
   EXPECT_EQ(status[2]["colour"], "fault");
   EXPECT_EQ(status[2]["counters"][0], json({"cycles", 42.0}));
   EXPECT_EQ(status[2]["counters"][2], json({"experiences", 7.0}));
-  EXPECT_EQ(status[2]["counters"].back(), json({"lcm_receive_drops", 3.0}));
+  const json& slam_counters = status[2]["counters"];
+  EXPECT_EQ(slam_counters[slam_counters.size() - 2], json({"lcm_receive_drops", 3.0}));
+  EXPECT_EQ(slam_counters.back(), json({"input_gaps", 4.0}));
 
   // based keeps reporting, the others fall silent for more than 3 s: stale, whatever they said last.
   const ViewerState::Versions before = s.versions();

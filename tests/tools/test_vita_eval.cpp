@@ -1,7 +1,10 @@
 // Integration test of the vita-eval binary: writes small slamd-like output logs (VITA_* and
 // GROUND_TRUTH) with LogWriterBus, runs the real executable on them and checks its JSON, its table
-// and its PNG plots.
+// and its PNG and SVG plots; and, on a short vita-sim + slamd --replay run with GROUND_TRUTH filtered
+// out (a real robot's log), that it draws the run over the world and reports what needs truth as
+// unavailable.
 #include "scratch.h"
+#include "subprocess.h"
 #include "whiskeye/common/bus.h"
 #include "whiskeye/common/se2.h"
 
@@ -72,6 +75,7 @@ struct Script {
   bool relocalise = true;  // false: new experiences all through the second revolution instead
   int64_t pose_delay_us = 0;  // VITA_POSE stamped this much later (past the ground truth: no LEM)
   bool board_fault = false;   // SIM_FAULT: board 2 offline from 10 s to 25 s
+  bool ground_truth = true;   // false: no GROUND_TRUTH (a real robot's log)
 };
 
 // Two revolutions. Experiences 0..19 are created once a second in the first; in the second the
@@ -116,7 +120,7 @@ void write_log(const std::string& path, const Script& script) {
     bus.set_time(t);
     pose2d_t gt{};
     set_pose(gt, t, gt_at(t));
-    publish(bus, "GROUND_TRUTH", gt);
+    if (script.ground_truth) publish(bus, "GROUND_TRUTH", gt);
     if (u % 100'000 == 0) {  // 10 Hz pose estimate, exact in the map frame
       vita_pose_t vp{};
       set_pose(vp, t + script.pose_delay_us, map_pose(t));
@@ -380,17 +384,155 @@ TEST_F(VitaEvalBinary, NoPoseWithinTheGroundTruthIsNoLemNotAPerfectOne) {
   EXPECT_TRUE(run["lem"]["orientation_rad"].is_null()) << run["lem"];
 }
 
-TEST_F(VitaEvalBinary, FailsWithAOneLineReasonOnALogWithoutGroundTruth) {
+TEST_F(VitaEvalBinary, FailsWithAOneLineReasonOnALogThatIsNoSlamdOutputOrABadOption) {
   {
-    LogWriterBus bus(file("nogt.lcmlog"));
-    vita_map_t map{};
-    publish(bus, "VITA_MAP", map);
+    LogWriterBus bus(file("nomap.lcmlog"));
+    pose2d_t gt{};
+    publish(bus, "GROUND_TRUTH", gt);
   }
-  EXPECT_NE(run_vita_eval("--input " + file("nogt.lcmlog"), file("stdout.txt")), 0);
-  EXPECT_NE(read_text(file("stdout.txt")).find("no GROUND_TRUTH"), std::string::npos);
+  EXPECT_NE(run_vita_eval("--input " + file("nomap.lcmlog"), file("stdout.txt")), 0);
+  EXPECT_NE(read_text(file("stdout.txt")).find("no VITA_MAP"), std::string::npos);
   EXPECT_NE(run_vita_eval("--input " + file("missing.lcmlog"), file("stdout2.txt")), 0);
-  EXPECT_NE(run_vita_eval("--input " + file("nogt.lcmlog") + " --centre 1:2", file("stdout3.txt")), 0);
+  write_log(file("vita.lcmlog"), Script{});
+  EXPECT_NE(run_vita_eval("--input " + file("vita.lcmlog") + " --centre 1:2", file("stdout3.txt")), 0);
   EXPECT_NE(read_text(file("stdout3.txt")).find("--centre must be X,Y"), std::string::npos);
+  EXPECT_NE(run_vita_eval("--input " + file("vita.lcmlog") + " --start 1,2", file("stdout4.txt")), 0);
+  EXPECT_NE(read_text(file("stdout4.txt")).find("--start must be X,Y,THETA_DEG"), std::string::npos);
+  EXPECT_NE(run_vita_eval("--input " + file("vita.lcmlog") + " --world " + file("missing.yaml"), file("stdout5.txt")), 0);
+  EXPECT_NE(read_text(file("stdout5.txt")).find("--world " + file("missing.yaml")), std::string::npos);
+}
+
+// Occurrences of `needle` in `text`.
+int count(const std::string& text, const std::string& needle) {
+  int n = 0;
+  for (std::size_t at = text.find(needle); at != std::string::npos; at = text.find(needle, at + needle.size())) ++n;
+  return n;
+}
+
+TEST_F(VitaEvalBinary, ARunWithoutGroundTruthIsDrawnAndItsTruthMetricsAreUnavailable) {
+  Script script;
+  script.ground_truth = false;
+  write_log(file("real.lcmlog"), script);
+  ASSERT_EQ(run_vita_eval("--input " + file("real.lcmlog") + " --json " + file("out.json") + " --plots " + file("plots") +
+                              " --trace " + file("trace"),
+                          file("stdout.txt")),
+            0)
+      << read_text(file("stdout.txt"));
+  const nlohmann::json run = nlohmann::json::parse(read_text(file("out.json")))["runs"][0];
+  EXPECT_EQ(run["ground_truth"], false);
+  EXPECT_NE(run["unavailable"].get<std::string>().find("no ground truth"), std::string::npos);
+  for (const char* metric : {"arcr", "arcr_after_base", "valid_fraction", "correct_total", "arr"}) {
+    EXPECT_TRUE(run["exm"][metric].is_null()) << metric << ": " << run["exm"];
+  }
+  EXPECT_TRUE(run["enm"]["enm"].is_null());
+  EXPECT_TRUE(run["lem"].is_null());
+  EXPECT_EQ(run["exm"]["relocalisations_total"], 19) << "the events are counted, not judged";
+  EXPECT_EQ(run["exm"]["experiences_created"], 21);
+  const std::string table = read_text(file("stdout.txt"));
+  EXPECT_NE(table.find("n/a — no ground truth"), std::string::npos) << table;
+  for (const char* plot : {"experience_map", "trail", "relocalisations"}) {
+    for (const char* ext : {".png", ".svg"}) {
+      EXPECT_TRUE(std::filesystem::exists(file(std::string("plots/vita_") + plot + ext))) << plot << ext;
+    }
+  }
+  const cv::Mat map_png = cv::imread(file("plots/vita_experience_map.png"));
+  ASSERT_FALSE(map_png.empty());
+  EXPECT_GT(count_colour(map_png, 0, 140, 255), 100);  // dense experiences (orange)
+  EXPECT_EQ(count(read_text(file("plots/vita_trail.svg")), "class=\"relocalisation\""), 19);
+  EXPECT_TRUE(std::filesystem::exists(file("trace/vita_trace.csv")));
+
+  // ARR needs only the base set, which --base-duration gives without truth: the same 19/20 as with it.
+  ASSERT_EQ(run_vita_eval("--input " + file("real.lcmlog") + " --base-duration 20 --json " + file("out2.json"),
+                          file("stdout2.txt")),
+            0);
+  const nlohmann::json run2 = nlohmann::json::parse(read_text(file("out2.json")))["runs"][0];
+  EXPECT_NEAR(run2["exm"]["arr"].get<double>(), 19.0 / 20.0, 1e-12);
+  EXPECT_TRUE(run2["exm"]["arcr"].is_null());
+}
+
+TEST_F(VitaEvalBinary, RunsOfTheSameModeGetTheirOwnPlotsAndOneFigureSideBySide) {
+  write_log(file("a.lcmlog"), Script{});
+  write_log(file("b.lcmlog"), Script{vita_pose_t::MODE_VITA, false});
+  write_log(file("c.lcmlog"), Script{vita_pose_t::MODE_TACTILE, false});
+  ASSERT_EQ(run_vita_eval("--input " + file("a.lcmlog") + " --input " + file("b.lcmlog") + " --input " +
+                              file("c.lcmlog") + " --plots " + file("plots"),
+                          file("stdout.txt")),
+            0)
+      << read_text(file("stdout.txt"));
+  const std::string a = read_text(file("plots/vita_experience_map.svg"));
+  const std::string b = read_text(file("plots/vita-2_experience_map.svg"));
+  EXPECT_EQ(count(a, "class=\"experience"), 21);
+  EXPECT_EQ(count(b, "class=\"experience"), 39) << "the second vita run's own map (no loop closure)";
+  EXPECT_TRUE(std::filesystem::exists(file("plots/vita-2_experience_map.png")));
+  EXPECT_TRUE(std::filesystem::exists(file("plots/tactile_trail.png")));
+  const std::string side = read_text(file("plots/comparison.svg"));
+  EXPECT_EQ(count(side, "<g class=\"panel\">"), 3) << "a panel per run";
+  EXPECT_EQ(count(side, "class=\"experience"), 21 + 39 + 39);
+  const cv::Mat png = cv::imread(file("plots/comparison.png"));
+  ASSERT_FALSE(png.empty());
+  EXPECT_GT(png.cols, 3 * png.rows / 2) << "side by side";
+}
+
+// A short simulated run through slamd, its GROUND_TRUTH filtered out: a real robot's log.
+class VitaEvalOnARealRun : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = whiskeye::testing::scratch_dir("vita_eval_real_run");
+    const std::string src = WHISKEYE_SOURCE_DIR;
+    const std::string sim = (dir_ / "sim.lcmlog").string();
+    const std::string slam = (dir_ / "slam.lcmlog").string();
+    whiskeye::testing::Subprocess s({VITA_SIM_EXE, "--world", src + "/config/worlds/aliased_arena.yaml", "--robot",
+                                     src + "/config/robot.yaml", "--duration", "15", "--seed", "3", "--quiet",
+                                     "--output", sim});
+    ASSERT_EQ(s.wait(120), 0) << s.output();
+    whiskeye::testing::Subprocess r({SLAMD_EXE, "--replay", sim, "--output", slam, "--mode", "vita", "--config",
+                                     src + "/config/slam.yaml", "--robot", src + "/config/robot.yaml"});
+    ASSERT_EQ(r.wait(120), 0) << r.output();
+    std::filesystem::remove(sim);
+    LogReader reader(slam);
+    LogWriterBus writer((dir_ / "real.lcmlog").string());
+    LogEvent ev;
+    while (reader.next(ev)) {
+      if (ev.channel == "GROUND_TRUTH") continue;
+      writer.set_time(ev.utime);
+      writer.publish_raw(ev.channel, ev.data);
+    }
+  }
+  static std::string file(const std::string& name) { return (dir_ / name).string(); }
+  static std::filesystem::path dir_;
+};
+std::filesystem::path VitaEvalOnARealRun::dir_;
+
+TEST_F(VitaEvalOnARealRun, ExitsZeroWithTheTruthMetricsNullAndDrawsTheRunOverTheWorld) {
+  const std::string world = std::string(WHISKEYE_SOURCE_DIR) + "/config/worlds/aliased_arena.yaml";
+  ASSERT_EQ(run_vita_eval("--input " + file("real.lcmlog") + " --json " + file("out.json") + " --plots " +
+                              file("plots") + " --world " + world,
+                          file("stdout.txt")),
+            0)
+      << read_text(file("stdout.txt"));
+  const nlohmann::json run = nlohmann::json::parse(read_text(file("out.json")))["runs"][0];
+  EXPECT_EQ(run["ground_truth"], false);
+  EXPECT_EQ(run["counts"]["ground_truth_samples"], 0);
+  EXPECT_GT(run["counts"]["map_experiences"].get<int>(), 5);
+  EXPECT_TRUE(run["exm"]["arcr"].is_null());
+  EXPECT_TRUE(run["enm"]["enm"].is_null());
+  EXPECT_TRUE(run["lem"].is_null());
+  EXPECT_NE(read_text(file("stdout.txt")).find("n/a — no ground truth"), std::string::npos);
+
+  // The arena (config/worlds/aliased_arena.yaml): 4 walls, 4 wall landmarks, 3 tactile landmarks,
+  // under the map in every plot.
+  const std::string svg = read_text(file("plots/vita_experience_map.svg"));
+  EXPECT_EQ(count(svg, "class=\"wall\""), 4);
+  EXPECT_EQ(count(svg, "class=\"visual-landmark\""), 4);
+  EXPECT_EQ(count(svg, "class=\"tactile-landmark\""), 3);
+  EXPECT_NE(svg.find("data-name=\"A_north (stripes)\""), std::string::npos);
+  EXPECT_NE(svg.find("data-name=\"post_south\""), std::string::npos);
+  EXPECT_LT(svg.find("class=\"wall\""), svg.find("class=\"experience")) << "the world is drawn under the map";
+  EXPECT_NE(svg.find("world frame"), std::string::npos);
+  EXPECT_GT(count(read_text(file("plots/vita_trail.svg")), "class=\"trail\""), 50);
+  const cv::Mat png = cv::imread(file("plots/vita_experience_map.png"));
+  ASSERT_FALSE(png.empty());
+  EXPECT_GT(count_colour(png, 105, 105, 105), 1000);  // the walls (grey)
 }
 
 }  // namespace

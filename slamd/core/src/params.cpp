@@ -9,7 +9,7 @@ void load(const ParamNode& node, SlamParams& p) {
   try {
     p.mode = parse_mode(mode);
   } catch (const std::invalid_argument& e) {
-    throw ParamError(node.source() + ": '" + node.path_of("mode") + "': " + e.what());
+    node.fail("mode", std::string("is an ") + e.what());
   }
   node.get("max_odometry_dt", p.max_odometry_dt, 1e-3, 60.0);
   node.get("path_integration_period", p.path_integration_period, 0.0, 10.0);

@@ -92,9 +92,6 @@ LoadedRun load_run(const std::string& path) {
     }
   }
   run.log_damage = reader.damage().summary();
-  if (run.input.ground_truth.empty()) {
-    throw std::runtime_error(path + ": no GROUND_TRUTH messages (the metrics need the simulator's ground truth)");
-  }
   if (run.map_messages == 0) {
     throw std::runtime_error(path + ": no VITA_MAP messages (is this a slamd output log?)");
   }

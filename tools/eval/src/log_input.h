@@ -18,9 +18,10 @@ struct LoadedRun {
   std::string log_damage;  // LogReader::Damage::summary(): empty unless the log was damaged
 };
 
-// Throws std::runtime_error with a one-line reason if the file cannot be read or lacks the
-// channels the metrics need (GROUND_TRUTH, VITA_MAP). A damaged log (a corrupt event, a cut-off
-// end) is evaluated from the events that could be read, and `log_damage` says what was skipped.
+// Throws std::runtime_error with a one-line reason if the file cannot be read or has no VITA_MAP
+// (not a slamd output log). A log without GROUND_TRUTH (a real robot's run) loads with
+// `input.ground_truth` empty. A damaged log (a corrupt event, a cut-off end) is evaluated from the
+// events that could be read, and `log_damage` says what was skipped.
 LoadedRun load_run(const std::string& path);
 
 }  // namespace whiskeye::eval

@@ -202,9 +202,15 @@ std::optional<int64_t> base_set_end(const GroundTruth& gt, const EvalParams& par
   return std::nullopt;
 }
 
-ExmResult compute_exm(const std::vector<ExperienceEvent>& events_in, const ExperienceMap& map,
-                      const GroundTruth& gt, const EvalParams& params) {
+namespace {
+
+// ExM over `events`, the base set ending at `end` (none: everything is base); `origin` is the time
+// base_end_s counts from. With ground truth every re-localisation is judged; without (`gt` empty),
+// the events are only counted and nothing that judges is set.
+ExmResult exm(const std::vector<ExperienceEvent>& events_in, const ExperienceMap& map, const GroundTruth& gt,
+              const EvalParams& params, std::optional<int64_t> end, int64_t origin) {
   ExmResult r;
+  const bool judge = !gt.empty();
   const std::vector<ExperienceEvent> events = in_time_order(events_in);
 
   std::map<int32_t, int64_t> created;
@@ -213,10 +219,9 @@ ExmResult compute_exm(const std::vector<ExperienceEvent>& events_in, const Exper
     if (e.type == EventType::kNewExperience && e.to_id != e.from_id) created.emplace(e.to_id, e.utime);
   }
 
-  const std::optional<int64_t> end = base_set_end(gt, params);
   r.base_end_found = end.has_value();
   r.base_end_utime = end.value_or(std::numeric_limits<int64_t>::max());
-  if (end) r.base_end_s = utime_delta_seconds(gt.begin_utime(), *end);
+  if (end) r.base_end_s = utime_delta_seconds(origin, *end);
   for (const auto& [id, t] : created) {
     if (t <= r.base_end_utime) ++r.base_set_size;
   }
@@ -228,7 +233,7 @@ ExmResult compute_exm(const std::vector<ExperienceEvent>& events_in, const Exper
       if (e.type == EventType::kRelocalise) ++r.relocalise_to_current;
       continue;
     }
-    const std::optional<Pose2> gt_now = gt.at(e.utime);
+    const std::optional<Pose2> gt_now = judge ? gt.at(e.utime) : Pose2{};
     if (!gt_now) {
       ++r.events_outside_gt;
       continue;
@@ -236,13 +241,21 @@ ExmResult compute_exm(const std::vector<ExperienceEvent>& events_in, const Exper
     const bool after = e.utime > r.base_end_utime;
     if (e.type == EventType::kNewExperience) {
       ++r.experiences_created;
-      if (valid_state) ++r.valid_experiences;
+      if (judge && valid_state) ++r.valid_experiences;
       if (after) ++r.experience_events_after_base;
       continue;
     }
     const auto target = created.find(e.to_id);
     if (target == created.end() || target->second > e.utime) {
       ++r.relocalise_unknown_target;
+      continue;
+    }
+    if (!judge) {
+      ++r.relocalisations_total;
+      if (after) {
+        ++r.experience_events_after_base;
+        ++r.relocalisations_after_base;
+      }
       continue;
     }
     const std::optional<Pose2> gt_target = gt.at(target->second);
@@ -276,6 +289,7 @@ ExmResult compute_exm(const std::vector<ExperienceEvent>& events_in, const Exper
     r.arr = static_cast<double>(r.relocalisations_after_base) /
             static_cast<double>(r.experience_events_after_base);
   }
+  if (!judge) return r;
   if (r.relocalisations_total > 0) {
     r.arcr = static_cast<double>(r.correct_total) / static_cast<double>(r.relocalisations_total);
   }
@@ -287,6 +301,13 @@ ExmResult compute_exm(const std::vector<ExperienceEvent>& events_in, const Exper
     r.valid_fraction = static_cast<double>(r.valid_experiences) / static_cast<double>(r.experiences_created);
   }
   return r;
+}
+
+}  // namespace
+
+ExmResult compute_exm(const std::vector<ExperienceEvent>& events, const ExperienceMap& map, const GroundTruth& gt,
+                      const EvalParams& params) {
+  return exm(events, map, gt, params, base_set_end(gt, params), gt.begin_utime());
 }
 
 // ---- EnM ----
@@ -326,8 +347,29 @@ EnmResult compute_enm(const ExperienceMap& map, const GroundTruth& gt) {
 
 // ---- Everything ----
 
+int64_t run_start_utime(const EvalInput& input) {
+  if (!input.ground_truth.empty()) return GroundTruth(input.ground_truth).begin_utime();
+  std::optional<int64_t> first;
+  for (const PoseSample& s : input.estimate) first = std::min(first.value_or(s.utime), s.utime);
+  for (const ExperienceEvent& e : input.events) first = std::min(first.value_or(e.utime), e.utime);
+  return first.value_or(0);
+}
+
+ExmResult count_exm_without_truth(const std::vector<ExperienceEvent>& events, const ExperienceMap& map,
+                                  const EvalParams& params, int64_t start_utime) {
+  std::optional<int64_t> end;
+  if (params.base_duration_s) end = start_utime + seconds_to_utime(*params.base_duration_s);
+  return exm(events, map, GroundTruth({}), params, end, start_utime);
+}
+
 EvalResult evaluate(const EvalInput& input, const EvalParams& params) {
   EvalResult r;
+  if (input.ground_truth.empty()) {
+    r.ground_truth = false;
+    r.alignment.reason = r.best_fit.reason = "no ground truth";
+    r.exm = count_exm_without_truth(input.events, input.map, params, run_start_utime(input));
+    return r;
+  }
   const GroundTruth gt(input.ground_truth);
   r.alignment = align_by_first_experience(input.map, gt);
   r.best_fit = align_best_fit(input.estimate, gt);
@@ -342,6 +384,7 @@ EvalResult evaluate(const EvalInput& input, const EvalParams& params) {
 
 std::vector<CycleTrace> trace_cycles(const EvalInput& input, const ExmResult& exm) {
   const GroundTruth gt(input.ground_truth);
+  const int64_t start = run_start_utime(input);
   const std::vector<ExperienceEvent> events = in_time_order(input.events);
   std::map<std::pair<int64_t, int32_t>, const Relocalisation*> relocs;
   for (const Relocalisation& r : exm.relocalisations) relocs[{r.utime, r.to_id}] = &r;
@@ -364,7 +407,7 @@ std::vector<CycleTrace> trace_cycles(const EvalInput& input, const ExmResult& ex
       if (n > 0) row.active_faults.push_back(name);
     }
     row.event = e;
-    row.t_s = utime_delta_seconds(gt.begin_utime(), e.utime);
+    row.t_s = utime_delta_seconds(start, e.utime);
     row.gt = gt.at(e.utime);
     if (e.type == EventType::kRelocalise) {
       const auto r = relocs.find({e.utime, e.to_id});

@@ -1,234 +1,346 @@
-// Draws with OpenCV (imgproc + imgcodecs only): world coordinates mapped to pixels with equal scale
-// on both axes, y up, a metric scale bar and a legend on every plot.
+// What each plot shows, as FigurePanel items in the plot frame (figure.h draws and writes them).
 #include "plots.h"
 
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
+#include "figure.h"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <cstdio>
-#include <limits>
-#include <stdexcept>
+#include <filesystem>
+#include <map>
 
 namespace whiskeye::eval {
 
 namespace {
 
-constexpr int kSize = 900;          // px, square canvas
-constexpr int kTop = 60;            // px reserved for the title
-constexpr int kMargin = 40;         // px around the data
-constexpr int kLegendWidth = 420;   // px, panel right of the data so the legend never hides it
+const Rgb kGrey{170, 170, 170};     // ground truth
+const Rgb kBlue{30, 110, 200};      // links, sparse experiences
+const Rgb kOrange{255, 140, 0};     // dense experiences
+const Rgb kGreen{40, 160, 40};      // correct re-localisation
+const Rgb kRed{220, 40, 40};        // incorrect re-localisation
+const Rgb kMagenta{190, 0, 190};    // re-localisation, correctness unknown (no ground truth)
+const Rgb kBlack{0, 0, 0};
+const Rgb kWall{105, 105, 105};
+const Rgb kSolid{80, 80, 80};
+// Visual landmarks by pattern: landmarks that look alike get one colour.
+const Rgb kPatternColours[] = {{140, 70, 170}, {0, 128, 128}, {150, 95, 40}, {200, 80, 150}, {110, 110, 20}};
 
-const cv::Scalar kWhite(255, 255, 255);
-const cv::Scalar kBlack(0, 0, 0);
-const cv::Scalar kGrey(170, 170, 170);
-const cv::Scalar kBlue(200, 110, 30);
-const cv::Scalar kOrange(0, 140, 255);
-const cv::Scalar kGreen(40, 160, 40);
-const cv::Scalar kRed(40, 40, 220);
+constexpr double kTrailBreak_m = 0.2;  // consecutive poses further apart: a jump (re-localisation), not a path
 
-class Canvas {
- public:
-  Canvas(double min_x, double max_x, double min_y, double max_y) : image_(kSize, kSize + kLegendWidth, CV_8UC3, kWhite) {
-    const double span = std::max({max_x - min_x, max_y - min_y, 0.5});
-    const int usable = kSize - kTop - 2 * kMargin;
-    scale_ = usable / span;
-    cx_ = 0.5 * (min_x + max_x);
-    cy_ = 0.5 * (min_y + max_y);
-  }
+Xy at(const Pose2& p) { return {p.x, p.y}; }
 
-  cv::Point px(double x, double y) const {
-    const double centre_col = kSize / 2.0;
-    const double centre_row = kTop + (kSize - kTop) / 2.0;
-    return {static_cast<int>(std::lround(centre_col + (x - cx_) * scale_)),
-            static_cast<int>(std::lround(centre_row - (y - cy_) * scale_))};
-  }
+double seconds(int64_t from, int64_t to) { return static_cast<double>(to - from) * 1e-6; }
 
-  cv::Mat& image() { return image_; }
+bool has_truth(const EvalInput& input) { return !input.ground_truth.empty(); }
 
-  void title(const std::string& text) {
-    cv::putText(image_, text, {20, 38}, cv::FONT_HERSHEY_SIMPLEX, 0.75, kBlack, 2, cv::LINE_AA);
-  }
-
-  // A bar of a round length about a fifth of the canvas, bottom right.
-  void scale_bar() {
-    const double target_m = (kSize / 5.0) / scale_;
-    double length = 0.01;
-    for (double base = 0.01; base < 1e4; base *= 10) {
-      for (double m : {1.0, 2.0, 5.0}) {
-        if (base * m <= target_m) length = base * m;
-      }
-    }
-    const int len_px = static_cast<int>(std::lround(length * scale_));
-    const cv::Point right(kSize - 40, kSize - 30);
-    const cv::Point left(right.x - len_px, right.y);
-    cv::line(image_, left, right, kBlack, 3);
-    cv::line(image_, left + cv::Point(0, -6), left + cv::Point(0, 6), kBlack, 2);
-    cv::line(image_, right + cv::Point(0, -6), right + cv::Point(0, 6), kBlack, 2);
-    char label[32];
-    std::snprintf(label, sizeof label, "%g m", length);
-    cv::putText(image_, label, {left.x, left.y - 12}, cv::FONT_HERSHEY_SIMPLEX, 0.6, kBlack, 1, cv::LINE_AA);
-  }
-
-  // Legend entries drawn by `marker(image, centre)`, in the panel right of the data.
-  template <typename Marker>
-  void legend_entry(int index, const std::string& text, Marker marker) {
-    if (index == 0) cv::line(image_, {kSize, kTop}, {kSize, kSize - 20}, kGrey, 1);
-    const cv::Point at(kSize + 25, kTop + 30 + 28 * index);
-    marker(image_, at);
-    cv::putText(image_, text, {at.x + 28, at.y + 6}, cv::FONT_HERSHEY_SIMPLEX, 0.55, kBlack, 1, cv::LINE_AA);
-  }
-
-  void save(const std::string& path) {
-    bool ok = false;
-    try {
-      ok = cv::imwrite(path, image_);
-    } catch (const cv::Exception& e) {
-      throw std::runtime_error("cannot write " + path + ": " + e.what());
-    }
-    if (!ok) throw std::runtime_error("cannot write " + path);
-  }
-
- private:
-  cv::Mat image_;
-  double scale_ = 1.0;  // px per m
-  double cx_ = 0.0;
-  double cy_ = 0.0;
-};
-
-struct Bounds {
-  double min_x = std::numeric_limits<double>::infinity();
-  double max_x = -std::numeric_limits<double>::infinity();
-  double min_y = std::numeric_limits<double>::infinity();
-  double max_y = -std::numeric_limits<double>::infinity();
-  void add(double x, double y) {
-    min_x = std::min(min_x, x);
-    max_x = std::max(max_x, x);
-    min_y = std::min(min_y, y);
-    max_y = std::max(max_y, y);
-  }
-  Canvas canvas() const {
-    if (!std::isfinite(min_x)) return Canvas(-1, 1, -1, 1);
-    return Canvas(min_x, max_x, min_y, max_y);
-  }
-};
-
-void draw_ground_truth(Canvas& c, const std::vector<PoseSample>& gt) {
-  std::vector<cv::Point> pts;
-  pts.reserve(gt.size());
-  for (const PoseSample& s : gt) pts.push_back(c.px(s.pose.x, s.pose.y));
-  if (pts.size() >= 2) cv::polylines(c.image(), pts, false, kGrey, 2, cv::LINE_AA);
+// A label `by` metres from `p` along `dir` (a unit vector), anchored so that the text runs away
+// from p: right of it, left of it, or centred above or below it.
+void label(FigurePanel& panel, Xy p, Xy dir, double by, const std::string& text, Rgb colour) {
+  const bool sideways = std::abs(dir.x) > std::abs(dir.y);
+  const int anchor = sideways ? (dir.x > 0 ? -1 : 1) : 0;
+  // Text hangs from its baseline: below a point it needs its height more.
+  const double drop = !sideways && dir.y < 0 ? 0.1 : 0.0;
+  panel.text({p.x + by * dir.x, p.y + by * dir.y - drop}, text, colour, 13, "landmark-label", anchor);
 }
 
-std::vector<PoseSample> sorted_ground_truth(const EvalInput& input) {
-  return GroundTruth(input.ground_truth).samples();
+// Walls, visual landmarks (coloured by pattern, labelled on the arena's side) and tactile landmarks
+// (labelled above or below), in the world frame.
+void draw_world(FigurePanel& panel, const sim::World& world) {
+  const Xy centre{world.trajectory.centre.x, world.trajectory.centre.y};
+  const auto towards_centre = [&](Xy p) {
+    const double dx = centre.x - p.x, dy = centre.y - p.y;
+    const double n = std::max(1e-9, std::hypot(dx, dy));
+    return Xy{dx / n, dy / n};
+  };
+  for (const sim::Panel& w : world.walls) {
+    panel.polyline({{w.from.x, w.from.y}, {w.to.x, w.to.y}}, kWall, 5, "wall", w.name);
+  }
+  for (const sim::Panel& l : world.landmarks) {
+    const std::size_t k = static_cast<std::size_t>(std::max(0, l.pattern)) % std::size(kPatternColours);
+    const std::string pattern = l.pattern >= 0 && static_cast<std::size_t>(l.pattern) < world.patterns.size()
+                                    ? world.patterns[static_cast<std::size_t>(l.pattern)].name
+                                    : "";
+    const std::string name = pattern.empty() ? l.name : l.name + " (" + pattern + ")";
+    panel.polyline({{l.from.x, l.from.y}, {l.to.x, l.to.y}}, kPatternColours[k], 10, "visual-landmark", name);
+    const Xy mid{0.5 * (l.from.x + l.to.x), 0.5 * (l.from.y + l.to.y)};
+    label(panel, mid, towards_centre(mid), 0.2, name, kPatternColours[k]);
+  }
+  for (const sim::Solid& s : world.solids) {
+    if (s.shape == sim::Solid::Shape::Circle) {
+      panel.disc({s.centre.x, s.centre.y}, s.radius, kSolid, "tactile-landmark", s.name);
+    } else {
+      std::vector<Xy> pts;
+      for (const sim::Point2& q : s.vertices) pts.push_back({q.x, q.y});
+      panel.polygon(pts, kSolid, "tactile-landmark", s.name);
+    }
+    // Above an object beyond the centre's north, else below it: clear of the map and of the wall
+    // landmarks' labels, which run along the walls.
+    const Xy in = towards_centre({s.centre.x, s.centre.y});
+    label(panel, {s.centre.x, s.centre.y}, {0.0, -in.y > 0.5 ? 1.0 : -1.0}, s.radius + 0.1, s.name, kSolid);
+  }
 }
 
-}  // namespace
+void draw_ground_truth(FigurePanel& panel, const EvalInput& input) {
+  const GroundTruth gt(input.ground_truth);  // sorted, one sample per time
+  std::vector<Xy> pts;
+  for (const PoseSample& s : gt.samples()) pts.push_back(at(s.pose));
+  panel.polyline(std::move(pts), kGrey, 2, "ground-truth");
+}
 
-void plot_experience_map(const std::string& path, const std::string& title, const EvalInput& input,
-                         const EvalResult& result) {
-  const std::vector<PoseSample> gt = sorted_ground_truth(input);
-  const Pose2 T = result.alignment.valid ? result.alignment.T_world_map : Pose2{};
-  Bounds b;
-  for (const PoseSample& s : gt) b.add(s.pose.x, s.pose.y);
-  std::vector<std::pair<Pose2, bool>> nodes;  // world pose, dense
-  for (const MapExperience& e : input.map.experiences) {
-    const Pose2 w = compose(T, e.pose);
-    nodes.emplace_back(w, e.dense);
-    b.add(w.x, w.y);
-  }
-  Canvas c = b.canvas();
-  c.title(title + (result.alignment.valid ? "" : " (NOT ALIGNED: " + result.alignment.reason + ")"));
-  draw_ground_truth(c, gt);
+void draw_experience_map(FigurePanel& panel, const EvalInput& input, const Pose2& T) {
   for (const MapLink& l : input.map.links) {
     const MapExperience* i = input.map.find(l.from_id);
     const MapExperience* j = input.map.find(l.to_id);
     if (i == nullptr || j == nullptr) continue;
-    const Pose2 wi = compose(T, i->pose);
-    const Pose2 wj = compose(T, j->pose);
-    cv::line(c.image(), c.px(wi.x, wi.y), c.px(wj.x, wj.y), kBlue, 1, cv::LINE_AA);
+    panel.polyline({at(compose(T, i->pose)), at(compose(T, j->pose))}, kBlue, 1, "link");
   }
-  for (const auto& [w, dense] : nodes) {
-    const cv::Point p = c.px(w.x, w.y);
-    // A short tick shows the heading.
-    const cv::Point h = p + cv::Point(static_cast<int>(std::lround(9 * std::cos(w.theta))),
-                                      static_cast<int>(std::lround(-9 * std::sin(w.theta))));
-    if (dense) {
-      cv::circle(c.image(), p, 5, kOrange, cv::FILLED, cv::LINE_AA);
-      cv::line(c.image(), p, h, kOrange, 1, cv::LINE_AA);
-    } else {
-      cv::circle(c.image(), p, 4, kBlue, 1, cv::LINE_AA);
-      cv::line(c.image(), p, h, kBlue, 1, cv::LINE_AA);
-    }
+  for (const MapExperience& e : input.map.experiences) {
+    const Pose2 w = compose(T, e.pose);
+    panel.marker(at(w), e.dense ? 5 : 4, e.dense ? kOrange : kBlue, e.dense, e.dense ? "experience dense" : "experience");
+    panel.tick(at(w), w.theta, 10, e.dense ? kOrange : kBlue, "heading");
   }
-  c.legend_entry(0, "ground truth", [](cv::Mat& im, cv::Point p) {
-    cv::line(im, p - cv::Point(10, 0), p + cv::Point(10, 0), kGrey, 2, cv::LINE_AA);
-  });
-  c.legend_entry(1, "link", [](cv::Mat& im, cv::Point p) {
-    cv::line(im, p - cv::Point(10, 0), p + cv::Point(10, 0), kBlue, 1, cv::LINE_AA);
-  });
-  c.legend_entry(2, "dense experience (contacts)", [](cv::Mat& im, cv::Point p) {
-    cv::circle(im, p, 5, kOrange, cv::FILLED, cv::LINE_AA);
-  });
-  c.legend_entry(3, "sparse experience", [](cv::Mat& im, cv::Point p) {
-    cv::circle(im, p, 4, kBlue, 1, cv::LINE_AA);
-  });
-  c.legend_entry(4, "tick: the experience's heading", [](cv::Mat& im, cv::Point p) {
-    cv::circle(im, p, 4, kBlue, 1, cv::LINE_AA);
-    cv::line(im, p, p + cv::Point(9, 0), kBlue, 1, cv::LINE_AA);
-  });
-  c.scale_bar();
-  c.save(path);
 }
 
-void plot_relocalisations(const std::string& path, const std::string& title, const EvalInput& input,
-                          const EvalResult& result, const EvalParams& params) {
-  const std::vector<PoseSample> gt = sorted_ground_truth(input);
-  Bounds b;
-  for (const PoseSample& s : gt) b.add(s.pose.x, s.pose.y);
-  Canvas c = b.canvas();
-  c.title(title);
-  draw_ground_truth(c, gt);
-  std::size_t correct = 0;
-  std::size_t incorrect = 0;
-  // Incorrect ones last so they stay visible over correct ones.
-  for (bool pass_correct : {true, false}) {
-    for (const Relocalisation& r : result.exm.relocalisations) {
-      if (r.correct != pass_correct) continue;
-      const cv::Scalar colour = r.correct ? kGreen : kRed;
-      const cv::Point now = c.px(r.gt_now.x, r.gt_now.y);
-      const cv::Point target = c.px(r.gt_target_created.x, r.gt_target_created.y);
-      cv::line(c.image(), now, target, colour, 2, cv::LINE_AA);
-      cv::circle(c.image(), now, 4, colour, cv::FILLED, cv::LINE_AA);
-      cv::circle(c.image(), target, 4, colour, 1, cv::LINE_AA);
-      (r.correct ? correct : incorrect) += 1;
-    }
+// The world (if any) and the ground truth (if any): what every plot of a run starts with.
+void draw_scene(FigurePanel& panel, const EvalInput& input, const PlotScene& scene, const Placement& placement) {
+  if (scene.world != nullptr) draw_world(panel, *scene.world);
+  if (has_truth(input)) draw_ground_truth(panel, input);
+  panel.set_frame(placement.frame);
+}
+
+void world_legend(Figure& fig, const PlotScene& scene) {
+  if (scene.world == nullptr) return;
+  fig.legend({LegendEntry::Kind::Line, kWall, 5, "wall"});
+  fig.legend({LegendEntry::Kind::Line, kPatternColours[1], 8, "visual landmark (one colour per pattern)"});
+  fig.legend({LegendEntry::Kind::Dot, kSolid, 6, "tactile landmark"});
+}
+
+void truth_legend(Figure& fig, const EvalInput& input) {
+  if (has_truth(input)) {
+    fig.legend({LegendEntry::Kind::Line, kGrey, 2, "ground truth"});
+  } else {
+    fig.legend({LegendEntry::Kind::Note, kBlack, 0, "no ground truth in this log: no correctness, no errors"});
   }
-  char threshold[96];
-  std::snprintf(threshold, sizeof threshold, "(correct: within %.3g m and %.3g deg)", params.correct_position_m,
-                rad_to_deg(params.correct_angle_rad));
-  c.legend_entry(0, "ground truth", [](cv::Mat& im, cv::Point p) {
-    cv::line(im, p - cv::Point(10, 0), p + cv::Point(10, 0), kGrey, 2, cv::LINE_AA);
-  });
-  c.legend_entry(1, "correct re-localisation (" + std::to_string(correct) + ")", [](cv::Mat& im, cv::Point p) {
-    cv::line(im, p - cv::Point(10, 0), p + cv::Point(10, 0), kGreen, 2, cv::LINE_AA);
-  });
-  c.legend_entry(2, "incorrect re-localisation (" + std::to_string(incorrect) + ")",
-                 [](cv::Mat& im, cv::Point p) {
-                   cv::line(im, p - cv::Point(10, 0), p + cv::Point(10, 0), kRed, 2, cv::LINE_AA);
-                 });
-  c.legend_entry(3, "dot: robot at the event", [](cv::Mat& im, cv::Point p) {
-    cv::circle(im, p, 4, kBlack, cv::FILLED, cv::LINE_AA);
-  });
-  c.legend_entry(4, "ring: where the target was created", [](cv::Mat& im, cv::Point p) {
-    cv::circle(im, p, 4, kBlack, 1, cv::LINE_AA);
-  });
-  c.legend_entry(5, threshold, [](cv::Mat&, cv::Point) {});
-  c.scale_bar();
-  c.save(path);
+}
+
+void map_legend(Figure& fig) {
+  fig.legend({LegendEntry::Kind::Line, kBlue, 1, "link"});
+  fig.legend({LegendEntry::Kind::Dot, kOrange, 5, "dense experience (contacts)"});
+  fig.legend({LegendEntry::Kind::Ring, kBlue, 4, "sparse experience"});
+  fig.legend({LegendEntry::Kind::Tick, kBlue, 4, "tick: the experience's heading"});
+}
+
+// The estimate before a time: the last VITA_POSE sample before `utime` (the pose a re-localisation
+// jumps from), or nothing.
+std::optional<Pose2> pose_before(const std::vector<PoseSample>& sorted, int64_t utime) {
+  const auto it = std::lower_bound(sorted.begin(), sorted.end(), utime,
+                                   [](const PoseSample& s, int64_t t) { return s.utime < t; });
+  if (it == sorted.begin()) return std::nullopt;
+  return std::prev(it)->pose;
+}
+
+std::vector<PoseSample> sorted_estimate(const EvalInput& input) {
+  std::vector<PoseSample> s = input.estimate;
+  std::stable_sort(s.begin(), s.end(), [](const PoseSample& a, const PoseSample& b) { return a.utime < b.utime; });
+  return s;
+}
+
+// Re-localisation events (to another experience), in time order.
+std::vector<ExperienceEvent> relocalise_events(const EvalInput& input) {
+  std::vector<ExperienceEvent> out;
+  for (const ExperienceEvent& e : input.events) {
+    if (e.type == EventType::kRelocalise && e.to_id != e.from_id) out.push_back(e);
+  }
+  std::stable_sort(out.begin(), out.end(), [](const ExperienceEvent& a, const ExperienceEvent& b) { return a.utime < b.utime; });
+  return out;
+}
+
+// The ExM verdict on a re-localisation event, when ground truth gave one.
+std::optional<bool> verdict(const EvalResult& result, const ExperienceEvent& e) {
+  for (const Relocalisation& r : result.exm.relocalisations) {
+    if (r.utime == e.utime && r.to_id == e.to_id) return r.correct;
+  }
+  return std::nullopt;
+}
+
+std::vector<std::string> write(const Figure& fig, const std::string& base) {
+  fig.write_png(base + ".png");
+  fig.write_svg(base + ".svg");
+  return {base + ".png", base + ".svg"};
+}
+
+}  // namespace
+
+Placement place(const EvalInput& input, const EvalResult& result, const PlotScene& scene) {
+  if (has_truth(input)) {
+    if (result.alignment.valid) return {result.alignment.T_world_map, "world frame (first experience on ground truth)"};
+    return {Pose2{}, "map frame, NOT ALIGNED: " + result.alignment.reason};
+  }
+  std::optional<Pose2> start = scene.start;
+  if (!start && scene.world != nullptr) start = scene.world->trajectory.pose_at(0.0);
+  const std::vector<PoseSample> est = sorted_estimate(input);
+  if (start && !est.empty()) {
+    return {compose(*start, inverse(est.front().pose)), "world frame (first pose at the start pose)"};
+  }
+  return {Pose2{}, "map frame"};
+}
+
+std::string plot_stem(const std::string& label) {
+  std::string s = label;
+  std::replace(s.begin(), s.end(), '#', '-');
+  return s;
+}
+
+std::vector<std::string> plot_run(const std::string& dir, const PlotRun& run, const PlotScene& scene) {
+  const std::string base = (std::filesystem::path(dir) / plot_stem(run.label)).string();
+  const EvalInput& input = *run.input;
+  const EvalResult& result = *run.result;
+  const Placement pl = place(input, result, scene);
+  const bool truth = has_truth(input);
+  std::vector<std::string> written;
+  const auto keep = [&](const std::vector<std::string>& paths) { written.insert(written.end(), paths.begin(), paths.end()); };
+
+  {  // The experience map.
+    Figure fig(run.label + ": experience map");
+    FigurePanel& panel = fig.add_panel(run.label);
+    draw_scene(panel, input, scene, pl);
+    draw_experience_map(panel, input, pl.T_plot_map);
+    world_legend(fig, scene);
+    truth_legend(fig, input);
+    map_legend(fig);
+    keep(write(fig, base + "_experience_map"));
+  }
+
+  const std::vector<PoseSample> est = sorted_estimate(input);
+  const std::vector<ExperienceEvent> relocs = relocalise_events(input);
+
+  {  // The pose trail, coloured by time, with the re-localisations on it.
+    Figure fig(run.label + ": pose trail and re-localisations");
+    FigurePanel& panel = fig.add_panel(run.label);
+    draw_scene(panel, input, scene, pl);
+    const int64_t t0 = est.empty() ? 0 : est.front().utime;
+    const double duration = est.empty() ? 1.0 : std::max(1e-6, seconds(t0, est.back().utime));
+    // Pieces of about 1/300 of the run, each in the colour of its middle; points closer than 5 mm
+    // merged (a 50 Hz trail is dense); a jump breaks the line.
+    const double piece_s = duration / 300.0;
+    std::vector<Xy> piece;
+    double piece_start = 0.0;
+    const auto flush = [&](double t_end) {
+      if (piece.size() >= 2) panel.polyline(piece, time_colour(0.5 * (piece_start + t_end) / duration), 2, "trail");
+      piece.clear();
+    };
+    for (const PoseSample& s : est) {
+      const Xy p = at(compose(pl.T_plot_map, s.pose));
+      const double t = seconds(t0, s.utime);
+      if (!piece.empty()) {
+        const Xy& last = piece.back();
+        const double d = std::hypot(p.x - last.x, p.y - last.y);
+        if (d > kTrailBreak_m) {
+          flush(t);
+          piece_start = t;
+        } else if (t - piece_start >= piece_s) {
+          piece.push_back(p);
+          flush(t);
+          piece_start = t;
+        } else if (d < 0.005) {
+          continue;
+        }
+      }
+      piece.push_back(p);
+    }
+    flush(duration);
+    int correct = 0, incorrect = 0, unknown = 0;
+    for (const ExperienceEvent& e : relocs) {
+      const std::optional<Pose2> before = pose_before(est, e.utime);
+      if (!before) continue;
+      const std::optional<bool> ok = verdict(result, e);
+      const Rgb c = !ok ? kMagenta : *ok ? kGreen : kRed;
+      ++(!ok ? unknown : *ok ? correct : incorrect);
+      panel.marker(at(compose(pl.T_plot_map, *before)), 5, c, false, "relocalisation");
+    }
+    world_legend(fig, scene);
+    truth_legend(fig, input);
+    fig.legend({LegendEntry::Kind::Line, time_colour(0.5), 2, "pose estimate (VITA_POSE), coloured by time"});
+    if (correct + incorrect > 0 || truth) {
+      fig.legend({LegendEntry::Kind::Ring, kGreen, 5, "correct re-localisation (" + std::to_string(correct) + ")"});
+      fig.legend({LegendEntry::Kind::Ring, kRed, 5, "incorrect re-localisation (" + std::to_string(incorrect) + ")"});
+    }
+    if (unknown > 0 || !truth) {
+      fig.legend({LegendEntry::Kind::Ring, kMagenta, 5, "re-localisation (" + std::to_string(unknown) + ")"});
+    }
+    fig.legend({LegendEntry::Kind::Note, kBlack, 0, "ring: the estimate just before the event"});
+    fig.colour_bar({"time since the first pose (s)", 0.0, duration});
+    keep(write(fig, base + "_trail"));
+  }
+
+  {  // The re-localisations.
+    Figure fig(run.label + ": re-localisations");
+    FigurePanel& panel = fig.add_panel(run.label);
+    draw_scene(panel, input, scene, pl);
+    world_legend(fig, scene);
+    truth_legend(fig, input);
+    if (truth) {
+      // Where the robot was and where the target was created, by ground truth. Incorrect ones last so
+      // they stay visible over correct ones.
+      std::size_t correct = 0, incorrect = 0;
+      for (bool pass_correct : {true, false}) {
+        for (const Relocalisation& r : result.exm.relocalisations) {
+          if (r.correct != pass_correct) continue;
+          const Rgb c = r.correct ? kGreen : kRed;
+          panel.polyline({at(r.gt_now), at(r.gt_target_created)}, c, 2, r.correct ? "relocalisation correct" : "relocalisation incorrect");
+          panel.marker(at(r.gt_now), 4, c, true, "relocalisation-from");
+          panel.marker(at(r.gt_target_created), 4, c, false, "relocalisation-target");
+          ++(r.correct ? correct : incorrect);
+        }
+      }
+      char threshold[96];
+      std::snprintf(threshold, sizeof threshold, "correct: within %.3g m and %.3g deg", scene.params.correct_position_m,
+                    rad_to_deg(scene.params.correct_angle_rad));
+      fig.legend({LegendEntry::Kind::Line, kGreen, 2, "correct re-localisation (" + std::to_string(correct) + ")"});
+      fig.legend({LegendEntry::Kind::Line, kRed, 2, "incorrect re-localisation (" + std::to_string(incorrect) + ")"});
+      fig.legend({LegendEntry::Kind::Dot, kBlack, 4, "robot at the event (ground truth)"});
+      fig.legend({LegendEntry::Kind::Ring, kBlack, 4, "where the target was created (ground truth)"});
+      fig.legend({LegendEntry::Kind::Note, kBlack, 0, threshold});
+    } else {
+      // Without truth: the jump each re-localisation made in the map, from the estimate before it to
+      // the target experience. A long jump is a loop closure to read against the scene.
+      std::size_t n = 0;
+      for (const ExperienceEvent& e : relocs) {
+        const std::optional<Pose2> before = pose_before(est, e.utime);
+        const MapExperience* target = input.map.find(e.to_id);
+        if (!before || target == nullptr) continue;
+        const Xy a = at(compose(pl.T_plot_map, *before));
+        const Xy b = at(compose(pl.T_plot_map, target->pose));
+        panel.polyline({a, b}, kMagenta, 2, "relocalisation");
+        panel.marker(a, 3, kMagenta, true, "relocalisation-from");
+        panel.marker(b, 7, kMagenta, false, "relocalisation-target");
+        ++n;
+      }
+      fig.legend({LegendEntry::Kind::Line, kMagenta, 2, "re-localisation: the jump in the map (" + std::to_string(n) + ")"});
+      fig.legend({LegendEntry::Kind::Dot, kMagenta, 3, "estimate just before the event"});
+      fig.legend({LegendEntry::Kind::Ring, kMagenta, 7, "the target experience (final map)"});
+    }
+    keep(write(fig, base + "_relocalisations"));
+  }
+  return written;
+}
+
+std::vector<std::string> plot_comparison(const std::string& dir, const std::vector<PlotRun>& runs,
+                                         const PlotScene& scene) {
+  Figure fig("experience maps side by side");
+  bool any_truth = false;
+  for (const PlotRun& run : runs) {
+    const Placement pl = place(*run.input, *run.result, scene);
+    FigurePanel& panel = fig.add_panel(run.label);
+    draw_scene(panel, *run.input, scene, pl);
+    draw_experience_map(panel, *run.input, pl.T_plot_map);
+    any_truth = any_truth || has_truth(*run.input);
+  }
+  world_legend(fig, scene);
+  if (any_truth) fig.legend({LegendEntry::Kind::Line, kGrey, 2, "ground truth"});
+  map_legend(fig);
+  fig.share_axes(true);
+  return write(fig, (std::filesystem::path(dir) / "comparison").string());
 }
 
 }  // namespace whiskeye::eval

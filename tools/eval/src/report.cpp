@@ -22,6 +22,9 @@ std::string fmt(const char* format, double v) {
   return buf;
 }
 
+// What a cell that needs ground truth says in a run without it.
+const char* const kNoTruth = "n/a — no ground truth";
+
 std::string opt(const std::optional<double>& v, const char* format = "%.4f") {
   return v ? fmt(format, *v) : std::string("n/a");
 }
@@ -75,7 +78,9 @@ nlohmann::json lem_json(const std::optional<LemResult>& lem) {
           {"orientation_rad", measured ? stats_json(lem->orientation_rad) : nlohmann::json(nullptr)}};
 }
 
-nlohmann::json exm_json(const ExmResult& x) {
+// `judged`: false for a run without ground truth, whose fields that judge correctness are null.
+nlohmann::json exm_json(const ExmResult& x, bool judged) {
+  const auto judging = [judged](nlohmann::json v) { return judged ? std::move(v) : nlohmann::json(nullptr); };
   nlohmann::json relocs = nlohmann::json::array();
   for (const Relocalisation& r : x.relocalisations) {
     relocs.push_back({{"utime", r.utime},
@@ -96,15 +101,15 @@ nlohmann::json exm_json(const ExmResult& x) {
           {"base_set_size", x.base_set_size},
           {"experience_events_after_base", x.experience_events_after_base},
           {"relocalisations_after_base", x.relocalisations_after_base},
-          {"correct_after_base", x.correct_after_base},
+          {"correct_after_base", judging(x.correct_after_base)},
           {"relocalisations_total", x.relocalisations_total},
-          {"correct_total", x.correct_total},
+          {"correct_total", judging(x.correct_total)},
           {"experiences_created", x.experiences_created},
-          {"valid_experiences", x.valid_experiences},
-          {"events_outside_gt", x.events_outside_gt},
+          {"valid_experiences", judging(x.valid_experiences)},
+          {"events_outside_gt", judging(x.events_outside_gt)},
           {"relocalise_unknown_target", x.relocalise_unknown_target},
           {"relocalise_to_current", x.relocalise_to_current},
-          {"relocalisations", relocs}};
+          {"relocalisations", judging(relocs)}};
 }
 
 nlohmann::json enm_json(const EnmResult& e) {
@@ -124,6 +129,10 @@ std::string format_table(const std::vector<RunReport>& runs, const std::vector<P
   out << std::string(112, '-') << "\n";
   for (const RunReport& r : runs) {
     const EvalResult& e = r.result;
+    if (!e.ground_truth) {
+      out << row({r.label, "n/a", opt(e.exm.arr), "n/a", kNoTruth, kNoTruth});
+      continue;
+    }
     out << row({r.label, opt(e.enm.enm), opt(e.exm.arr), opt(e.exm.arcr), lem_cell(e.lem, true),
                 lem_cell(e.lem, false)});
   }
@@ -148,6 +157,22 @@ std::string format_table(const std::vector<RunReport>& runs, const std::vector<P
       out << "\n";
     }
     if (!r.log_damage.empty()) out << "  damaged log: " << r.log_damage << "\n";
+    if (!e.ground_truth) {
+      const ExmResult& x = e.exm;
+      out << "  no ground truth (no GROUND_TRUTH in the log): EnM, ARCR, LEM and the valid fraction are "
+             "unavailable; events counted, none judged\n";
+      out << "  ExM counts: " << x.experiences_created << " new experiences, " << x.relocalisations_total
+          << " re-localisations (correctness unknown)";
+      if (x.base_end_found) {
+        out << "; after a base set of " << fmt("%.3f", x.base_end_s) << " s (" << x.base_set_size
+            << " experiences): " << x.experience_events_after_base << " experience events, "
+            << x.relocalisations_after_base << " re-localisations, ARR " << opt(x.arr);
+      } else {
+        out << "; ARR needs --base-duration without ground truth";
+      }
+      out << "\n";
+      continue;
+    }
     if (e.alignment.valid) {
       const Pose2& t = e.alignment.T_world_map;
       out << "  alignment (first experience onto ground truth): T_world_map = (" << fmt("%.4f", t.x) << ", "
@@ -214,8 +239,16 @@ nlohmann::json to_json(const std::vector<RunReport>& runs, const EvalParams& par
                          {"best_fit_alignment", alignment_json(e.best_fit)},
                          {"lem", lem_json(e.lem)},
                          {"lem_best_fit_alignment", lem_json(e.lem_best_fit)},
-                         {"exm", exm_json(e.exm)},
-                         {"enm", enm_json(e.enm)}});
+                         {"ground_truth", e.ground_truth},
+                         {"unavailable", e.ground_truth ? nlohmann::json(nullptr)
+                                                        : nlohmann::json("no ground truth: no GROUND_TRUTH in the log")},
+                         {"exm", exm_json(e.exm, e.ground_truth)},
+                         {"enm", e.ground_truth ? enm_json(e.enm)
+                                                : nlohmann::json({{"enm", nullptr},
+                                                                  {"translation_m2", nullptr},
+                                                                  {"rotation_rad2", nullptr},
+                                                                  {"links_used", nullptr},
+                                                                  {"links_excluded", nullptr}})}});
   }
   j["paper_rows"] = nlohmann::json::array();
   for (const PaperRow& p : paper) {

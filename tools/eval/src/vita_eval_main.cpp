@@ -1,10 +1,14 @@
 // vita-eval: the paper's Table I metrics (LEM, ExM, EnM; ../shared/design/metrics.md) from one or
-// more slamd output logs that carry GROUND_TRUTH. Prints the table, optionally writes JSON and PNGs.
+// more slamd output logs. Prints the table, optionally writes JSON, plots (PNG and SVG, optionally
+// over a vita-sim world) and per-cycle traces. A log without GROUND_TRUTH (a real robot's run) is
+// drawn and counted; what needs truth is reported as unavailable.
 #include "log_input.h"
 #include "plots.h"
 #include "report.h"
 
+#include "whiskeye/common/cli.h"
 #include "whiskeye/eval/metrics.h"
+#include "whiskeye/sim/world.h"
 
 #include <CLI/CLI.hpp>
 
@@ -28,6 +32,15 @@ bool parse_centre(const std::string& text, double& x, double& y) {
   return static_cast<bool>(in >> x >> comma >> y) && comma == ',' && (in >> std::ws).eof();
 }
 
+bool parse_start(const std::string& text, Pose2& pose) {
+  std::istringstream in(text);
+  char c1 = 0, c2 = 0;
+  double deg = 0.0;
+  if (!(in >> pose.x >> c1 >> pose.y >> c2 >> deg) || c1 != ',' || c2 != ',' || !(in >> std::ws).eof()) return false;
+  pose.theta = wrap_angle(deg_to_rad(deg));
+  return true;
+}
+
 // Writes `text` to `path`; throws naming the file if it cannot.
 void write_text(const std::string& path, const std::string& text) {
   std::ofstream out(path);
@@ -36,12 +49,17 @@ void write_text(const std::string& path, const std::string& text) {
 }
 
 int run(int argc, char** argv) {
-  CLI::App app{"vita-eval: LEM, ExM (ARR, ARCR, valid fraction) and EnM of slamd output logs against "
-               "their GROUND_TRUTH, as in the paper's Table I (see docs/evaluation.md)"};
+  cli::Program program("vita-eval",
+                       "vita-eval: LEM, ExM (ARR, ARCR, valid fraction) and EnM of slamd output logs against "
+                       "their GROUND_TRUTH, as in the paper's Table I, and plots of any run, with or without ground "
+                       "truth (see docs/evaluation.md)");
+  CLI::App& app = program.app();
   std::vector<std::string> inputs;
   std::string json_path;
   std::string plots_dir;
   std::string trace_dir;
+  std::string world_path;
+  std::string start_text;
   std::vector<std::string> paper_names;
   std::string centre = "0,0";
   double position_threshold_m = 0.08;
@@ -49,7 +67,14 @@ int run(int argc, char** argv) {
   double base_duration_s = -1.0;
   app.add_option("--input", inputs, "slamd output log (repeat for a multi-row table)")->required();
   app.add_option("--json", json_path, "write all results as JSON to this file");
-  app.add_option("--plots", plots_dir, "write PNG plots into this directory (created if missing)");
+  app.add_option("--plots", plots_dir,
+                 "write plots (PNG and SVG) into this directory (created if missing): per run the experience map, "
+                 "the pose trail and the re-localisations; with several runs the maps side by side");
+  app.add_option("--world", world_path,
+                 "a vita-sim world file (config/worlds/*.yaml): its walls and landmarks drawn under the plots");
+  app.add_option("--start", start_text,
+                 "X,Y,THETA_DEG: where the first pose lies in the world, for a run without ground truth "
+                 "(default with --world: the world's start pose)");
   app.add_option("--trace", trace_dir,
                  "write a CSV per run into this directory: every cycle's event, its re-localisation's error against "
                  "ground truth and its template match (created if missing)");
@@ -66,88 +91,101 @@ int run(int argc, char** argv) {
   app.add_option("--angle-threshold-deg", angle_threshold_deg, "ExM: and within this heading (deg)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e);
-  }
-
-  EvalParams params;
-  params.correct_position_m = position_threshold_m;
-  params.correct_angle_rad = deg_to_rad(angle_threshold_deg);
-  if (!parse_centre(centre, params.centre_x, params.centre_y)) {
-    std::cerr << "vita-eval: --centre must be X,Y in metres, got '" << centre << "'\n";
-    return 2;
-  }
-  if (base_duration_s > 0) params.base_duration_s = base_duration_s;
-
-  std::vector<RunReport> reports;
-  std::vector<EvalInput> loaded_inputs;
-  std::set<std::string> labels;
-  for (const std::string& path : inputs) {
-    LoadedRun run = load_run(path);
-    RunReport r;
-    r.label = run.mode;
-    for (int n = 2; labels.count(r.label) > 0; ++n) r.label = run.mode + "#" + std::to_string(n);
-    labels.insert(r.label);
-    r.path = path;
-    r.mode = run.mode;
-    r.pose_samples = run.input.estimate.size();
-    r.events = run.input.events.size();
-    r.map_experiences = run.input.map.experiences.size();
-    r.map_links = run.input.map.links.size();
-    r.ground_truth_samples = run.input.ground_truth.size();
-    r.decode_errors = run.decode_errors;
-    r.log_damage = run.log_damage;
-    r.faults = run.input.faults;
-    if (!r.log_damage.empty()) std::cerr << "vita-eval: " << r.log_damage << " (evaluated what could be read)\n";
-    r.result = evaluate(run.input, params);
-    for (const auto& [ch, n] : run.decode_errors) {
-      std::cerr << "vita-eval: " << path << ": " << n << " undecodable messages on " << ch << "\n";
+  return program.run(argc, argv, [&] {
+    EvalParams params;
+    params.correct_position_m = position_threshold_m;
+    params.correct_angle_rad = deg_to_rad(angle_threshold_deg);
+    if (!parse_centre(centre, params.centre_x, params.centre_y)) {
+      std::cerr << "vita-eval: --centre must be X,Y in metres, got '" << centre << "'\n";
+      return 2;
     }
-    if (!r.result.alignment.valid) std::cerr << "vita-eval: " << path << ": " << r.result.alignment.reason << "\n";
-    if (!r.result.exm.base_end_found) {
-      std::cerr << "vita-eval: " << path
-                << ": ground truth never completes a revolution around the centre; every experience is in "
-                   "the base set (use --centre or --base-duration)\n";
+    if (base_duration_s > 0) params.base_duration_s = base_duration_s;
+    PlotScene scene;
+    scene.params = params;
+    Pose2 start;
+    if (!start_text.empty()) {
+      if (!parse_start(start_text, start)) {
+        std::cerr << "vita-eval: --start must be X,Y,THETA_DEG (m, m, degrees), got '" << start_text << "'\n";
+        return 2;
+      }
+      scene.start = start;
     }
-    reports.push_back(std::move(r));
-    loaded_inputs.push_back(std::move(run.input));
-  }
-
-  std::vector<PaperRow> paper;
-  for (const std::string& name : paper_names) paper.push_back(*paper_row(name));
-
-  std::cout << format_table(reports, paper);
-
-  if (!json_path.empty()) write_text(json_path, to_json(reports, params, paper).dump(2) + "\n");
-  if (!plots_dir.empty()) {
-    std::filesystem::create_directories(plots_dir);
-    for (std::size_t i = 0; i < reports.size(); ++i) {
-      const std::string base = (std::filesystem::path(plots_dir) / reports[i].label).string();
-      plot_experience_map(base + "_experience_map.png", reports[i].label + ": experience map (aligned) over ground truth",
-                          loaded_inputs[i], reports[i].result);
-      plot_relocalisations(base + "_relocalisations.png", reports[i].label + ": re-localisations",
-                           loaded_inputs[i], reports[i].result, params);
+    std::optional<sim::World> world;
+    if (!world_path.empty()) {
+      try {
+        world = sim::load_world_file(world_path);
+      } catch (const std::exception& e) {
+        std::cerr << "vita-eval: --world " << world_path << ": " << e.what() << "\n";
+        return 2;
+      }
+      scene.world = &*world;
     }
-  }
-  if (!trace_dir.empty()) {
-    std::filesystem::create_directories(trace_dir);
-    for (std::size_t i = 0; i < reports.size(); ++i) {
-      write_text((std::filesystem::path(trace_dir) / (reports[i].label + "_trace.csv")).string(),
-                 format_trace_csv(trace_cycles(loaded_inputs[i], reports[i].result.exm)));
+
+    std::vector<RunReport> reports;
+    std::vector<EvalInput> loaded_inputs;
+    std::set<std::string> labels;
+    for (const std::string& path : inputs) {
+      LoadedRun run = load_run(path);
+      RunReport r;
+      r.label = run.mode;
+      for (int n = 2; labels.count(r.label) > 0; ++n) r.label = run.mode + "#" + std::to_string(n);
+      labels.insert(r.label);
+      r.path = path;
+      r.mode = run.mode;
+      r.pose_samples = run.input.estimate.size();
+      r.events = run.input.events.size();
+      r.map_experiences = run.input.map.experiences.size();
+      r.map_links = run.input.map.links.size();
+      r.ground_truth_samples = run.input.ground_truth.size();
+      r.decode_errors = run.decode_errors;
+      r.log_damage = run.log_damage;
+      r.faults = run.input.faults;
+      if (!r.log_damage.empty()) std::cerr << "vita-eval: " << r.log_damage << " (evaluated what could be read)\n";
+      r.result = evaluate(run.input, params);
+      for (const auto& [ch, n] : run.decode_errors) {
+        std::cerr << "vita-eval: " << path << ": " << n << " undecodable messages on " << ch << "\n";
+      }
+      if (!r.result.ground_truth) {
+        std::cerr << "vita-eval: " << path
+                  << ": no GROUND_TRUTH: the metrics that need it (EnM, ARCR, LEM, valid fraction) are unavailable\n";
+      } else if (!r.result.alignment.valid) {
+        std::cerr << "vita-eval: " << path << ": " << r.result.alignment.reason << "\n";
+      }
+      if (r.result.ground_truth && !r.result.exm.base_end_found) {
+        std::cerr << "vita-eval: " << path
+                  << ": ground truth never completes a revolution around the centre; every experience is in "
+                     "the base set (use --centre or --base-duration)\n";
+      }
+      reports.push_back(std::move(r));
+      loaded_inputs.push_back(std::move(run.input));
     }
-  }
-  return 0;
+
+    std::vector<PaperRow> paper;
+    for (const std::string& name : paper_names) paper.push_back(*paper_row(name));
+
+    std::cout << format_table(reports, paper);
+
+    if (!json_path.empty()) write_text(json_path, to_json(reports, params, paper).dump(2) + "\n");
+    if (!plots_dir.empty()) {
+      std::filesystem::create_directories(plots_dir);
+      std::vector<PlotRun> runs;
+      for (std::size_t i = 0; i < reports.size(); ++i) {
+        runs.push_back({reports[i].label, &loaded_inputs[i], &reports[i].result});
+        plot_run(plots_dir, runs.back(), scene);
+      }
+      if (runs.size() > 1) plot_comparison(plots_dir, runs, scene);
+    }
+    if (!trace_dir.empty()) {
+      std::filesystem::create_directories(trace_dir);
+      for (std::size_t i = 0; i < reports.size(); ++i) {
+        write_text((std::filesystem::path(trace_dir) / (plot_stem(reports[i].label) + "_trace.csv")).string(),
+                   format_trace_csv(trace_cycles(loaded_inputs[i], reports[i].result.exm)));
+      }
+    }
+    return 0;
+  });
 }
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& e) {
-    std::cerr << "vita-eval: " << e.what() << "\n";
-    return 1;
-  }
-}
+int main(int argc, char** argv) { return run(argc, argv); }

@@ -60,17 +60,11 @@ void LogCheck::add(std::string_view channel, int64_t utime, std::span<const uint
     s.sequenced = false;
     return;
   }
-  if (c.last_seq) {
-    if (*seq <= *c.last_seq) {
-      ++s.restarts;
-    } else if (*seq > *c.last_seq + 1) {
-      const int64_t missing = *seq - *c.last_seq - 1;
-      s.lost += missing;
-      ++s.loss_places;
-      s.longest_loss = std::max(s.longest_loss, missing);
-    }
-  }
-  c.last_seq = seq;
+  c.gaps.add(*seq);
+  s.lost = c.gaps.lost();
+  s.loss_places = c.gaps.places();
+  s.longest_loss = c.gaps.longest();
+  s.restarts = c.gaps.restarts();
 }
 
 std::vector<ChannelStats> LogCheck::channels() const {

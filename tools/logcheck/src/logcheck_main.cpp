@@ -2,6 +2,7 @@
 // the messages carry sequence numbers — how many never reached the log. Exit 1 when a channel lost
 // more than --max-loss of its messages or the file is damaged; 2 on a bad command line.
 #include "whiskeye/common/bus.h"
+#include "whiskeye/common/cli.h"
 #include "whiskeye/logcheck/log_check.h"
 
 #include <CLI/CLI.hpp>
@@ -9,25 +10,12 @@
 #include <cstdio>
 #include <string>
 
-int main(int argc, char** argv) {
+namespace {
+
+// Reads `file` and prints the table: 0, or 1 when a channel lost more than `max_loss` or the file is
+// damaged or unreadable.
+int check_log(const std::string& file, double max_loss, double gap_factor) {
   using namespace whiskeye;
-  CLI::App app{"whiskeye-logcheck: per channel, what an LCM log holds and what it lost (sequence gaps, pauses)"};
-  std::string file;
-  double max_loss = 0.0;
-  double gap_factor = 3.0;
-  app.add_option("FILE", file, "LCM log (lcm-logger's)")->required();
-  app.add_option("--max-loss", max_loss, "fraction of a channel's messages that may be lost before exit 1 (default 0)")
-      ->check(CLI::Range(0.0, 1.0));
-  app.add_option("--gap-factor", gap_factor, "a pause is an interval longer than this × the channel's median interval")
-      ->check(CLI::PositiveNumber);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    std::fprintf(stderr, "whiskeye-logcheck: %s\n", e.what());
-    return 2;
-  }
   logcheck::LogCheck check(gap_factor);
   std::string damage;
   try {
@@ -70,4 +58,22 @@ int main(int argc, char** argv) {
     std::printf("whiskeye-logcheck: %s: lost %s\n", file.c_str(), lost_list.c_str());
   }
   return over || !damage.empty() ? 1 : 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace whiskeye;
+  cli::Program program("whiskeye-logcheck",
+                       "whiskeye-logcheck: per channel, what an LCM log holds and what it lost (sequence gaps, pauses)");
+  CLI::App& app = program.app();
+  std::string file;
+  double max_loss = 0.0;
+  double gap_factor = 3.0;
+  app.add_option("FILE", file, "LCM log (lcm-logger's)")->required();
+  app.add_option("--max-loss", max_loss, "fraction of a channel's messages that may be lost before exit 1 (default 0)")
+      ->check(CLI::Range(0.0, 1.0));
+  app.add_option("--gap-factor", gap_factor, "a pause is an interval longer than this × the channel's median interval")
+      ->check(CLI::PositiveNumber);
+  return program.run(argc, argv, [&] { return check_log(file, max_loss, gap_factor); });
 }

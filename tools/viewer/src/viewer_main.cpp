@@ -6,6 +6,7 @@
 // it cannot start (LCM, the address, the log).
 #include "whiskeye/common/bus.h"
 #include "whiskeye/common/channels.h"
+#include "whiskeye/common/cli.h"
 #include "whiskeye/common/clock.h"
 #include "whiskeye/common/service.h"
 #include "whiskeye/viewer/assets.h"
@@ -316,11 +317,13 @@ class Viewer {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"whiskeye-viewer: a web page of the robot's map, pose, camera, whiskers, events and daemons' status, "
-               "live over LCM or from a recorded log (docs/viewer.md)"};
+  cli::Program program("whiskeye-viewer",
+                       "whiskeye-viewer: a web page of the robot's map, pose, camera, whiskers, events and daemons' "
+                       "status, live over LCM or from a recorded log (docs/viewer.md)");
+  CLI::App& app = program.app();
   Options o;
   app.add_option("--listen", o.listen, "ADDR:PORT to serve the page on (default 127.0.0.1:8088: this host only; port 0: any free one)");
-  app.add_option("--lcm-url", o.lcm_url, "LCM URL (default: $LCM_DEFAULT_URL or LCM's default)");
+  program.add_lcm_url(o.lcm_url);
   app.add_option("--log", o.log, "serve this recorded LCM log with a time slider instead of live LCM traffic")
       ->check(CLI::ExistingFile);
   app.add_option("--max-clients", o.max_clients, "live pages served at once; more are refused (default 8)")
@@ -329,17 +332,10 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 10000));
   app.add_option("--update-ms", o.update_ms, "how often pages are sent what changed, ms (default 100)")
       ->check(CLI::Range(20, 10000));
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    std::fprintf(stderr, "whiskeye-viewer: %s\n", e.what());
-    return 2;
-  }
-  if (!o.log.empty() && !o.lcm_url.empty()) {
-    std::fprintf(stderr, "whiskeye-viewer: --log and --lcm-url exclude each other (a log is read, not received)\n");
-    return 2;
-  }
-  return Viewer(o).run();
+  return program.run(argc, argv, [&] {
+    if (!o.log.empty() && !o.lcm_url.empty()) {
+      throw cli::UsageError("--log and --lcm-url exclude each other (a log is read, not received)");
+    }
+    return Viewer(o).run();
+  });
 }

@@ -242,7 +242,8 @@ void ViewerState::on_slam_status(const slam_status_t& m, int64_t recv_utime) {
                 {"checkpoint_errors", i64(m.checkpoint_errors)},
                 {"checkpoints_superseded", i64(m.checkpoints_superseded)},
                 {"lcm_publish_errors", i64(m.lcm_publish_errors)},
-                {"lcm_receive_drops", i64(m.lcm_receive_drops)}};
+                {"lcm_receive_drops", i64(m.lcm_receive_drops)},
+                {"input_gaps", i64(m.input_gaps)}};
   d.stats = {{"latency_last_ms", m.latency_last_ms},
              {"latency_p50_ms", m.latency_p50_ms},
              {"latency_p99_ms", m.latency_p99_ms},

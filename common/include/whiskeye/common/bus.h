@@ -176,6 +176,14 @@ class LcmBus : public Bus {
   void publish_raw(const std::string& channel, std::span<const uint8_t> data) override;
   void subscribe_raw(const std::string& channel, RawHandler handler) override;
   int64_t publish_errors() const override { return publish_errors_.load(); }
+  // LCM's receive thread holds each message for the subscriptions it matches until handle_timeout()
+  // hands it over; a subscription already holding its capacity of unhandled messages loses every
+  // further one without a trace (no counter, no log line, not even with LCM_DBG). LCM's default
+  // capacity, 30, is overrun by any burst the loop does not drain as fast as it arrives: a sender
+  // catching up after a pause, a busy cycle, a replay at speed. Sets the capacity (messages) of this
+  // bus's subscriptions to `channel` (as given to subscribe_raw), those made and those to come;
+  // 0: no limit (memory then grows for as long as the loop is behind).
+  void set_queue_capacity(const std::string& channel, int messages);
   // Dispatches at most one message; 0 on timeout, >0 if handled, <0 on error.
   int handle_timeout(int timeout_ms);
   int fileno();
@@ -184,6 +192,7 @@ class LcmBus : public Bus {
   struct Adapter;
   std::unique_ptr<lcm::LCM> lcm_;
   std::vector<std::unique_ptr<Adapter>> adapters_;
+  std::map<std::string, int> queue_capacity_;  // by channel, for subscriptions made later
   std::atomic<int64_t> publish_errors_{0};
 };
 

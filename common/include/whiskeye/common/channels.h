@@ -22,4 +22,29 @@ inline constexpr const char* kVitaMap = "VITA_MAP";
 inline constexpr const char* kDriverStatus = "DRIVER_STATUS";
 inline constexpr const char* kSlamStatus = "SLAM_STATUS";
 
+// The LCM type (package whiskeye) each channel carries: docs/lcm-channels.md's table. The Python
+// package's `whiskeye.channels` is generated from this file at build time (python/CMakeLists.txt),
+// which fails when a channel above has no entry here or an entry names no .lcm type.
+struct ChannelType {
+  const char* channel;
+  const char* type;
+};
+inline constexpr ChannelType kChannelTypes[] = {
+    {kWhiskerSample, "whisker_sample_t"},
+    {kRcpState, "rcp_state_t"},
+    {kWhiskCycle, "whisk_cycle_t"},
+    {kCamera, "image_t"},
+    {kOdometry, "odometry_t"},
+    {kBaseCmd, "base_cmd_t"},
+    {kGroundTruth, "pose2d_t"},
+    {kSimContactTruth, "contact_truth_t"},
+    {kSimFault, "sim_fault_t"},
+    {kVitaPose, "vita_pose_t"},
+    {kVitaEvent, "vita_event_t"},
+    {kVitaMatch, "template_match_t"},
+    {kVitaMap, "vita_map_t"},
+    {kDriverStatus, "driver_status_t"},
+    {kSlamStatus, "slam_status_t"},
+};
+
 }  // namespace whiskeye::channels

@@ -23,7 +23,8 @@ std::vector<std::filesystem::path> config_search_dirs(const std::filesystem::pat
                                                       const std::filesystem::path& source_dir);
 
 // `name` (e.g. "robot.yaml") in the first of `dirs` that holds a regular file of that name. None:
-// std::runtime_error "no default <name>: tried <dir>/<name>, ...; give one with <option>".
+// ParamError (a configuration error, exit 2) "no default <name>: tried <dir>/<name>, ...; give one with
+// <option>".
 std::filesystem::path find_config(std::string_view name, const std::vector<std::filesystem::path>& dirs,
                                   std::string_view option);
 

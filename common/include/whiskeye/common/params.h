@@ -8,7 +8,9 @@
 // key path. A key given twice in one map is refused at parse time, naming both lines (yaml-cpp would
 // silently keep the first, so an override further down a file was ignored).
 // dump() lists every parameter asked for, with its value and whether it came from the file, so a
-// daemon can print exactly what it runs with.
+// daemon can print exactly what it runs with. A command-line option that overrides a key goes in
+// through set_override() before the loader runs: the loader checks it like a value from the file,
+// and dump() shows the value in use, tagged with the option.
 //
 // yaml-cpp stays behind this header (only params.cpp includes it), so the algorithm libraries that
 // load their parameters here never see YAML. get()/require() are instantiated in params.cpp for the
@@ -47,6 +49,11 @@ class ParamNode {
   std::vector<ParamNode> list(const std::string& key) const;
   bool has(const std::string& key) const;
 
+  // The value of `path` (dotted, from the root: "can.interface") is `value`, given by `option`
+  // ("--interface"), whatever the file says. Read by get() as a scalar from the file would be, so the
+  // loader's type and range checks apply; a failing check names the option. Call before loading.
+  void set_override(const std::string& path, const std::string& value, const std::string& option);
+
   // Optional scalar or list-of-scalars parameter: keeps `value` when the key is absent.
   template <typename T>
   void get(const std::string& key, T& value) const;
@@ -57,12 +64,17 @@ class ParamNode {
   template <typename T>
   void require(const std::string& key, T& value) const;
 
-  // Throws ParamError naming the first key in the document that no get/section/list asked for.
+  // Throws ParamError naming the first key in the document that no get/section/list asked for (and
+  // std::logic_error for an override that no loader read: a program's mistake).
   void check_no_unknown_keys() const;
-  // One line "path: value" per parameter asked for, "  (default)" where the file did not set it.
+  // One line "path: value" per parameter asked for, "  (default)" where the file did not set it,
+  // "  (--option)" where a command-line option did.
   std::string dump() const;
   const std::string& source() const;
   std::string path_of(const std::string& key) const;
+  // Throws ParamError "<source>: '<path of key>' <what>", the source being the file, or the option
+  // that overrides the key: for a loader's own checks of a value it read.
+  [[noreturn]] void fail(const std::string& key, const std::string& what) const;
 
  private:
   struct State;
@@ -70,7 +82,6 @@ class ParamNode {
 
   YAML::Node lookup(const std::string& key) const;
   void mark_leaf(const std::string& key, const std::string& value, bool from_file) const;
-  [[noreturn]] void fail(const std::string& key, const std::string& what) const;
   static std::string describe(const YAML::Node& node);
 
   template <typename T>

@@ -204,6 +204,10 @@ struct EvalInput {
 };
 
 struct EvalResult {
+  // False for a log without GROUND_TRUTH (a real robot's run): then nothing that needs truth is
+  // computed — no alignment, LEM, EnM, correctness (ARCR, valid fraction) — and ExM only counts
+  // events; ARR too with `base_duration_s` (the base set then starts at the first pose or event).
+  bool ground_truth = true;
   Alignment alignment;
   Alignment best_fit;
   std::optional<LemResult> lem;           // with the contract's alignment
@@ -214,13 +218,22 @@ struct EvalResult {
 
 EvalResult evaluate(const EvalInput& input, const EvalParams& params);
 
+// ExM without ground truth: the experience events counted (new experiences, re-localisations, none
+// judged), and ARR when `params.base_duration_s` sets the base set (from `start_utime`); every
+// correctness field stays 0 and ARCR and the valid fraction undefined.
+ExmResult count_exm_without_truth(const std::vector<ExperienceEvent>& events, const ExperienceMap& map,
+                                  const EvalParams& params, int64_t start_utime);
+
+// When a run starts: its first ground-truth sample, else its first pose estimate or event (0 if none).
+int64_t run_start_utime(const EvalInput& input);
+
 // ---- Per-cycle trace ----
 
 // What happened in one whisk cycle, against ground truth: where a run went wrong, and why. One row
 // per VITA_EVENT, in the order compute_exm() takes them.
 struct CycleTrace {
   ExperienceEvent event;
-  double t_s = 0.0;                              // seconds after the first ground-truth sample
+  double t_s = 0.0;                              // seconds after run_start_utime()
   std::optional<Pose2> gt;                       // ground truth at the event (none outside it)
   std::optional<Relocalisation> relocalisation;  // a counted re-localisation: its error, correctness
   std::optional<TemplateMatch> match;            // the cycle's VITA_MATCH (the same cycle number)

@@ -3,6 +3,8 @@
 // under load and says nothing). Pure: events in, statistics out; whiskeye-logcheck reads the file.
 #pragma once
 
+#include "whiskeye/common/sequence_gaps.h"
+
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -45,7 +47,7 @@ class LogCheck {
  private:
   struct Channel {
     ChannelStats stats;
-    std::optional<int64_t> last_seq;
+    SequenceGaps gaps;
     std::vector<int64_t> intervals_us;
   };
   double gap_factor_;

@@ -1,0 +1,72 @@
+// The command-line convention of every WhiskEye program, in one place (docs/deployment.md,
+// "Command-line convention"):
+//   -c/--config FILE   the program's YAML parameters (must exist);
+//   --print-config     the parameters in use, command-line overrides included, then exit 0;
+//   --version          "<program> <version>" (the build's project version and git description);
+//   --lcm-url URL      where the program talks LCM;
+//   -o/--output FILE   where the program writes its one output file;
+//   exit status        0 done, 1 runtime failure, 2 bad command line or configuration, with one line
+//                      "<program>: <reason>" on stderr (command-line errors too).
+// A program builds its options on app(), then hands its body to run(), which parses and maps every
+// error to that status and line.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <functional>
+#include <stdexcept>
+#include <string>
+
+namespace whiskeye::cli {
+
+inline constexpr int kExitOk = 0;       // done
+inline constexpr int kExitFailure = 1;  // failed at run time (a device, the disk, a damaged input)
+inline constexpr int kExitUsage = 2;    // a bad command line or configuration: retrying will not help
+
+// A bad command line found after parsing (a missing option, a bad combination): run() exits 2 with
+// "<program>: <what>".
+class UsageError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// "0.1.0 (0358d50-dirty)": the project version and `git describe --always --dirty` of the source
+// tree at build time; the project version alone when built from a tree without git (a tarball).
+// Generated at build time (cmake/WhiskeyeVersion.cmake).
+const char* version();
+
+class Program {
+ public:
+  // `name` is the program's name on every error line and in --version; --help and --version are
+  // added here.
+  Program(std::string name, const std::string& description);
+  Program(const Program&) = delete;
+  Program& operator=(const Program&) = delete;
+
+  CLI::App& app() { return app_; }
+  const std::string& name() const { return name_; }
+
+  // -c/--config FILE: `what` says what the file holds. A file that does not exist is a usage error.
+  CLI::Option* add_config(std::string& path, const std::string& what);
+  // --print-config: print the parameters in use and exit.
+  CLI::Option* add_print_config(bool& flag);
+  // --lcm-url URL (empty: $LCM_DEFAULT_URL, or LCM's default).
+  CLI::Option* add_lcm_url(std::string& url);
+  // -o/--output FILE: `what` says what is written.
+  CLI::Option* add_output(std::string& path, const std::string& what);
+
+  // Parses argv, then returns body()'s exit status. --help and --version print to stdout and return
+  // 0. A parse error, a CLI::ParseError or UsageError thrown by body, and a ParamError (a bad config)
+  // print one line "<name>: <reason>" to stderr and return 2; any other exception from body the same
+  // line and 1.
+  int run(int argc, char** argv, const std::function<int()>& body);
+
+  // Prints "<name>: <reason>" to stderr, on one line (line breaks in `reason` become "; ").
+  void error(const std::string& reason) const;
+
+ private:
+  std::string name_;
+  CLI::App app_;
+};
+
+}  // namespace whiskeye::cli
