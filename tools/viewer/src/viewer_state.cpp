@@ -203,14 +203,22 @@ void ViewerState::on_camera(Frame frame) {
   bump(kCamera);
 }
 
-void ViewerState::on_driver_status(const driver_status_t& m, int64_t recv_utime) {
-  Daemon& d = daemons_[m.driver];
-  d.kind = "driver";
+// A daemon's card: what every status message says (state, message, its time, when it came).
+template <typename Status>
+ViewerState::Daemon& ViewerState::status_record(const std::string& name, const char* kind, const Status& m,
+                                                int64_t recv_utime) {
+  Daemon& d = daemons_[name];
+  d.kind = kind;
   d.state = m.state;
   d.message = m.message;
   d.utime = m.utime;
   d.recv_utime = recv_utime;
   d.stale = now_utime_ - recv_utime > params_.status_stale_us;
+  return d;
+}
+
+void ViewerState::on_driver_status(const driver_status_t& m, int64_t recv_utime) {
+  Daemon& d = status_record(m.driver, "driver", m, recv_utime);
   d.counters.clear();
   d.stats.clear();
   for (int i = 0; i < m.num_counters; ++i) d.counters.emplace_back(m.counter_names[i], static_cast<double>(m.counter_values[i]));
@@ -219,13 +227,7 @@ void ViewerState::on_driver_status(const driver_status_t& m, int64_t recv_utime)
 }
 
 void ViewerState::on_slam_status(const slam_status_t& m, int64_t recv_utime) {
-  Daemon& d = daemons_["slamd"];
-  d.kind = "slam";
-  d.state = m.state;
-  d.message = m.message;
-  d.utime = m.utime;
-  d.recv_utime = recv_utime;
-  d.stale = now_utime_ - recv_utime > params_.status_stale_us;
+  Daemon& d = status_record("slamd", "slam", m, recv_utime);
   const auto i64 = [](int64_t v) { return static_cast<double>(v); };
   d.counters = {{"cycles", i64(m.cycles)},
                 {"templates", m.num_templates},

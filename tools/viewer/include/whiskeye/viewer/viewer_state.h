@@ -166,6 +166,8 @@ class ViewerState {
     bool stale = false;
   };
   std::map<std::string, Daemon> daemons_;
+  template <typename Status>
+  Daemon& status_record(const std::string& name, const char* kind, const Status& m, int64_t recv_utime);
 
   std::map<std::string, int64_t, std::less<>> messages_;
   int64_t decode_errors_ = 0;
