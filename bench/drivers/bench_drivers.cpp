@@ -10,7 +10,7 @@
 #include <array>
 #include <vector>
 
-#include "whiskerd_core.h"
+#include "whiskeye/whiskerd/whiskerd_core.h"
 #include "whiskeye/drivers/whisker_protocol.h"
 
 using namespace whiskeye;

@@ -1,7 +1,14 @@
+// Strict YAML parameters (see params.h): the only file that includes yaml-cpp.
 #include "whiskeye/common/params.h"
 
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <cstdint>
 #include <map>
 #include <set>
+#include <sstream>
+#include <type_traits>
 
 namespace whiskeye {
 
@@ -43,8 +50,8 @@ struct ParamNode::State {
   std::map<std::string, std::pair<std::string, std::string>> overrides;  // path -> (value, option)
 };
 
-ParamNode::ParamNode(std::shared_ptr<State> state, YAML::Node node, std::string prefix)
-    : state_(std::move(state)), node_(std::move(node)), prefix_(std::move(prefix)) {}
+ParamNode::ParamNode(std::shared_ptr<State> state, const YAML::Node& node, std::string prefix)
+    : state_(std::move(state)), node_(std::make_shared<const YAML::Node>(node)), prefix_(std::move(prefix)) {}
 
 ParamNode ParamNode::from_string(const std::string& yaml, const std::string& source) {
   auto state = std::make_shared<State>();
@@ -92,8 +99,8 @@ YAML::Node ParamNode::lookup(const std::string& key) const {
   if (const auto it = state_->overrides.find(path_of(key)); it != state_->overrides.end()) {
     return YAML::Node(it->second.first);
   }
-  if (!node_ || !node_.IsMap()) return YAML::Node();
-  const YAML::Node& const_node = node_;
+  const YAML::Node& const_node = *node_;  // const: a lookup must not insert the key
+  if (!const_node || !const_node.IsMap()) return YAML::Node();
   return const_node[key];
 }
 
@@ -199,5 +206,103 @@ std::string ParamNode::dump() const {
   for (const auto& line : state_->dump_lines) out += line + "\n";
   return out;
 }
+
+// ---- the templates, and their instantiations for the types the loaders use ----
+
+template <typename T>
+std::string ParamNode::to_text(const T& value) {
+  std::ostringstream out;
+  out.precision(10);
+  if constexpr (std::is_same_v<T, std::string>) {
+    out << '"' << value << '"';
+  } else if constexpr (std::is_same_v<T, bool>) {
+    out << (value ? "true" : "false");
+  } else if constexpr (std::is_arithmetic_v<T>) {
+    out << +value;
+  } else {
+    out << '[';
+    bool first = true;
+    for (const auto& v : value) {
+      out << (first ? "" : ", ") << to_text(v);
+      first = false;
+    }
+    out << ']';
+  }
+  return out.str();
+}
+
+template <typename T>
+bool ParamNode::all_finite(const T& value) {
+  if constexpr (std::is_floating_point_v<T>) {
+    return std::isfinite(value);
+  } else if constexpr (std::is_arithmetic_v<T> || std::is_same_v<T, std::string>) {
+    return true;
+  } else {
+    for (const auto& v : value) {
+      if (!all_finite(v)) return false;
+    }
+    return true;
+  }
+}
+
+template <typename T>
+void ParamNode::get(const std::string& key, T& value) const {
+  const YAML::Node n = lookup(key);
+  if (!n || n.IsNull()) {
+    mark_leaf(key, to_text(value), false);
+    return;
+  }
+  try {
+    value = n.as<T>();
+  } catch (const YAML::Exception&) {
+    fail(key, "has the wrong type: " + describe(n));
+  }
+  if (!all_finite(value)) fail(key, "= " + to_text(value) + " is not a finite number");
+  mark_leaf(key, to_text(value), true);
+}
+
+template <typename T>
+void ParamNode::get(const std::string& key, T& value, T min, T max) const {
+  get(key, value);
+  if (!(value >= min && value <= max)) {
+    fail(key, "= " + to_text(value) + " is out of range [" + to_text(min) + ", " + to_text(max) + "]");
+  }
+}
+
+template <typename T>
+void ParamNode::require(const std::string& key, T& value) const {
+  const YAML::Node n = lookup(key);
+  if (!n || n.IsNull()) fail(key, "is required but missing");
+  get(key, value);
+}
+
+// The types a loader may read (params.h). Each line instantiates get(), and for arithmetic types
+// get() with a range; require() for each.
+#define WHISKEYE_PARAM_TYPE(T)                                                         \
+  template void ParamNode::get<T>(const std::string&, T&) const;                       \
+  template void ParamNode::require<T>(const std::string&, T&) const;
+#define WHISKEYE_PARAM_RANGE_TYPE(T) \
+  WHISKEYE_PARAM_TYPE(T)             \
+  template void ParamNode::get<T>(const std::string&, T&, T, T) const;
+
+WHISKEYE_PARAM_RANGE_TYPE(int)
+WHISKEYE_PARAM_RANGE_TYPE(unsigned)
+WHISKEYE_PARAM_RANGE_TYPE(long)
+WHISKEYE_PARAM_RANGE_TYPE(unsigned long)
+WHISKEYE_PARAM_RANGE_TYPE(long long)
+WHISKEYE_PARAM_RANGE_TYPE(unsigned long long)
+WHISKEYE_PARAM_RANGE_TYPE(float)
+WHISKEYE_PARAM_RANGE_TYPE(double)
+WHISKEYE_PARAM_TYPE(bool)
+WHISKEYE_PARAM_TYPE(std::string)
+WHISKEYE_PARAM_TYPE(std::vector<int>)
+WHISKEYE_PARAM_TYPE(std::vector<float>)
+WHISKEYE_PARAM_TYPE(std::vector<double>)
+WHISKEYE_PARAM_TYPE(std::vector<std::string>)
+WHISKEYE_PARAM_TYPE(std::vector<std::vector<int>>)
+WHISKEYE_PARAM_TYPE(std::vector<std::vector<double>>)
+
+#undef WHISKEYE_PARAM_RANGE_TYPE
+#undef WHISKEYE_PARAM_TYPE
 
 }  // namespace whiskeye

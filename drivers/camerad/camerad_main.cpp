@@ -11,6 +11,7 @@
 #include <thread>
 
 #include <whiskeye/common/bus.h>
+#include <whiskeye/common/channels.h>
 #include <whiskeye/common/cli.h>
 #include <whiskeye/common/clock.h>
 #include <whiskeye/common/params.h>
@@ -33,8 +34,8 @@ struct Params {
   double reopen_max_s = 5.0;
   double frame_timeout_s = 2.0;  // no frame for this long while streaming: reopen
   std::string lcm_url;
-  std::string channel = "CAMERA";
-  std::string channel_status = "DRIVER_STATUS";
+  std::string channel = channels::kCamera;
+  std::string channel_status = channels::kDriverStatus;
   double status_period_s = 1.0;
 };
 

@@ -31,9 +31,9 @@
 #include <whiskeye/whisk_cycle_t.hpp>
 #include <whiskeye/whisker_sample_t.hpp>
 
-#include "socket_custody.h"
-#include "spsc_ring.h"
-#include "whiskerd_core.h"
+#include "whiskeye/common/socket_custody.h"
+#include "whiskeye/common/spsc_ring.h"
+#include "whiskeye/whiskerd/whiskerd_core.h"
 #include "whiskeye/drivers/can_socket.h"
 
 namespace {

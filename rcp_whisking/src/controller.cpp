@@ -129,7 +129,7 @@ ControlOutput Controller::step(const WhiskerSample& sample) {
   // A late sample (a stall, a loop that runs without real-time priority) must not license a step:
   // the slew step is bounded by two nominal periods, however long the gap was.
   const double max_step = pp.max_rate * std::min(dt, 2.0 * nominal_period_s_);
-  for (int r = 0; r < kNumRows; ++r) {
+  for (int r = 0; r < kWhiskerRows; ++r) {
     double nominal = pp.theta_rest;
     bool protracting = false;
     int64_t row_cycle = 0;
@@ -139,8 +139,8 @@ ControlOutput Controller::step(const WhiskerSample& sample) {
       protracting = pattern_.protracting(rph);
       nominal = pp.theta_rest + amplitude * (pattern_.theta(rph) - pp.theta_rest);
     }
-    for (int c = 0; c < kNumColumns; ++c) {
-      const int w = r * kNumColumns + c;
+    for (int c = 0; c < kWhiskerColumns; ++c) {
+      const int w = r * kWhiskerColumns + c;
       if (running_ && row_cycle != row_cycle_[w]) {
         // Each whisker's ceiling resets at the start of its own (row) cycle.
         row_cycle_[w] = row_cycle;

@@ -61,7 +61,7 @@ void load(const ParamNode& node, ControllerParams& params) {
   std::vector<double> row_phase(p.row_phase.begin(), p.row_phase.end());
   pat.get("row_phase", row_phase);
   if (row_phase.size() != p.row_phase.size()) {
-    fail(pat, "row_phase", "must list " + std::to_string(kNumRows) + " values (one per row), got " +
+    fail(pat, "row_phase", "must list " + std::to_string(kWhiskerRows) + " values (one per row), got " +
                                std::to_string(row_phase.size()));
   }
   for (std::size_t i = 0; i < row_phase.size(); ++i) {

@@ -22,7 +22,7 @@ void load(const ParamNode& node, PlantParams& p) {
   std::vector<double> by_row(kWhiskEyeRowLength.begin(), kWhiskEyeRowLength.end());
   if (node.has("whisker_length_by_row")) {
     node.get("whisker_length_by_row", by_row);
-    if (by_row.size() != static_cast<std::size_t>(kNumRows)) fail("whisker_length_by_row", "must list 4 lengths (m)");
+    if (by_row.size() != static_cast<std::size_t>(kWhiskerRows)) fail("whisker_length_by_row", "must list 4 lengths (m)");
     for (int w = 0; w < kNumWhiskers; ++w) p.whisker_length[w] = by_row[row_of(w)];
   }
   if (node.has("whisker_length")) {

@@ -7,9 +7,6 @@
 
 namespace whiskeye::sim {
 
-static_assert(kNumBoards == wp::kNumBoards && kWhiskersPerBoard == wp::kWhiskersPerBoard,
-              "the simulator's board layout (world.h) is the protocol's");
-
 namespace {
 
 constexpr char kHex[] = "0123456789ABCDEF";

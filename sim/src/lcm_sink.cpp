@@ -1,6 +1,8 @@
 // SimSink → LCM messages (see lcm_sink.h).
 #include "whiskeye/sim/lcm_sink.h"
 
+#include "whiskeye/common/channels.h"
+
 #include <whiskeye/contact_truth_t.hpp>
 #include <whiskeye/odometry_t.hpp>
 #include <whiskeye/pose2d_t.hpp>
@@ -19,64 +21,21 @@ int16_t to_counts(double v, double scale) {
 }  // namespace
 
 whisker_sample_t to_lcm(const rcp::WhiskerSample& s, const WhiskerHealth& health, double saturation) {
-  whisker_sample_t m;
-  m.utime = s.utime;
-  m.seq = s.seq;
-  m.num_whiskers = rcp::kNumWhiskers;
+  rcp::PerWhisker<int16_t> raw_x, raw_y, raw_theta;
+  rcp::PerWhisker<int8_t> status;
   for (int w = 0; w < rcp::kNumWhiskers; ++w) {
-    m.theta.push_back(static_cast<float>(s.theta[w]));
-    m.deflection_x.push_back(static_cast<float>(s.deflection_x[w]));
-    m.deflection_y.push_back(static_cast<float>(s.deflection_y[w]));
-    m.raw_x.push_back(to_counts(s.deflection_x[w], kRawHallPerUnit));
-    m.raw_y.push_back(to_counts(s.deflection_y[w], kRawHallPerUnit));
-    m.raw_theta.push_back(to_counts(s.theta[w], kRawThetaPerRad));
-    int8_t status = whisker_sample_t::STATUS_OK;
+    raw_x[w] = to_counts(s.deflection_x[w], kRawHallPerUnit);
+    raw_y[w] = to_counts(s.deflection_y[w], kRawHallPerUnit);
+    raw_theta[w] = to_counts(s.theta[w], kRawThetaPerRad);
+    status[w] = whisker_sample_t::STATUS_OK;
     if (std::max(std::abs(s.deflection_x[w]), std::abs(s.deflection_y[w])) >= saturation) {
-      status |= whisker_sample_t::STATUS_SATURATED;
+      status[w] |= whisker_sample_t::STATUS_SATURATED;
     }
-    if (health.stale[w]) status |= whisker_sample_t::STATUS_STALE;
-    if (health.fault[w] || (!s.valid[w] && !health.stale[w])) status |= whisker_sample_t::STATUS_FAULT;
-    m.status.push_back(status);
+    if (health.stale[w]) status[w] |= whisker_sample_t::STATUS_STALE;
+    if (health.fault[w] || (!s.valid[w] && !health.stale[w])) status[w] |= whisker_sample_t::STATUS_FAULT;
   }
-  return m;
-}
-
-rcp_state_t to_lcm(const rcp::ControlOutput& out) {
-  rcp_state_t m;
-  m.utime = out.utime;
-  m.cycle = out.cycle;
-  m.phase = static_cast<int8_t>(out.phase);
-  m.cycle_phase = out.cycle_phase;
-  m.enabled = out.enabled;
-  m.num_whiskers = rcp::kNumWhiskers;
-  for (int w = 0; w < rcp::kNumWhiskers; ++w) {
-    m.contact.push_back(static_cast<float>(out.contact[w]));
-    m.theta_ceiling.push_back(static_cast<float>(out.theta_ceiling[w]));
-    m.theta_command.push_back(static_cast<float>(out.theta_command[w]));
-  }
-  return m;
-}
-
-whisk_cycle_t to_lcm(const rcp::WhiskCycle& c) {
-  whisk_cycle_t m;
-  m.utime = c.utime_end;
-  m.cycle = c.cycle;
-  m.utime_start = c.utime_start;
-  m.utime_end = c.utime_end;
-  m.num_whiskers = rcp::kNumWhiskers;
-  m.num_samples = static_cast<int32_t>(c.samples.size());
-  m.num_missing = c.num_missing;
-  for (const rcp::WhiskCycle::Sample& s : c.samples) {
-    m.sample_utime.push_back(s.utime);
-    m.sample_valid.push_back(s.valid ? 1 : 0);
-    m.phase.push_back(static_cast<int8_t>(s.phase));
-    m.theta.emplace_back(s.theta.begin(), s.theta.end());
-    m.deflection_x.emplace_back(s.deflection_x.begin(), s.deflection_x.end());
-    m.deflection_y.emplace_back(s.deflection_y.begin(), s.deflection_y.end());
-    std::vector<int8_t> contact(rcp::kNumWhiskers);
-    for (int w = 0; w < rcp::kNumWhiskers; ++w) contact[static_cast<std::size_t>(w)] = s.contact[w] ? 1 : 0;
-    m.contact.push_back(std::move(contact));
-  }
+  whisker_sample_t m;
+  rcp::fill_whisker_sample(s.utime, s.seq, s.theta, s.deflection_x, s.deflection_y, raw_x, raw_y, raw_theta, status, m);
   return m;
 }
 
@@ -101,12 +60,12 @@ void LcmSink::put(const std::string& channel, int64_t utime, const T& msg) {
 }
 
 void LcmSink::whisker_sample(const rcp::WhiskerSample& sample, const WhiskerHealth& health) {
-  put("WHISKER_SAMPLE", sample.utime, to_lcm(sample, health, saturation_));
+  put(channels::kWhiskerSample, sample.utime, to_lcm(sample, health, saturation_));
 }
 
-void LcmSink::rcp_state(const rcp::ControlOutput& out) { put("RCP_STATE", out.utime, to_lcm(out)); }
+void LcmSink::rcp_state(const rcp::ControlOutput& out) { put(channels::kRcpState, out.utime, to_lcm(out)); }
 
-void LcmSink::whisk_cycle(const rcp::WhiskCycle& cycle) { put("WHISK_CYCLE", cycle.utime_end, to_lcm(cycle)); }
+void LcmSink::whisk_cycle(const rcp::WhiskCycle& cycle) { put(channels::kWhiskCycle, cycle.utime_end, to_lcm(cycle)); }
 
 void LcmSink::contact_truth(const ContactTruth& truth) {
   contact_truth_t m;
@@ -120,7 +79,7 @@ void LcmSink::contact_truth(const ContactTruth& truth) {
     m.y.push_back(p.p_in_head.y);
     m.z.push_back(p.p_in_head.z);
   }
-  put("SIM_CONTACT_TRUTH", truth.utime, m);
+  put(channels::kSimContactTruth, truth.utime, m);
 }
 
 void LcmSink::odometry(int64_t utime, int64_t seq, const OdometrySample& odom) {
@@ -133,7 +92,7 @@ void LcmSink::odometry(int64_t utime, int64_t seq, const OdometrySample& odom) {
   m.vx = odom.vx;
   m.vy = odom.vy;
   m.omega = odom.omega;
-  put("ODOMETRY", utime, m);
+  put(channels::kOdometry, utime, m);
 }
 
 void LcmSink::ground_truth(int64_t utime, const Pose2& T_world_base) {
@@ -142,7 +101,7 @@ void LcmSink::ground_truth(int64_t utime, const Pose2& T_world_base) {
   m.x = T_world_base.x;
   m.y = T_world_base.y;
   m.theta = T_world_base.theta;
-  put("GROUND_TRUTH", utime, m);
+  put(channels::kGroundTruth, utime, m);
 }
 
 void LcmSink::camera(int64_t utime, int64_t seq, const std::vector<uint8_t>& grey, int width, int height) {
@@ -160,9 +119,9 @@ void LcmSink::camera(int64_t utime, int64_t seq, const std::vector<uint8_t>& gre
     image_.pixelformat = image_t::PIXEL_FORMAT_GREY;
   }
   image_.size = static_cast<int32_t>(image_.data.size());
-  put("CAMERA", utime, image_);
+  put(channels::kCamera, utime, image_);
 }
 
-void LcmSink::fault(const FaultEvent& event) { put("SIM_FAULT", event.utime, to_lcm(event)); }
+void LcmSink::fault(const FaultEvent& event) { put(channels::kSimFault, event.utime, to_lcm(event)); }
 
 }  // namespace whiskeye::sim

@@ -204,7 +204,7 @@ int run_replay(const Loaded& cfg, const Options& o) {
     in.set_time(ev.utime);
     channel.assign(ev.channel);
     // The simulator's truth, for vita-eval (slamd itself never reads it).
-    if (channel == "GROUND_TRUTH" || channel == "SIM_CONTACT_TRUTH" || channel == "SIM_FAULT") {
+    if (channel == channels::kGroundTruth || channel == channels::kSimContactTruth || channel == channels::kSimFault) {
       out.publish_raw(channel, ev.data);
     }
     in.publish_shared(channel, ev.data, ev.owner);  // views into the mapped log, valid while it is
@@ -309,7 +309,7 @@ int run_live(const Loaded& cfg, const Options& o) {
         receive_drops = drops;
         st.lcm_receive_drops = drops;
       }
-      publish(bus, "SLAM_STATUS", st);
+      publish(bus, cfg.node.channels.status, st);
       next_tick = now + 1'000'000;
     }
     service.keep_alive(now);  // sent when due; the loop wakes at least every 100 ms

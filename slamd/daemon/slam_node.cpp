@@ -23,6 +23,15 @@ void load(const ParamNode& node, NodeParams& p) {
   node.get("max_jump_s", p.sync.max_jump_s, 1.0, 86400.0);
   node.get("odometry_buffer", p.sync.odometry_buffer, 100, 10000000);
   node.get("map_period_s", p.map_period_s, 0.0, 3600.0);
+  // The same key names as whiskerd's lcm.channel_* for the same channel (channel_cycle).
+  node.get("channel_cycle", p.channels.cycle);
+  node.get("channel_camera", p.channels.camera);
+  node.get("channel_odometry", p.channels.odometry);
+  node.get("channel_pose", p.channels.pose);
+  node.get("channel_event", p.channels.event);
+  node.get("channel_match", p.channels.match);
+  node.get("channel_map", p.channels.map);
+  node.get("channel_status", p.channels.status);
 }
 
 namespace {
@@ -241,12 +250,12 @@ SlamNode::SlamNode(Bus& in, Bus& out, std::unique_ptr<slam::VitaSlam> slam, cons
     warn("decode " + channel, channel + ": " + reason);
   });
   // Camera frames are the bulk of the input: decoded as views (no pixel copy), see on_camera().
-  in.subscribe_raw("CAMERA", [this](std::span<const uint8_t> data, const MessageInfo& info) { on_camera(data, info); });
-  subscribe<odometry_t>(in, "ODOMETRY", [this](const odometry_t& m) { on_odometry(m); }, decode_errors_);
+  in.subscribe_raw(params_.channels.camera, [this](std::span<const uint8_t> data, const MessageInfo& info) { on_camera(data, info); });
+  subscribe<odometry_t>(in, params_.channels.odometry, [this](const odometry_t& m) { on_odometry(m); }, decode_errors_);
   // The generated decoder sizes its arrays from the message's counts before it checks them against
   // the message's length (a negative count throws, a huge one allocates gigabytes): check them first,
   // against the length, then against the contract.
-  in.subscribe_raw("WHISK_CYCLE", [this](std::span<const uint8_t> data, const MessageInfo& info) {
+  in.subscribe_raw(params_.channels.cycle, [this](std::span<const uint8_t> data, const MessageInfo& info) {
     whisk_cycle_t msg;
     std::string reason = whisk_cycle_size_error(data);
     if (reason.empty()) {
@@ -348,7 +357,7 @@ void SlamNode::on_odometry(const odometry_t& msg) {
   out.template_id = last_template_id_;
   out.mode = mode_code(slam_->params().mode);
   slam_->pose_cells().best(out.pose_cell_x, out.pose_cell_y, out.pose_cell_theta);
-  publish(out_, "VITA_POSE", out);
+  publish(out_, params_.channels.pose, out);
 }
 
 void SlamNode::process(std::vector<SyncedCycle> cycles) {
@@ -407,7 +416,7 @@ void SlamNode::process_one(const SyncedCycle& cycle) {
   ev.to_id = r.event.to_id;
   ev.template_id = r.match.template_id;
   ev.mode = mode;
-  publish(out_, "VITA_EVENT", ev);
+  publish(out_, params_.channels.event, ev);
 
   template_match_t m{};
   m.utime = input.utime;
@@ -423,7 +432,7 @@ void SlamNode::process_one(const SyncedCycle& cycle) {
   m.mode = mode;
   m.visual_used = r.match.visual_used;
   m.tactile_used = r.match.tactile_used;
-  publish(out_, "VITA_MATCH", m);
+  publish(out_, params_.channels.match, m);
 
   if (r.event.type != slam::EventType::SameExperience || r.match.is_new) map_dirty_ = true;
   // (A cycle before the last map's time: the clock was stepped back and followed; not throttled.)
@@ -468,7 +477,7 @@ void SlamNode::publish_map(int64_t utime) {
     msg.links.push_back(x);
   }
   msg.num_links = static_cast<int32_t>(msg.links.size());
-  publish(out_, "VITA_MAP", msg);
+  publish(out_, params_.channels.map, msg);
   last_map_utime_ = utime;
   map_dirty_ = false;
 }
@@ -528,6 +537,6 @@ bool SlamNode::Recent::changed_within(int64_t now_value, int64_t utime, int64_t 
   return changed_at != INT64_MIN && utime - changed_at < window_us;
 }
 
-void SlamNode::publish_status(int64_t utime) { publish(out_, "SLAM_STATUS", status(utime)); }
+void SlamNode::publish_status(int64_t utime) { publish(out_, params_.channels.status, status(utime)); }
 
 }  // namespace whiskeye::slamd

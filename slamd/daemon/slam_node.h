@@ -7,11 +7,14 @@
 //      VITA_EVENT, VITA_MATCH  per processed whisk cycle
 //      VITA_MAP    when the map changed, at most every map_period_s of data time, and on flush()
 //      SLAM_STATUS from publish_status()
+// Each channel's name is configurable (NodeChannels: `channel_*` in slam.yaml's `slamd:` section),
+// the defaults those of common/channels.h.
 #pragma once
 
 #include "cycle_sync.h"
 
 #include "whiskeye/common/bus.h"
+#include "whiskeye/common/channels.h"
 #include "whiskeye/common/log_throttle.h"
 #include "whiskeye/common/params.h"
 #include "whiskeye/common/se2.h"
@@ -29,9 +32,24 @@
 
 namespace whiskeye::slamd {
 
+// The channels the node reads and writes. A renamed channel must be renamed at both ends: e.g.
+// whiskerd.yaml's lcm.channel_cycle and slam.yaml's slamd.channel_cycle (docs/lcm-channels.md).
+struct NodeChannels {
+  std::string cycle = channels::kWhiskCycle;
+  std::string camera = channels::kCamera;
+  std::string odometry = channels::kOdometry;
+  std::string pose = channels::kVitaPose;
+  std::string event = channels::kVitaEvent;
+  std::string match = channels::kVitaMatch;
+  std::string map = channels::kVitaMap;
+  std::string status = channels::kSlamStatus;
+  bool operator==(const NodeChannels&) const = default;
+};
+
 struct NodeParams {
   SyncParams sync;
   double map_period_s = 1.0;  // VITA_MAP throttle, data time
+  NodeChannels channels;
   bool operator==(const NodeParams&) const = default;
 };
 void load(const ParamNode& node, NodeParams& params);

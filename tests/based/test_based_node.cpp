@@ -61,11 +61,11 @@ bool wait_for(const std::function<bool()>& done, double timeout_s = 3.0) {
 // Collects what the node publishes (from its threads).
 struct Collector {
   explicit Collector(MemoryBus& bus) {
-    subscribe<odometry_t>(bus, kOdometryChannel, [this](const odometry_t& m) {
+    subscribe<odometry_t>(bus, channels::kOdometry, [this](const odometry_t& m) {
       std::lock_guard<std::mutex> lock(mutex);
       odometry.push_back(m);
     }, errors);
-    subscribe<driver_status_t>(bus, kDriverStatusChannel, [this](const driver_status_t& m) {
+    subscribe<driver_status_t>(bus, channels::kDriverStatus, [this](const driver_status_t& m) {
       std::lock_guard<std::mutex> lock(mutex);
       status.push_back(m);
     }, errors);
@@ -99,7 +99,7 @@ void send_cmd(MemoryBus& bus, double vx, double vy, double omega) {
   c.vx = vx;
   c.vy = vy;
   c.omega = omega;
-  publish(bus, kBaseCmdChannel, c);
+  publish(bus, channels::kBaseCmd, c);
 }
 
 // Every published sample equals what the base reported for its seq (identity offset, wrapped theta).

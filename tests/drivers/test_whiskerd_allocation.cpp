@@ -7,7 +7,7 @@
 #include <utility>
 
 #include "counting_new.h"
-#include "whiskerd_core.h"
+#include "whiskeye/whiskerd/whiskerd_core.h"
 #include "whiskerd_rig.h"
 
 using namespace whiskeye;

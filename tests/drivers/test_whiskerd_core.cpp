@@ -16,10 +16,10 @@
 #include <thread>
 #include <vector>
 
-#include "latency_stats.h"
-#include "socket_custody.h"
-#include "spsc_ring.h"
-#include "whiskerd_core.h"
+#include "whiskeye/common/latency_stats.h"
+#include "whiskeye/common/socket_custody.h"
+#include "whiskeye/common/spsc_ring.h"
+#include "whiskeye/whiskerd/whiskerd_core.h"
 #include "whiskerd_rig.h"
 
 using namespace whiskeye;

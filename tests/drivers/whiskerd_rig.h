@@ -6,7 +6,7 @@
 #include <cmath>
 #include <cstdint>
 
-#include "whiskerd_core.h"
+#include "whiskeye/whiskerd/whiskerd_core.h"
 
 namespace whiskeye::whiskerd::test {
 

@@ -5,6 +5,7 @@
 #include "whiskeye/common/robot_geometry.h"
 #include "whiskeye/slam/types.h"
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>

@@ -66,7 +66,7 @@ void BasedNode::start() {
   if (started_) return;
   started_ = true;
   if (!circle_) {
-    subscribe<base_cmd_t>(bus_, kBaseCmdChannel, [this](const base_cmd_t& m) {
+    subscribe<base_cmd_t>(bus_, channels::kBaseCmd, [this](const base_cmd_t& m) {
       handle_command(Velocity{m.vx, m.vy, m.omega});
     }, decode_errors_);
   }
@@ -234,7 +234,7 @@ void BasedNode::poll_loop() {
           m.omega = s.omega;
           {
             std::lock_guard<std::mutex> lock(publish_mutex_);
-            publish(bus_, kOdometryChannel, m);
+            publish(bus_, channels::kOdometry, m);
           }
           std::lock_guard<std::mutex> lock(mutex_);
           ++counters_["odometry_published"];
@@ -398,7 +398,7 @@ void BasedNode::status_loop() {
     }
     {
       std::lock_guard<std::mutex> lock(publish_mutex_);
-      publish(bus_, kDriverStatusChannel, s);
+      publish(bus_, channels::kDriverStatus, s);
     }
     log_lines();
   }

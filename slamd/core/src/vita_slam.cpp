@@ -42,19 +42,27 @@ double VitaSlam::tau_of(const Terms& terms) const {
                                       : params_.match.threshold_tactile;
 }
 
+// One cycle in the four steps of vita_slam.h, each a member function below.
 CycleResult VitaSlam::process_cycle(const CycleInput& in) {
   CycleResult out;
   ++stats_.cycles;
+  integrate_odometry(in.odometry);                           // 1. path integration
+  const CycleTemplates templates = make_templates(in, out);  // 2. templates of this cycle
+  PoseCellBest pc = match_or_create(templates, out);         // 3. match or create
+  update_map(in.utime, pc, out);                             // 4. experience map
+  return out;
+}
 
-  // 1. Path integration. The experience map integrates every sample; the pose cells take one step
-  // per `path_integration_period` with the mean velocity of the samples in it, and the remainder is
-  // flushed at the cycle's end so that templates are matched against an up-to-date packet.
+// 1. Path integration. The experience map integrates every sample; the pose cells take one step
+// per `path_integration_period` with the mean velocity of the samples in it, and the remainder is
+// flushed at the cycle's end so that templates are matched against an up-to-date packet.
+void VitaSlam::integrate_odometry(const std::vector<OdometrySample>& odometry) {
   double acc_vx = 0.0, acc_vy = 0.0, acc_omega = 0.0, acc_dt = 0.0;
   auto flush = [&] {
     if (acc_dt > 0.0) cells_.step(acc_vx / acc_dt, acc_vy / acc_dt, acc_omega / acc_dt, acc_dt);
     acc_vx = acc_vy = acc_omega = acc_dt = 0.0;
   };
-  for (const OdometrySample& o : in.odometry) {
+  for (const OdometrySample& o : odometry) {
     // A sample no base can produce is skipped before it takes the clock: the next good one
     // integrates the whole interval (and the pose cells' sub-steps stay bounded).
     const bool usable = std::isfinite(o.vx) && std::isfinite(o.vy) && std::isfinite(o.omega) &&
@@ -95,13 +103,15 @@ CycleResult VitaSlam::process_cycle(const CycleInput& in) {
     if (acc_dt >= params_.path_integration_period) flush();
   }
   flush();
+}
 
-  // 2. Templates of this cycle.
-  std::optional<VisualTemplate> vt;
-  std::optional<TactileTemplate> tt;
+// 2. Templates of this cycle: visual and tactile, as the mode and the inputs allow; a refused
+// frame or an empty whisk cycle is counted and reported in `out`, and the cycle goes on without it.
+VitaSlam::CycleTemplates VitaSlam::make_templates(const CycleInput& in, CycleResult& out) {
+  CycleTemplates t;
   if (uses_visual(params_.mode) && in.image != nullptr) {
     try {
-      vt = make_visual_template(*in.image, params_.visual);
+      t.visual = make_visual_template(*in.image, params_.visual);
     } catch (const InputError& e) {
       ++stats_.bad_images;
       out.image_warning = e.what();
@@ -111,13 +121,13 @@ CycleResult VitaSlam::process_cycle(const CycleInput& in) {
     const bool any_valid =
         std::any_of(in.whisk->samples.begin(), in.whisk->samples.end(), [](const WhiskSample& s) { return s.valid; });
     if (any_valid) {
-      tt = make_tactile_template(*in.whisk, geometry_, params_.tactile);
+      t.tactile = make_tactile_template(*in.whisk, geometry_, params_.tactile);
     } else {
       ++stats_.empty_whisk_cycles;
       out.whisk_warning = "whisk cycle " + std::to_string(in.whisk->cycle) + " has no valid sample";
     }
   }
-  Terms terms{vt.has_value(), tt.has_value()};
+  t.terms = Terms{t.visual.has_value(), t.tactile.has_value()};
   // No contact this cycle, in ViTa mode: the empty touch adds no term (it would be 0 against every
   // contact-free template), so vision decides, with the visual threshold, but only among templates
   // that touched nothing either: where something was touched is not here. (A contact cycle is never
@@ -125,16 +135,21 @@ CycleResult VitaSlam::process_cycle(const CycleInput& in) {
   // Without a usable frame nothing decides. Touch alone (tactile mode) compares empty touches, and
   // is fooled by them, as the paper's. A cycle without touch data (no valid sample) has no tt: vision
   // alone, against every template.
-  if (params_.mode == Mode::Vita && terms.tactile && !tt->has_contact()) {
-    terms.tactile = false;
-    terms.contact_free_only = true;
+  if (params_.mode == Mode::Vita && t.terms.tactile && !t.tactile->has_contact()) {
+    t.terms.tactile = false;
+    t.terms.contact_free_only = true;
   }
-  const Query q{vt ? &*vt : nullptr, tt ? &*tt : nullptr};
-  out.dense = tt.has_value() && tt->has_contact();
+  out.dense = t.tactile.has_value() && t.tactile->has_contact();
+  return t;
+}
 
-  // 3. Match or create.
-  double pcx = 0.0, pcy = 0.0, pct = 0.0;
-  cells_.best(pcx, pcy, pct);
+// 3. Match against every stored template, or create one; injects energy at a matched template's
+// pose cells. Returns the pose cells' best estimate after it.
+VitaSlam::PoseCellBest VitaSlam::match_or_create(const CycleTemplates& t, CycleResult& out) {
+  const Query q{t.visual ? &*t.visual : nullptr, t.tactile ? &*t.tactile : nullptr};
+  const Terms& terms = t.terms;
+  PoseCellBest pc;
+  cells_.best(pc.x, pc.y, pc.theta);
   store_.restore_decay(params_.pose_cells.vt_restore, 0.0);
   MatchResult& m = out.match;
   m.visual_used = terms.visual;
@@ -158,35 +173,38 @@ CycleResult VitaSlam::process_cycle(const CycleInput& in) {
                               std::max(0.0, 30.0 - std::exp(1.2 * store_.decay(b.id))) / 30.0;
         cells_.inject(store_.pc_x(b.id), store_.pc_y(b.id), store_.pc_theta(b.id), energy);
         for (int i = 0; i < params_.pose_cells.settle_steps; ++i) cells_.settle();
-        cells_.best(pcx, pcy, pct);
+        cells_.best(pc.x, pc.y, pc.theta);
       }
     } else if (!localise_only_) {
-      m.template_id = store_.add(q, pcx, pcy, pct);
+      m.template_id = store_.add(q, pc.x, pc.y, pc.theta);
       m.is_new = true;
     }
   }
+  return pc;
+}
 
-  // 4. Experience map.
+// 4. The experience map's action rule and relaxation, and the cycle's outputs.
+void VitaSlam::update_map(int64_t utime, PoseCellBest& pc, CycleResult& out) {
+  const MatchResult& m = out.match;
   const int tid = m.template_id;
   out.event = map_.on_cycle(tid, tid >= 0 && store_.has_visual(tid) ? tid : -1,
-                            tid >= 0 && store_.has_tactile(tid) ? tid : -1, out.dense, pcx, pcy, pct, cells_, in.utime,
-                            m.visual_used && !m.is_new ? m.visual_shift : 0);
+                            tid >= 0 && store_.has_tactile(tid) ? tid : -1, out.dense, pc.x, pc.y, pc.theta, cells_,
+                            utime, m.visual_used && !m.is_new ? m.visual_shift : 0);
   // A re-localisation the map accepted beyond the packet's reach (the pose cells drifted with the
   // odometry): the packet follows the map, so that what is recognised next is looked for there.
   if (out.event.type == EventType::Relocalise && out.event.to_id >= 0) {
     const Experience& e = map_.experiences()[static_cast<size_t>(out.event.to_id)];
-    if (cells_.distance(e.pc_x, e.pc_y, e.pc_theta, pcx, pcy, pct) > params_.experience_map.delta_pc_threshold) {
+    if (cells_.distance(e.pc_x, e.pc_y, e.pc_theta, pc.x, pc.y, pc.theta) > params_.experience_map.delta_pc_threshold) {
       cells_.relocate(e.pc_x, e.pc_y, e.pc_theta);
-      cells_.best(pcx, pcy, pct);
+      cells_.best(pc.x, pc.y, pc.theta);
     }
   }
   out.experience_id = map_.current_id();
   out.pose = map_.current_pose();
-  out.pc_x = pcx;
-  out.pc_y = pcy;
-  out.pc_theta = pct;
+  out.pc_x = pc.x;
+  out.pc_y = pc.y;
+  out.pc_theta = pc.theta;
   out.num_templates = store_.size();
-  return out;
 }
 
 Pose2 VitaSlam::dead_reckon(const Pose2& offset) const { return compose(map_.current_pose(), offset); }

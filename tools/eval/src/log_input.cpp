@@ -2,6 +2,7 @@
 #include "log_input.h"
 
 #include "whiskeye/common/bus.h"
+#include "whiskeye/common/channels.h"
 #include "whiskeye/common/wire_names.h"
 
 #include <whiskeye/pose2d_t.hpp>
@@ -52,12 +53,12 @@ LoadedRun load_run(const std::string& path) {
   vita_map_t last_map{};
   std::optional<int8_t> pose_mode;
   while (reader.next(ev)) {
-    if (ev.channel == "VITA_POSE") {
+    if (ev.channel == channels::kVitaPose) {
       vita_pose_t m{};
       if (!decode_counted(ev, m, run)) continue;
       run.input.estimate.push_back({m.utime, {m.x, m.y, m.theta}});
       pose_mode = m.mode;
-    } else if (ev.channel == "VITA_EVENT") {
+    } else if (ev.channel == channels::kVitaEvent) {
       vita_event_t m{};
       if (!decode_counted(ev, m, run)) continue;
       EventType type = EventType::kSameExperience;
@@ -70,21 +71,21 @@ LoadedRun load_run(const std::string& path) {
         continue;
       }
       run.input.events.push_back({m.utime, m.cycle, type, m.from_id, m.to_id});
-    } else if (ev.channel == "VITA_MAP") {
+    } else if (ev.channel == channels::kVitaMap) {
       vita_map_t m{};
       if (!decode_counted(ev, m, run)) continue;
       last_map = std::move(m);
       ++run.map_messages;
-    } else if (ev.channel == "VITA_MATCH") {
+    } else if (ev.channel == channels::kVitaMatch) {
       template_match_t m{};
       if (!decode_counted(ev, m, run)) continue;
       run.input.matches.push_back({m.utime, m.cycle, m.template_id, m.is_new != 0, m.error, m.visual_error,
                                    m.pfh_error, m.sda_error, m.visual_shift, m.visual_used != 0, m.tactile_used != 0});
-    } else if (ev.channel == "SIM_FAULT") {
+    } else if (ev.channel == channels::kSimFault) {
       sim_fault_t m{};
       if (!decode_counted(ev, m, run)) continue;
       run.input.faults.push_back({m.utime, fault_name(m), m.active != 0});
-    } else if (ev.channel == "GROUND_TRUTH") {
+    } else if (ev.channel == channels::kGroundTruth) {
       pose2d_t m{};
       if (!decode_counted(ev, m, run)) continue;
       run.input.ground_truth.push_back({m.utime, {m.x, m.y, m.theta}});

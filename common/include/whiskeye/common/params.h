@@ -11,16 +11,22 @@
 // daemon can print exactly what it runs with. A command-line option that overrides a key goes in
 // through set_override() before the loader runs: the loader checks it like a value from the file,
 // and dump() shows the value in use, tagged with the option.
+//
+// yaml-cpp stays behind this header (only params.cpp includes it), so the algorithm libraries that
+// load their parameters here never see YAML. get()/require() are instantiated in params.cpp for the
+// types the loaders use: bool, the integer types, float, double, std::string and vectors of them (and
+// vectors of vectors of double and int); another type is a link error naming ParamNode::get<T>: add
+// it to the list at the end of params.cpp.
 #pragma once
 
-#include <yaml-cpp/yaml.h>
-
-#include <cmath>
 #include <memory>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+namespace YAML {
+class Node;
+}
 
 namespace whiskeye {
 
@@ -72,7 +78,7 @@ class ParamNode {
 
  private:
   struct State;
-  ParamNode(std::shared_ptr<State> state, YAML::Node node, std::string prefix);
+  ParamNode(std::shared_ptr<State> state, const YAML::Node& node, std::string prefix);
 
   YAML::Node lookup(const std::string& key) const;
   void mark_leaf(const std::string& key, const std::string& value, bool from_file) const;
@@ -85,77 +91,8 @@ class ParamNode {
   static bool all_finite(const T& value);
 
   std::shared_ptr<State> state_;
-  YAML::Node node_;
+  std::shared_ptr<const YAML::Node> node_;  // this node's map (never null; shared by copies)
   std::string prefix_;
 };
-
-// ---- implementation of the templates ----
-
-template <typename T>
-std::string ParamNode::to_text(const T& value) {
-  std::ostringstream out;
-  out.precision(10);
-  if constexpr (std::is_same_v<T, std::string>) {
-    out << '"' << value << '"';
-  } else if constexpr (std::is_same_v<T, bool>) {
-    out << (value ? "true" : "false");
-  } else if constexpr (std::is_arithmetic_v<T>) {
-    out << +value;
-  } else {
-    out << '[';
-    bool first = true;
-    for (const auto& v : value) {
-      out << (first ? "" : ", ") << to_text(v);
-      first = false;
-    }
-    out << ']';
-  }
-  return out.str();
-}
-
-template <typename T>
-bool ParamNode::all_finite(const T& value) {
-  if constexpr (std::is_floating_point_v<T>) {
-    return std::isfinite(value);
-  } else if constexpr (std::is_arithmetic_v<T> || std::is_same_v<T, std::string>) {
-    return true;
-  } else {
-    for (const auto& v : value) {
-      if (!all_finite(v)) return false;
-    }
-    return true;
-  }
-}
-
-template <typename T>
-void ParamNode::get(const std::string& key, T& value) const {
-  const YAML::Node n = lookup(key);
-  if (!n || n.IsNull()) {
-    mark_leaf(key, to_text(value), false);
-    return;
-  }
-  try {
-    value = n.as<T>();
-  } catch (const YAML::Exception&) {
-    fail(key, "has the wrong type: " + describe(n));
-  }
-  if (!all_finite(value)) fail(key, "= " + to_text(value) + " is not a finite number");
-  mark_leaf(key, to_text(value), true);
-}
-
-template <typename T>
-void ParamNode::get(const std::string& key, T& value, T min, T max) const {
-  get(key, value);
-  if (!(value >= min && value <= max)) {
-    fail(key, "= " + to_text(value) + " is out of range [" + to_text(min) + ", " + to_text(max) + "]");
-  }
-}
-
-template <typename T>
-void ParamNode::require(const std::string& key, T& value) const {
-  const YAML::Node n = lookup(key);
-  if (!n || n.IsNull()) fail(key, "is required but missing");
-  get(key, value);
-}
 
 }  // namespace whiskeye

@@ -15,14 +15,11 @@
 
 #include "whiskeye/common/params.h"
 #include "whiskeye/common/se2.h"
+#include "whiskeye/common/whisker_array.h"
 
 #include <array>
 
 namespace whiskeye {
-
-constexpr int kNumWhiskers = 24;
-constexpr int kWhiskerRows = 4;
-constexpr int kWhiskerColumns = 6;
 
 struct Vec3 {
   double x = 0.0;

@@ -29,7 +29,7 @@ struct PatternParams {
   double theta_limit = 60.0 * kPi / 180.0; // |command| never exceeds this (joint range), rad
   Waveform waveform = Waveform::Sine;
   double protraction_fraction = 0.5;               // part of the cycle spent protracting (0.5 = WhiskEye sine)
-  std::array<double, kNumRows> row_phase{};        // per-row phase lead, in cycles (0..1)
+  std::array<double, kWhiskerRows> row_phase{};        // per-row phase lead, in cycles (0..1)
   double ramp_time = 0.5;                          // s, amplitude ramp on enable / disable
   double max_rate = 15.0;                          // rad/s, slew limit on the command (never steps)
 };

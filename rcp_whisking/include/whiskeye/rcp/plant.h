@@ -17,7 +17,7 @@
 namespace whiskeye::rcp {
 
 // WhiskEye whisker lengths by position on a board (= row), m.
-constexpr std::array<double, kNumRows> kWhiskEyeRowLength{0.0604, 0.0810, 0.1115, 0.1717};
+constexpr std::array<double, kWhiskerRows> kWhiskEyeRowLength{0.0604, 0.0810, 0.1115, 0.1717};
 
 struct PlantParams {
   PerWhisker<double> whisker_length{};  // m; default from kWhiskEyeRowLength by row

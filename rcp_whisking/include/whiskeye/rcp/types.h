@@ -3,21 +3,23 @@
 // No LCM here; the daemons convert to and from whisker_sample_t / rcp_state_t / whisk_cycle_t.
 #pragma once
 
+#include <whiskeye/common/whisker_array.h>
+
 #include <array>
 #include <cstdint>
 #include <vector>
 
 namespace whiskeye::rcp {
 
-constexpr int kNumRows = 4;
-constexpr int kNumColumns = 6;
-// Whisker index w = row * kNumColumns + column (rows top to bottom, columns front to back).
-constexpr int kNumWhiskers = kNumRows * kNumColumns;
-static_assert(kNumWhiskers == 24);
+// The array (common/whisker_array.h). Whisker index w = row * kWhiskerColumns + column (rows top to
+// bottom, columns front to back).
+using whiskeye::kNumWhiskers;
+using whiskeye::kWhiskerColumns;
+using whiskeye::kWhiskerRows;
 
-constexpr int row_of(int whisker) { return whisker / kNumColumns; }
-constexpr int column_of(int whisker) { return whisker % kNumColumns; }
-constexpr int whisker_index(int row, int column) { return row * kNumColumns + column; }
+constexpr int row_of(int whisker) { return whisker / kWhiskerColumns; }
+constexpr int column_of(int whisker) { return whisker % kWhiskerColumns; }
+constexpr int whisker_index(int row, int column) { return row * kWhiskerColumns + column; }
 
 template <typename T>
 using PerWhisker = std::array<T, kNumWhiskers>;

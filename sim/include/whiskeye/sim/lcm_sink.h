@@ -5,13 +5,11 @@
 #pragma once
 
 #include "whiskeye/common/bus.h"
+#include "whiskeye/rcp/lcm.h"
 #include "whiskeye/sim/simulator.h"
 
 #include <whiskeye/image_t.hpp>
-#include <whiskeye/rcp_state_t.hpp>
 #include <whiskeye/sim_fault_t.hpp>
-#include <whiskeye/whisk_cycle_t.hpp>
-#include <whiskeye/whisker_sample_t.hpp>
 
 #include <functional>
 #include <map>
@@ -23,11 +21,10 @@ namespace whiskeye::sim {
 constexpr double kRawHallPerUnit = 2000.0;    // raw_x/raw_y = round(deflection · 2000)
 constexpr double kRawThetaPerRad = 10000.0;   // raw_theta = round(θ · 10000), 0.1 mrad counts
 
-// status as whiskerd sets it: STALE for a stale whisker, FAULT for a faulty one (or any other
-// invalid one), SATURATED at the plant's clip.
+// WHISKER_SAMPLE with raw counts at the nominal scales and status as whiskerd sets it: STALE for a
+// stale whisker, FAULT for a faulty one (or any other invalid one), SATURATED at the plant's clip.
+// RCP_STATE and WHISK_CYCLE go out as whiskerd's do, through rcp::to_lcm (whiskeye/rcp/lcm.h).
 whisker_sample_t to_lcm(const rcp::WhiskerSample& s, const WhiskerHealth& health, double saturation);
-rcp_state_t to_lcm(const rcp::ControlOutput& out);
-whisk_cycle_t to_lcm(const rcp::WhiskCycle& c);
 sim_fault_t to_lcm(const FaultEvent& e);
 
 class LcmSink : public SimSink {

@@ -9,6 +9,7 @@
 
 #include "whiskeye/common/params.h"
 #include "whiskeye/common/se2.h"
+#include "whiskeye/common/whisker_array.h"
 
 #include <algorithm>
 #include <cmath>
@@ -176,10 +177,8 @@ struct FaultInterval {
   double duration = 1.0;
 };
 
-// The whisker boards as docs/can-protocol.md wires them: board b carries whiskers 4b..4b+3. The pure
-// simulator does not link the drivers' protocol; can_log.cpp checks these equal wp's.
-inline constexpr int kNumBoards = 6;
-inline constexpr int kWhiskersPerBoard = 4;
+// The whisker boards as docs/can-protocol.md wires them: board b carries whiskers 4b..4b+3
+// (kNumBoards, kWhiskersPerBoard: common/whisker_array.h).
 
 struct BoardOffline : FaultInterval {
   int board = 0;  // 0..5: whiskers 4·board .. 4·board + 3

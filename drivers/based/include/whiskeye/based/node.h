@@ -18,6 +18,7 @@
 #include "whiskeye/based/robotino_client.h"
 #include "whiskeye/based/tracker.h"
 #include "whiskeye/common/bus.h"
+#include "whiskeye/common/channels.h"
 #include "whiskeye/common/heartbeats.h"
 
 #include <whiskeye/driver_status_t.hpp>
@@ -34,10 +35,7 @@
 
 namespace whiskeye::based {
 
-inline constexpr const char* kOdometryChannel = "ODOMETRY";
-inline constexpr const char* kBaseCmdChannel = "BASE_CMD";
-inline constexpr const char* kDriverStatusChannel = "DRIVER_STATUS";
-
+// Channels: ODOMETRY and DRIVER_STATUS out, BASE_CMD in (names from common/channels.h).
 class BasedNode {
  public:
   // Throws std::invalid_argument if params.url is not http://host[:port].

@@ -7,6 +7,9 @@
 // (see docs/can-protocol.md).
 #pragma once
 
+#include <whiskeye/common/se2.h>
+#include <whiskeye/common/whisker_array.h>
+
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -16,16 +19,17 @@
 namespace whiskeye::wp {
 
 inline constexpr int kProtocolVersion = 1;
-inline constexpr int kNumBoards = 6;
-inline constexpr int kWhiskersPerBoard = 4;
-inline constexpr int kNumWhiskers = kNumBoards * kWhiskersPerBoard;
+// The array's boards and whiskers (common/whisker_array.h).
+using whiskeye::kNumBoards;
+using whiskeye::kNumWhiskers;
+using whiskeye::kWhiskersPerBoard;
 
 // Value ranges. Hall sensors: 12-bit signed ADC; |value| == kHallLimit means saturated, beyond is
 // impossible and rejected. Protraction encoder: 4096 counts per revolution, signed around the rest
 // position; the joint range is +-60 deg, so |counts| > kThetaLimit (+-90 deg) is rejected.
 inline constexpr int16_t kHallLimit = 2047;
 inline constexpr int16_t kThetaLimit = 1024;
-inline constexpr double kThetaRadPerCount = 2.0 * 3.14159265358979323846 / 4096.0;
+inline constexpr double kThetaRadPerCount = kTwoPi / 4096.0;
 
 // FD mode frame sizes (bytes); classic mode frames are always 8 bytes.
 inline constexpr std::size_t kFdSampleBytes = 32;

@@ -33,6 +33,7 @@
 #include "whiskeye/slam/visual_template.h"
 
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -100,6 +101,21 @@ class VitaSlam {
   static VitaSlam deserialise(std::span<const uint8_t> data, const SlamParams& params, const RobotGeometry& geometry);
 
  private:
+  // The templates of one cycle and the terms they are compared by.
+  struct CycleTemplates {
+    std::optional<VisualTemplate> visual;
+    std::optional<TactileTemplate> tactile;
+    Terms terms;
+  };
+  // The pose cells' best estimate (cell coordinates).
+  struct PoseCellBest {
+    double x = 0.0, y = 0.0, theta = 0.0;
+  };
+  // process_cycle's four steps, in order (the numbered steps at the top of this file).
+  void integrate_odometry(const std::vector<OdometrySample>& odometry);
+  CycleTemplates make_templates(const CycleInput& in, CycleResult& out);
+  PoseCellBest match_or_create(const CycleTemplates& templates, CycleResult& out);
+  void update_map(int64_t utime, PoseCellBest& pc, CycleResult& out);
   double tau_of(const Terms& terms) const;
 
   SlamParams params_;

@@ -8,7 +8,7 @@
 #include <cstddef>
 #include <utility>
 
-namespace whiskeye::whiskerd {
+namespace whiskeye {
 
 template <typename T, std::size_t N>
 class SpscRing {
@@ -40,4 +40,4 @@ class SpscRing {
   alignas(64) std::atomic<std::size_t> tail_{0};
 };
 
-}  // namespace whiskeye::whiskerd
+}  // namespace whiskeye

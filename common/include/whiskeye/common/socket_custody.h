@@ -22,9 +22,9 @@
 #include <memory>
 #include <optional>
 
-#include "spsc_ring.h"
+#include "whiskeye/common/spsc_ring.h"
 
-namespace whiskeye::whiskerd {
+namespace whiskeye {
 
 template <typename Socket>
 class SocketCustody {
@@ -80,4 +80,4 @@ class SocketCustody {
   int64_t backoff_us_ = kFirstBackoffUs;
 };
 
-}  // namespace whiskeye::whiskerd
+}  // namespace whiskeye

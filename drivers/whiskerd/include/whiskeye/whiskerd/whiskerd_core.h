@@ -5,8 +5,10 @@
 // silent board: retract, then drop enable). The daemon (whiskerd_main.cpp) is the thin wiring around it.
 #pragma once
 
+#include <whiskeye/common/channels.h>
 #include <whiskeye/common/params.h>
 #include <whiskeye/rcp/controller.h>
+#include <whiskeye/rcp/lcm.h>  // WHISK_CYCLE: rcp::to_lcm(const rcp::WhiskCycle&, whisk_cycle_t&)
 
 #include <array>
 #include <cstdint>
@@ -15,21 +17,17 @@
 #include <span>
 #include <string>
 
-#include "latency_stats.h"
+#include "whiskeye/common/latency_stats.h"
 #include "whiskeye/drivers/motor_lines.h"
 #include "whiskeye/drivers/whisker_protocol.h"
 
 namespace whiskeye {
-struct whisker_sample_t;
-struct rcp_state_t;
-struct whisk_cycle_t;
 struct driver_status_t;
 }  // namespace whiskeye
 
 namespace whiskeye::whiskerd {
 
-static_assert(wp::kNumWhiskers == rcp::kNumWhiskers);
-constexpr int kN = wp::kNumWhiskers;
+constexpr int kN = kNumWhiskers;
 
 struct Params {
   // can
@@ -52,10 +50,10 @@ struct Params {
   bool lock_memory = true;
   // lcm
   std::string lcm_url;
-  std::string channel_sample = "WHISKER_SAMPLE";
-  std::string channel_state = "RCP_STATE";
-  std::string channel_cycle = "WHISK_CYCLE";
-  std::string channel_status = "DRIVER_STATUS";
+  std::string channel_sample = channels::kWhiskerSample;
+  std::string channel_state = channels::kRcpState;
+  std::string channel_cycle = channels::kWhiskCycle;
+  std::string channel_status = channels::kDriverStatus;
   double status_period_s = 1.0;
   // the whisking controller (section `rcp`: pattern, detector, rcp)
   rcp::ControllerParams controller;
@@ -202,9 +200,9 @@ struct StatusSnapshot {
   bool rt_scheduling = false;
 };
 
-// LCM conversions (daemon side).
+// LCM conversions (daemon side): the period's WHISKER_SAMPLE and RCP_STATE, and DRIVER_STATUS. A
+// completed cycle goes out through rcp::to_lcm (whiskeye/rcp/lcm.h), as vita-sim's do.
 void to_lcm(const PeriodOutput& in, whisker_sample_t& sample, rcp_state_t& state);
-void to_lcm(const rcp::WhiskCycle& in, whisk_cycle_t& out);
 void to_lcm(const StatusSnapshot& in, driver_status_t& out);
 
 }  // namespace whiskeye::whiskerd

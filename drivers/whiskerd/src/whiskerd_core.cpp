@@ -1,10 +1,7 @@
 // whiskerd's control core (see whiskerd_core.h).
-#include "whiskerd_core.h"
+#include "whiskeye/whiskerd/whiskerd_core.h"
 
 #include <whiskeye/driver_status_t.hpp>
-#include <whiskeye/rcp_state_t.hpp>
-#include <whiskeye/whisk_cycle_t.hpp>
-#include <whiskeye/whisker_sample_t.hpp>
 
 #include <cmath>
 #include <cstdio>
@@ -411,54 +408,10 @@ void LineGuard::update(const WhiskerCore& core) {
 }
 
 void to_lcm(const PeriodOutput& in, whisker_sample_t& s, rcp_state_t& r) {
-  s.utime = in.utime;
-  s.seq = in.seq;
-  s.num_whiskers = kN;
-  s.theta.assign(in.theta.begin(), in.theta.end());
-  s.deflection_x.assign(in.deflection_x.begin(), in.deflection_x.end());
-  s.deflection_y.assign(in.deflection_y.begin(), in.deflection_y.end());
-  s.raw_x.assign(in.raw_x.begin(), in.raw_x.end());
-  s.raw_y.assign(in.raw_y.begin(), in.raw_y.end());
-  s.raw_theta.assign(in.raw_theta.begin(), in.raw_theta.end());
-  s.status.assign(in.status.begin(), in.status.end());
-  r.utime = in.utime;
-  r.cycle = in.cycle;
-  r.phase = in.phase;
-  r.cycle_phase = in.cycle_phase;
-  r.enabled = in.enabled;
-  r.num_whiskers = kN;
-  r.contact.assign(in.contact.begin(), in.contact.end());
-  r.theta_ceiling.assign(in.theta_ceiling.begin(), in.theta_ceiling.end());
-  r.theta_command.assign(in.theta_command.begin(), in.theta_command.end());
-}
-
-void to_lcm(const rcp::WhiskCycle& in, whisk_cycle_t& out) {
-  out.cycle = in.cycle;
-  out.utime_start = in.utime_start;
-  out.utime_end = in.utime_end;
-  out.utime = in.utime_end;
-  out.num_whiskers = kN;
-  out.num_samples = static_cast<int32_t>(in.samples.size());
-  out.num_missing = in.num_missing;
-  out.sample_utime.resize(in.samples.size());
-  out.sample_valid.resize(in.samples.size());
-  out.phase.resize(in.samples.size());
-  out.theta.assign(in.samples.size(), std::vector<float>(kN));
-  out.deflection_x.assign(in.samples.size(), std::vector<float>(kN));
-  out.deflection_y.assign(in.samples.size(), std::vector<float>(kN));
-  out.contact.assign(in.samples.size(), std::vector<int8_t>(kN));
-  for (std::size_t i = 0; i < in.samples.size(); ++i) {
-    const auto& s = in.samples[i];
-    out.sample_utime[i] = s.utime;
-    out.sample_valid[i] = s.valid ? 1 : 0;
-    out.phase[i] = static_cast<int8_t>(s.phase);
-    for (int w = 0; w < kN; ++w) {
-      out.theta[i][w] = s.theta[w];
-      out.deflection_x[i][w] = s.deflection_x[w];
-      out.deflection_y[i][w] = s.deflection_y[w];
-      out.contact[i][w] = s.contact[w] ? 1 : 0;
-    }
-  }
+  rcp::fill_whisker_sample(in.utime, in.seq, in.theta, in.deflection_x, in.deflection_y, in.raw_x, in.raw_y,
+                           in.raw_theta, in.status, s);
+  rcp::fill_rcp_state(in.utime, in.cycle, in.phase, in.cycle_phase, in.enabled, in.contact, in.theta_ceiling,
+                      in.theta_command, r);
 }
 
 void to_lcm(const StatusSnapshot& in, driver_status_t& out) {

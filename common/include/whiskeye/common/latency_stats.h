@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <vector>
 
-namespace whiskeye::whiskerd {
+namespace whiskeye {
 
 struct LatencySummary {
   double p50_us = 0, p99_us = 0, max_us = 0;
@@ -48,4 +48,4 @@ class LatencyStats {
   int64_t count_ = 0;
 };
 
-}  // namespace whiskeye::whiskerd
+}  // namespace whiskeye

@@ -1,0 +1,18 @@
+// The WhiskEye's whisker array, defined once for every module that counts whiskers: the geometry
+// (robot_geometry.h), the whisking controller (rcp), the CAN protocol (whisker_protocol) and the
+// simulator take these; none defines its own.
+//   24 whiskers in 4 rows of 6; whisker w = row * 6 + column (rows top to bottom).
+//   6 whisker boards of 4 whiskers on the CAN bus (docs/can-protocol.md gives the wiring).
+#pragma once
+
+namespace whiskeye {
+
+inline constexpr int kWhiskerRows = 4;
+inline constexpr int kWhiskerColumns = 6;
+inline constexpr int kNumWhiskers = kWhiskerRows * kWhiskerColumns;
+
+inline constexpr int kNumBoards = 6;         // whisker boards on the CAN bus
+inline constexpr int kWhiskersPerBoard = 4;  // whiskers read and driven by one board
+static_assert(kNumBoards * kWhiskersPerBoard == kNumWhiskers, "every whisker is on one board");
+
+}  // namespace whiskeye
