@@ -8,7 +8,7 @@
 //   head: origin at the whisker array's centre, x forward (the camera's optical axis), y left, z up.
 //         T_base_head is fixed (the neck is not moved in these experiments).
 // Whisker w = row * 6 + column: rows 0..3 top to bottom; columns 0..2 on the left side and 3..5 on
-// the right side, each side front to back. Board b = column (6 boards × 4 whiskers, one per row).
+// the right side, each side front to back. Board b carries whiskers 4b..4b+3 (docs/can-protocol.md).
 // Protraction angle θ (rad, + = protraction) rotates a whisker about the head's z axis through its
 // base, sweeping it forward: azimuth(θ) = azimuth0 − side·θ, side = +1 left, −1 right.
 #pragma once
