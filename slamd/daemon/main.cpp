@@ -5,6 +5,7 @@
 #include "checkpoint_store.h"
 #include "checkpoint_writer.h"
 #include "slam_node.h"
+#include "startup.h"
 
 #include "whiskeye/common/bus.h"
 #include "whiskeye/common/cli.h"
@@ -107,56 +108,10 @@ class Progress {
   int last_ = -1;
 };
 
+// The map slamd starts from (slamd/daemon/startup.h: --map, resume or --fresh).
 std::unique_ptr<slam::VitaSlam> make_slam(const Loaded& cfg, const Options& o, slamd::CheckpointStore* store) {
-  if (!o.map_file.empty()) {
-    // Growing the loaded map writes its checkpoints into the state directory: whatever map is there
-    // would be rotated out within --checkpoint-keep cycles. The operator says so with --fresh.
-    if (!o.localise && !o.fresh && store != nullptr) {
-      if (const auto held = store->list(); !held.empty()) {
-        throw std::runtime_error("the state directory " + store->directory() + " holds " +
-                                 std::to_string(held.size()) + " checkpoint(s) of a map (newest " + held.back() +
-                                 ") that growing --map " + o.map_file +
-                                 " would rotate out: move them out of it first, or add --fresh to let them go "
-                                 "(or --localise, which writes no checkpoints)");
-      }
-    }
-    const slamd::Checkpoint cp = slamd::read_checkpoint(o.map_file);
-    std::unique_ptr<slam::VitaSlam> s;
-    try {
-      s = std::make_unique<slam::VitaSlam>(slam::VitaSlam::deserialise(cp.payload, cfg.slam, cfg.robot));
-    } catch (const std::exception& e) {
-      throw std::runtime_error(o.map_file + ": " + e.what());
-    }
-    if (o.localise) s->set_localise_only(true);
-    log_line("loaded map " + o.map_file + " (" + std::to_string(s->map().experiences().size()) + " experiences)" +
-             (o.localise ? ", localising without growing it" : ""));
-    return s;
-  }
-  if (store != nullptr) {
-    for (const auto& f : store->removed_temp_files()) log_line("removed " + f + " (an unfinished write)");
-  }
-  if (store != nullptr && !o.fresh) {
-    std::vector<std::string> problems;
-    std::unique_ptr<slam::VitaSlam> resumed;
-    std::optional<slamd::Checkpoint> cp;
-    try {
-      cp = store->load_newest(&problems, [&](const slamd::Checkpoint& c) {
-        resumed = std::make_unique<slam::VitaSlam>(slam::VitaSlam::deserialise(c.payload, cfg.slam, cfg.robot));
-      });
-    } catch (const slamd::CheckpointError& e) {
-      // Intact but not loadable here: starting a new map would rotate it out. The operator decides.
-      throw std::runtime_error(std::string("cannot resume from ") + e.what() + " (to keep that map, move it out of " +
-                               store->directory() +
-                               " first; then start with --fresh for a new map, whose checkpoints rotate the "
-                               "older ones out)");
-    }
-    for (const auto& p : problems) log_line("skipped unusable checkpoint " + p);
-    if (cp) {
-      log_line("resuming from " + cp->path + " (after cycle " + std::to_string(cp->sequence) + ")");
-      return resumed;
-    }
-  }
-  return std::make_unique<slam::VitaSlam>(cfg.slam, cfg.robot);
+  return slamd::start_slam(cfg.slam, cfg.robot, slamd::StartupOptions{o.map_file, o.localise, o.fresh}, store,
+                           log_line);
 }
 
 int run_replay(const Loaded& cfg, const Options& o) {
@@ -164,9 +119,8 @@ int run_replay(const Loaded& cfg, const Options& o) {
   LogWriterBus out(o.replay_out);
   MemoryBus in;
   DecodeErrors errors;  // logged by the node, rate-limited
-  // --localise writes no checkpoints: it needs no state directory (nor its lock).
   std::optional<slamd::CheckpointStore> store;
-  if (!o.state_dir.empty() && !o.localise) store.emplace(o.state_dir, o.checkpoint_keep);
+  slamd::open_store(store, o.state_dir, o.checkpoint_keep, o.localise);
   slamd::SlamNode node(in, out, make_slam(cfg, o, store ? &*store : nullptr), cfg.node, errors);
   node.set_logger(log_line);
   if (o.timing) node.set_latency_clock(monotonic_us);
@@ -185,11 +139,7 @@ int run_replay(const Loaded& cfg, const Options& o) {
       return false;
     }
   };
-  if (store && o.checkpoint_every > 0) {
-    node.set_cycle_hook([&](const slam::CycleResult&) {
-      if (node.counters().cycles % o.checkpoint_every == 0) checkpoint();
-    });
-  }
+  if (store) slamd::checkpoint_every(node, o.checkpoint_every, [&] { checkpoint(); });
   Progress progress;
   LogReader::EventView ev;
   int64_t next_status = INT64_MIN;
@@ -242,15 +192,9 @@ int run_replay(const Loaded& cfg, const Options& o) {
 }
 
 int run_live(const Loaded& cfg, const Options& o) {
-  std::string state_dir = o.state_dir;
-  if (state_dir.empty()) {
-    const char* sd = std::getenv("STATE_DIRECTORY");  // systemd StateDirectory=
-    state_dir = sd ? sd : "/var/lib/slamd";
-  }
-  // --localise writes no checkpoints: it needs no state directory (nor its lock), so it can run next
-  // to the service.
+  const std::string state_dir = slamd::live_state_directory(o.state_dir);
   std::optional<slamd::CheckpointStore> store;
-  if (!o.localise) store.emplace(state_dir, o.checkpoint_keep);
+  slamd::open_store(store, state_dir, o.checkpoint_keep, o.localise);
   LcmBus bus(o.lcm_url);
   DecodeErrors errors;  // logged by the node, rate-limited
   slamd::SlamNode node(bus, bus, make_slam(cfg, o, store ? &*store : nullptr), cfg.node, errors);
@@ -270,11 +214,7 @@ int run_live(const Loaded& cfg, const Options& o) {
   auto checkpoint = [&] {
     writer.submit(static_cast<uint64_t>(node.slam().stats().cycles), node.slam().serialise_unsealed());
   };
-  if (o.checkpoint_every > 0 && !o.localise) {
-    node.set_cycle_hook([&](const slam::CycleResult&) {
-      if (node.counters().cycles % o.checkpoint_every == 0) checkpoint();
-    });
-  }
+  if (store) slamd::checkpoint_every(node, o.checkpoint_every, checkpoint);
   std::signal(SIGTERM, on_signal);
   std::signal(SIGINT, on_signal);
   ServiceNotifier service("slamd", monotonic_us());
