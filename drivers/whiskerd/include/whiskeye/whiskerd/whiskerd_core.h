@@ -2,7 +2,8 @@
 // on the host: frames in (on_frame), one control period out (step) — latest sample of every board
 // -> calibration -> rcp_whisking controller -> motor command -> the messages to publish — plus the
 // safety state machine (GPIO fault: motors off at once and latched; stop request, stale bus or a
-// silent board: retract, then drop enable). The daemon (whiskerd_main.cpp) is the thin wiring around it.
+// silent board: retract, then drop enable). The daemon (ControlLoop,
+// control_loop.h, and whiskerd_main.cpp) is the thin wiring around it.
 #pragma once
 
 #include <whiskeye/common/channels.h>
