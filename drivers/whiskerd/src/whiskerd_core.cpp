@@ -153,7 +153,7 @@ void load(const ParamNode& root, Params& p) {
   root.check_no_unknown_keys();
 }
 
-WhiskerCore::WhiskerCore(const Params& params)
+WhiskerCore::WhiskerCore(const CoreParams& params)
     : params_(params), controller_(params.controller, params.rate_hz), assembler_(params.mode) {
   last_sample_mono_.fill(-1);
   for (; pooled_cycles_ < 2; ++pooled_cycles_) cycle_pool_[pooled_cycles_] = std::make_unique<rcp::WhiskCycle>();
