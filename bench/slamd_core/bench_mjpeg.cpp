@@ -17,8 +17,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include "mjpeg_decode.h"
 #include "mjpeg_pattern.h"
-#include "whiskeye/slam/mjpeg_decode.h"
 
 namespace {
 
@@ -52,7 +52,7 @@ void BM_MjpegDecodeSlamd(benchmark::State& state) {
   const std::vector<uint8_t>& jpeg = frame(state.range(0));
   std::vector<uint8_t> grey(static_cast<std::size_t>(w) * h);
   for (auto _ : state) {
-    whiskeye::slam::decode_mjpeg_grey(jpeg, w, h, grey.data(), static_cast<std::size_t>(w));
+    whiskeye::slamd::decode_mjpeg_grey(jpeg, w, h, grey.data(), static_cast<std::size_t>(w));
     benchmark::DoNotOptimize(grey.data());
   }
   label(state);

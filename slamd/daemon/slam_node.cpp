@@ -1,5 +1,7 @@
 #include "slam_node.h"
 
+#include "mjpeg_decode.h"
+
 #include "whiskeye/common/clock.h"
 #include "whiskeye/common/robot_geometry.h"
 #include "whiskeye/common/se2.h"
@@ -245,6 +247,7 @@ SlamNode::SlamNode(Bus& in, Bus& out, std::unique_ptr<slam::VitaSlam> slam, cons
       decode_errors_(decode_errors),
       sync_(params.sync),
       log_clock_([] { return monotonic_us(); }) {
+  slam_->set_frame_decoder(mjpeg_decoder());  // MJPEG frames are decoded here, at the daemon's edge
   // 2,000 undecodable messages were 2,000 lines: the first per channel, then one per 10 s with a count.
   decode_errors_.set_callback([this](const std::string& channel, const std::string& reason) {
     warn("decode " + channel, channel + ": " + reason);

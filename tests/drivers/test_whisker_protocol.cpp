@@ -157,6 +157,46 @@ TEST(WhiskerProtocol, ClassicCommandMarksDisabledWhiskers) {
   EXPECT_EQ(d.command.theta_target[10], 0);
 }
 
+TEST(WhiskerProtocol, CommandOnFdIsOneBroadcastFrameWithBitRateSwitch) {
+  MotorCommand c;
+  c.seq = 9;
+  c.enable_mask = 0xFFFFFF;
+  c.theta_target[23] = -123;
+  ProtocolIds ids;
+  ids.command_base = 0x300;
+  CommandFrames out;
+  encode_command(c, BusMode::kFd, ids, out);
+  ASSERT_EQ(out.count, 1);
+  const CommandFrame& f = out.frames[0];
+  EXPECT_TRUE(f.fd);
+  EXPECT_EQ(f.id, 0x300u);
+  ASSERT_EQ(f.len, kFdCommandBytes);
+  const Decoded d = decode_frame(f.id, true, std::span<const uint8_t>(f.data.data(), f.len), BusMode::kFd, ids);
+  ASSERT_EQ(d.kind, FrameKind::kCommand) << d.reason;
+  EXPECT_EQ(d.command.seq, 9);
+  EXPECT_EQ(d.command.theta_target[23], -123);
+}
+
+TEST(WhiskerProtocol, CommandOnClassicIsOneFramePerBoardInBoardOrder) {
+  MotorCommand c;
+  c.enable_mask = 0xFFFFFF;
+  for (int w = 0; w < kNumWhiskers; ++w) c.theta_target[w] = static_cast<int16_t>(w);
+  const ProtocolIds ids;
+  CommandFrames out;
+  encode_command(c, BusMode::kClassic, ids, out);
+  ASSERT_EQ(out.count, kNumBoards);
+  for (int b = 0; b < kNumBoards; ++b) {
+    const CommandFrame& f = out.frames[static_cast<std::size_t>(b)];
+    EXPECT_FALSE(f.fd);
+    EXPECT_EQ(f.id, command_board_id(ids, b));
+    ASSERT_EQ(f.len, kClassicBytes);
+    const Decoded d = decode_frame(f.id, false, std::span<const uint8_t>(f.data.data(), f.len), BusMode::kClassic, ids);
+    ASSERT_EQ(d.kind, FrameKind::kCommand) << d.reason;
+    EXPECT_EQ(d.command_board, b);
+    EXPECT_EQ(d.command.theta_target[b * kWhiskersPerBoard + 3], b * kWhiskersPerBoard + 3);
+  }
+}
+
 TEST(WhiskerProtocol, ClassicFragmentsAssembleIntoBoardSample) {
   SampleAssembler a(BusMode::kClassic);
   const BoardSample in = make_sample(2, 0);

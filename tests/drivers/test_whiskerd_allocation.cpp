@@ -17,7 +17,7 @@ using namespace whiskeye::whiskerd::test;
 
 namespace {
 
-// One control period as whiskerd_main.cpp runs it: cycles handed back first, frames (good ones and
+// One control period as ControlLoop (src/control_loop.cpp) runs it: cycles handed back first, frames (good ones and
 // a burst of rejected ones), then step(); the published cycle is handed back as the publisher does.
 struct RtLoop {
   explicit RtLoop(const Params& p) : rig(p) {}

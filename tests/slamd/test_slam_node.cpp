@@ -10,6 +10,8 @@
 
 #include <gtest/gtest.h>
 
+#include "mjpeg_pattern.h"
+
 #include <functional>
 
 #include <atomic>
@@ -395,6 +397,24 @@ TEST_F(SlamNodeTest, AFrameTheCoreCannotUseIsCountedAndLoggedAndTheCycleRunsWith
   EXPECT_EQ(node_->counters().validation_errors, 1);
   ASSERT_EQ(lines.size(), 1u);
   EXPECT_NE(lines[0].find("cycle 0: image: MJPEG frame"), std::string::npos) << lines[0];
+}
+
+// The core decodes no MJPEG itself: the node gives it slamd's decoder (mjpeg_decode.h).
+TEST_F(SlamNodeTest, AnMjpegFrameIsDecodedAtTheEdgeAndUsedForVision) {
+  image_t frame{};
+  frame.utime = kT0 + kS;
+  frame.width = 640;
+  frame.height = 480;
+  frame.pixelformat = image_t::PIXEL_FORMAT_MJPEG;
+  frame.data = test::mjpeg_pattern_jpeg(640, 480, 7);
+  frame.size = static_cast<int32_t>(frame.data.size());
+  publish(in_, "CAMERA", frame);
+  publish(in_, "WHISK_CYCLE", free_cycle(0, kT0 + kS));
+  node_->flush();
+  ASSERT_EQ(matches_.size(), 1u);
+  EXPECT_TRUE(matches_[0].visual_used);
+  EXPECT_EQ(node_->counters().validation_errors, 0);
+  EXPECT_EQ(node_->slam().stats().bad_images, 0);
 }
 
 // Finite but impossible values (found by fuzzing): each rejected with a line naming the field, counted,

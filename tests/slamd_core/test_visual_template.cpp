@@ -1,6 +1,7 @@
 // Visual template: formats, crop/subsample/normalise, and refusal of bad frames.
 #include "whiskeye/slam/visual_template.h"
 
+#include "mjpeg_decode.h"  // slamd's, at the daemon's edge: the core decodes no MJPEG itself
 #include "synthetic.h"
 
 #include <gtest/gtest.h>
@@ -16,6 +17,12 @@ VisualParams plain_params() {
   p.crop_width = p.crop_height = 0;
   p.global_normalisation = 0.0;
   return p;
+}
+
+// The decoder slamd gives the core for MJPEG frames.
+const FrameDecoder* mjpeg() {
+  static const FrameDecoder d = slamd::mjpeg_decoder();
+  return &d;
 }
 
 ImageView view(const std::vector<uint8_t>& d, int w, int h, int stride, uint32_t fmt) {
@@ -91,7 +98,7 @@ TEST(VisualTemplate, AllPixelFormatsGiveTheSameTemplate) {
                                std::pair{"rgb", make_visual_template(view(rgb, w, h, w * 3, kPixRgb24), p)},
                                std::pair{"bgr", make_visual_template(view(rgb, w, h, w * 3, kPixBgr24), p)},
                                std::pair{"yuyv", make_visual_template(view(yuyv, w, h, w * 2, kPixYuyv), p)},
-                               std::pair{"mjpeg", make_visual_template(view(jpeg, w, h, 0, kPixMjpeg), p)}}) {
+                               std::pair{"mjpeg", make_visual_template(view(jpeg, w, h, 0, kPixMjpeg), p, mjpeg())}}) {
     ASSERT_EQ(t.pixels.size(), ref.pixels.size()) << name;
     int worst = 0;
     for (size_t i = 0; i < ref.pixels.size(); ++i) worst = std::max(worst, std::abs(t.pixels[i] - ref.pixels[i]));
@@ -104,7 +111,7 @@ TEST(VisualTemplate, AnMjpegFrameLargerThanItsMessageSaysIsRefusedBeforeDecoding
   std::vector<uint8_t> jpeg;
   cv::imencode(".jpg", cv::Mat(16, 16, CV_8UC1, const_cast<uint8_t*>(grey.data())), jpeg);
   const VisualParams p = plain_params();
-  EXPECT_NO_THROW(make_visual_template(view(jpeg, 16, 16, 0, kPixMjpeg), p));
+  EXPECT_NO_THROW(make_visual_template(view(jpeg, 16, 16, 0, kPixMjpeg), p, mjpeg()));
   // The frame header (SOF0: FF C0, length, precision, height, width) patched to 32752 x 32752: a
   // 300-byte message that decoded into 1 GB of pixels (5 GB once converted) and took 12 s.
   std::size_t sof = 2;
@@ -114,14 +121,14 @@ TEST(VisualTemplate, AnMjpegFrameLargerThanItsMessageSaysIsRefusedBeforeDecoding
     jpeg[at + 1] = 0xf0;
   }
   try {
-    make_visual_template(view(jpeg, 16, 16, 0, kPixMjpeg), p);
+    make_visual_template(view(jpeg, 16, 16, 0, kPixMjpeg), p, mjpeg());
     FAIL() << "a frame that does not match its message must be refused";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("32752x32752 by its JPEG header, the message says 16x16"), std::string::npos)
         << e.what();
   }
   const std::vector<uint8_t> not_jpeg{0xff, 0xd8, 0xff, 0xda, 0x00, 0x02, 0x00, 0x00};
-  EXPECT_THROW(make_visual_template(view(not_jpeg, 16, 16, 0, kPixMjpeg), p), InputError);
+  EXPECT_THROW(make_visual_template(view(not_jpeg, 16, 16, 0, kPixMjpeg), p, mjpeg()), InputError);
   // A header claiming 10000 x 10000 for a message that says the same: refused before decoding
   // (it took 2 s and 550 MB, and the grey it decoded to became a template).
   for (std::size_t at : {sof + 5, sof + 7}) {
@@ -129,7 +136,7 @@ TEST(VisualTemplate, AnMjpegFrameLargerThanItsMessageSaysIsRefusedBeforeDecoding
     jpeg[at + 1] = 10000 & 0xff;
   }
   try {
-    make_visual_template(view(jpeg, 10000, 10000, 0, kPixMjpeg), p);
+    make_visual_template(view(jpeg, 10000, 10000, 0, kPixMjpeg), p, mjpeg());
     FAIL() << "a 100 MP MJPEG frame must be refused before decoding";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("10000x10000 is larger than 4096x4096"), std::string::npos) << e.what();
@@ -144,10 +151,10 @@ TEST(VisualTemplate, AnMjpegFrameCutOffInTransferIsRefusedNotDecodedToGrey) {
   const VisualParams p = plain_params();
   std::vector<uint8_t> padded = jpeg;  // zero padding after the end marker, as some cameras send
   padded.resize(padded.size() + 100, 0x00);
-  EXPECT_NO_THROW(make_visual_template(view(padded, 64, 48, 0, kPixMjpeg), p));
+  EXPECT_NO_THROW(make_visual_template(view(padded, 64, 48, 0, kPixMjpeg), p, mjpeg()));
   std::vector<uint8_t> cut(jpeg.begin(), jpeg.begin() + static_cast<std::ptrdiff_t>(jpeg.size() * 2 / 3));
   try {
-    make_visual_template(view(cut, 64, 48, 0, kPixMjpeg), p);
+    make_visual_template(view(cut, 64, 48, 0, kPixMjpeg), p, mjpeg());
     FAIL() << "OpenCV decodes a cut-off JPEG, greying out the rest";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("cut off (no end-of-image marker)"), std::string::npos) << e.what();
@@ -169,14 +176,14 @@ TEST(VisualTemplate, AnMjpegFrameCutShortWithAnEndMarkerAppendedIsRefusedAndLibj
   ::testing::internal::CaptureStderr();
   std::string why;
   try {
-    make_visual_template(view(cut, 64, 48, 0, kPixMjpeg), p);
+    make_visual_template(view(cut, 64, 48, 0, kPixMjpeg), p, mjpeg());
   } catch (const InputError& e) {
     why = e.what();
   }
   const std::string err = ::testing::internal::GetCapturedStderr();
   EXPECT_NE(why.find("image: MJPEG frame is damaged (Corrupt JPEG data"), std::string::npos) << why;
   EXPECT_EQ(err, "") << "libjpeg's own line";
-  EXPECT_NO_THROW(make_visual_template(view(jpeg, 64, 48, 0, kPixMjpeg), p)) << "the whole frame still decodes";
+  EXPECT_NO_THROW(make_visual_template(view(jpeg, 64, 48, 0, kPixMjpeg), p, mjpeg())) << "the whole frame still decodes";
 }
 
 TEST(VisualTemplate, RefusesBadFramesWithAReason) {
@@ -185,12 +192,26 @@ TEST(VisualTemplate, RefusesBadFramesWithAReason) {
   EXPECT_THROW(make_visual_template(view(small, 640, 480, 640, kPixGrey), p), InputError);
   EXPECT_THROW(make_visual_template(view(small, 10, 10, 5, kPixGrey), p), InputError);
   EXPECT_THROW(make_visual_template(view(small, 10, 10, 10, fourcc('H', '2', '6', '4')), p), InputError);
-  EXPECT_THROW(make_visual_template(view(small, 10, 10, 0, kPixMjpeg), p), InputError);
+  EXPECT_THROW(make_visual_template(view(small, 10, 10, 0, kPixMjpeg), p, mjpeg()), InputError);
   EXPECT_THROW(make_visual_template(view(small, 0, 10, 10, kPixGrey), p), InputError);
   try {
     make_visual_template(view(small, 10, 10, 10, fourcc('H', '2', '6', '4')), p);
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("H264"), std::string::npos) << e.what();
+  }
+}
+
+TEST(VisualTemplate, WithoutADecoderAnMjpegFrameIsAFormatTheCoreDoesNotRead) {
+  const std::vector<uint8_t> grey(16 * 16, 100);
+  std::vector<uint8_t> jpeg;
+  cv::imencode(".jpg", cv::Mat(16, 16, CV_8UC1, const_cast<uint8_t*>(grey.data())), jpeg);
+  const VisualParams p = plain_params();
+  EXPECT_NO_THROW(make_visual_template(view(jpeg, 16, 16, 0, kPixMjpeg), p, mjpeg()));
+  try {
+    make_visual_template(view(jpeg, 16, 16, 0, kPixMjpeg), p);
+    FAIL() << "the core has no JPEG decoder of its own";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("unsupported pixel format 'MJPG'"), std::string::npos) << e.what();
   }
 }
 

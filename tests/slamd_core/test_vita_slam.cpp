@@ -1,6 +1,7 @@
 // The ViTa-SLAM cycle: modes, degraded senses, loop closure, parameters and exact checkpoints.
 #include "whiskeye/slam/vita_slam.h"
 
+#include "mjpeg_decode.h"  // slamd's MJPEG decoder, which SlamNode gives the core
 #include "synthetic.h"
 
 #include <gtest/gtest.h>
@@ -223,6 +224,7 @@ TEST(VitaSlam, WithoutAFrameAndWithoutContactViTaMatchesNothing) {
 TEST(VitaSlam, ABadFrameIsCountedAndTheCycleGoesOn) {
   World w;
   VitaSlam slam(SlamParams{}, w.geometry);
+  slam.set_frame_decoder(slamd::mjpeg_decoder());  // as SlamNode gives it
   const std::vector<uint8_t> junk(10, 0);
   const ImageView bad{0, 640, 480, 640, kPixMjpeg, junk};
   CycleInput in = input(w.place(0), 1);

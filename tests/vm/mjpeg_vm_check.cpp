@@ -1,6 +1,6 @@
 // VM test program of the MJPEG scenario (scenario_camerad_mjpeg.sh): records what camerad publishes on
 // CAMERA while the writer feeds v4l2loopback known frames and damaged ones, until SIGTERM (or
-// --seconds), then decodes every frame with slamd's decoder (slam::decode_mjpeg_grey) and reports
+// --seconds), then decodes every frame with slamd's decoder (slamd::decode_mjpeg_grey) and reports
 // one PASS/FAIL line per behaviour: the frames are 640x480 MJPG as negotiated, every one decodes (no
 // damaged frame got through camerad), each carries the pattern the writer drew for its number
 // (within a JPEG's tolerance), and the numbers only go up (no frame twice, none out of order).
@@ -16,8 +16,8 @@
 #include <whiskeye/common/bus.h>
 #include <whiskeye/common/clock.h>
 #include <whiskeye/image_t.hpp>
-#include <whiskeye/slam/mjpeg_decode.h>
 
+#include "mjpeg_decode.h"
 #include "mjpeg_pattern.h"
 
 #include "vm_report.h"
@@ -75,7 +75,7 @@ int main(int argc, char** argv) {
   for (const image_t& f : frames) {
     if (f.width != 640 || f.height != 480) continue;
     try {
-      slam::decode_mjpeg_grey(f.data, f.width, f.height, grey.data(), 640);
+      slamd::decode_mjpeg_grey(f.data, f.width, f.height, grey.data(), 640);
     } catch (const slam::InputError& e) {
       ++undecodable;
       decode_why = "seq " + std::to_string(f.seq) + ": " + e.what();

@@ -245,6 +245,24 @@ std::size_t encode_command_classic(const MotorCommand& c, int board, std::span<u
   return kClassicBytes;
 }
 
+void encode_command(const MotorCommand& c, BusMode mode, const ProtocolIds& ids, CommandFrames& out) {
+  if (mode == BusMode::kFd) {
+    CommandFrame& f = out.frames[0];
+    f.fd = true;
+    f.id = command_id(ids);
+    f.len = static_cast<uint8_t>(encode_command_fd(c, f.data));
+    out.count = 1;
+    return;
+  }
+  for (int b = 0; b < kNumBoards; ++b) {
+    CommandFrame& f = out.frames[static_cast<std::size_t>(b)];
+    f.fd = false;
+    f.id = command_board_id(ids, b);
+    f.len = static_cast<uint8_t>(encode_command_classic(c, b, f.data));
+  }
+  out.count = kNumBoards;
+}
+
 bool SampleAssembler::accept(Board& b, const BoardSample& s) {
   if (b.have && !b.restarted) {
     const uint32_t modulus = mode_ == BusMode::kFd ? 0x10000u : 0x100u;

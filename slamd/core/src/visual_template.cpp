@@ -10,8 +10,6 @@
 #include <cmath>
 #include <string>
 
-#include "whiskeye/slam/mjpeg_decode.h"
-
 namespace whiskeye::slam {
 
 void load(const ParamNode& n, VisualParams& p) {
@@ -53,7 +51,7 @@ void check_raw(const ImageView& im, int bytes_per_pixel) {
   }
 }
 
-cv::Mat to_grey8(const ImageView& im) {
+cv::Mat to_grey8(const ImageView& im, const FrameDecoder* decoder) {
   // OpenCV wants a non-const pointer for a header over foreign data; it is only read.
   auto* data = const_cast<uint8_t*>(im.data.data());
   const auto stride = static_cast<size_t>(im.row_stride);
@@ -74,12 +72,13 @@ cv::Mat to_grey8(const ImageView& im) {
       check_raw(im, 3);
       cv::cvtColor(cv::Mat(im.height, im.width, CV_8UC3, data, stride), grey, cv::COLOR_BGR2GRAY);
       return grey;
-    case kPixMjpeg:
-      check_mjpeg_frame(im.data, im.width, im.height);  // before allocating what the message claims
-      grey.create(im.height, im.width, CV_8UC1);
-      decode_mjpeg_grey(im.data, im.width, im.height, grey.data, grey.step[0]);
-      return grey;
     default:
+      if (decoder != nullptr && im.pixelformat == decoder->pixelformat) {
+        decoder->check(im);  // before allocating what the message claims
+        grey.create(im.height, im.width, CV_8UC1);
+        decoder->decode(im, grey.data, grey.step[0]);
+        return grey;
+      }
       throw InputError("image: unsupported pixel format '" + fourcc_text(im.pixelformat) + "'");
   }
 }
@@ -151,8 +150,8 @@ VisualTemplate make_visual_template_from_grey(const float* grey, int width, int 
   return t;
 }
 
-VisualTemplate make_visual_template(const ImageView& image, const VisualParams& params) {
-  const cv::Mat grey8 = to_grey8(image);
+VisualTemplate make_visual_template(const ImageView& image, const VisualParams& params, const FrameDecoder* decoder) {
+  const cv::Mat grey8 = to_grey8(image, decoder);
   cv::Mat grey;
   grey8.convertTo(grey, CV_32F, 1.0 / 255.0);
   return make_visual_template_from_grey(grey.ptr<float>(), grey.cols, grey.rows, static_cast<int>(grey.step1()),

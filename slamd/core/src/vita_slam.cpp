@@ -111,7 +111,7 @@ VitaSlam::CycleTemplates VitaSlam::make_templates(const CycleInput& in, CycleRes
   CycleTemplates t;
   if (uses_visual(params_.mode) && in.image != nullptr) {
     try {
-      t.visual = make_visual_template(*in.image, params_.visual);
+      t.visual = make_visual_template(*in.image, params_.visual, decoder_ ? &*decoder_ : nullptr);
     } catch (const InputError& e) {
       ++stats_.bad_images;
       out.image_warning = e.what();

@@ -1,8 +1,8 @@
 // Camera frame → small JPEG for the page (camera_jpeg.h).
 #include "whiskeye/viewer/camera_jpeg.h"
 
+#include "mjpeg_decode.h"
 #include "slam_node.h"
-#include "whiskeye/slam/mjpeg_decode.h"
 
 #include <whiskeye/image_t.hpp>
 
@@ -36,9 +36,9 @@ std::shared_ptr<const std::string> frame_to_jpeg(const Frame& f, int max_width, 
     } else {
       // slamd's decoder: checks the frame before allocating what its header claims, refuses a
       // damaged one with libjpeg's reason, and writes nothing to stderr.
-      slam::check_mjpeg_frame(f.data, f.width, f.height);
+      slamd::check_mjpeg_frame(f.data, f.width, f.height);
       image.create(f.height, f.width, CV_8UC1);
-      slam::decode_mjpeg_grey(f.data, f.width, f.height, image.data, image.step[0]);
+      slamd::decode_mjpeg_grey(f.data, f.width, f.height, image.data, image.step[0]);
     }
   } catch (const std::exception& e) {
     if (reason) *reason = e.what();

@@ -152,6 +152,23 @@ inline uint32_t command_board_id(const ProtocolIds& ids, int board) {
 }
 inline uint32_t heartbeat_id(const ProtocolIds& ids, int board) { return ids.heartbeat_base + board + 1; }
 
+// One frame of a motor command as it goes on the bus. `fd`: a CAN FD frame sent with bit-rate switch;
+// otherwise a classic frame.
+struct CommandFrame {
+  uint32_t id = 0;
+  bool fd = false;
+  uint8_t len = 0;
+  std::array<uint8_t, kFdCommandBytes> data{};
+};
+// Every frame of one motor command, in the order they are sent.
+struct CommandFrames {
+  std::array<CommandFrame, kNumBoards> frames{};
+  int count = 0;
+};
+// The frames that carry `c` on a bus in `mode`: FD, one broadcast frame (command_id) for all
+// boards; classic, one frame per board (command_board_id), board 0 first. No allocation.
+void encode_command(const MotorCommand& c, BusMode mode, const ProtocolIds& ids, CommandFrames& out);
+
 // Counts decoded and rejected frames by reason.
 struct DecodeCounters {
   int64_t frames = 0;

@@ -2,7 +2,8 @@
 // on the host: frames in (on_frame), one control period out (step) — latest sample of every board
 // -> calibration -> rcp_whisking controller -> motor command -> the messages to publish — plus the
 // safety state machine (GPIO fault: motors off at once and latched; stop request, stale bus or a
-// silent board: retract, then drop enable). The daemon (whiskerd_main.cpp) is the thin wiring around it.
+// silent board: retract, then drop enable). The daemon (ControlLoop,
+// control_loop.h, and whiskerd_main.cpp) is the thin wiring around it.
 #pragma once
 
 #include <whiskeye/common/channels.h>
@@ -29,9 +30,10 @@ namespace whiskeye::whiskerd {
 
 constexpr int kN = kNumWhiskers;
 
-struct Params {
+// What the control core needs (WhiskerCore): the bus's frame format and rate, the safety timings,
+// the calibration and the whisking controller.
+struct CoreParams {
   // can
-  std::string interface = "can0";
   wp::BusMode mode = wp::BusMode::kFd;
   wp::ProtocolIds ids;
   double rate_hz = 500.0;         // control and sample rate
@@ -41,6 +43,15 @@ struct Params {
   bool whisk_on_start = true;     // start whisking as soon as every board is streaming
   // calibration, per whisker
   std::array<wp::WhiskerCalibration, kN> calibration{};
+  // the whisking controller (section `rcp`: pattern, detector, rcp)
+  rcp::ControllerParams controller;
+};
+
+// The whole of whiskerd.yaml: the core's part and the daemon's (the CAN interface, the motor lines,
+// real-time scheduling, LCM).
+struct Params : CoreParams {
+  // can
+  std::string interface = "can0";
   // gpio
   bool gpio = true;
   gpio::LineNames lines;
@@ -55,8 +66,6 @@ struct Params {
   std::string channel_cycle = channels::kWhiskCycle;
   std::string channel_status = channels::kDriverStatus;
   double status_period_s = 1.0;
-  // the whisking controller (section `rcp`: pattern, detector, rcp)
-  rcp::ControllerParams controller;
 };
 
 // Loads a whole whiskerd.yaml (every section optional); unknown keys and bad values throw ParamError
@@ -100,7 +109,7 @@ struct Counters {
 
 class WhiskerCore {
  public:
-  explicit WhiskerCore(const Params& params);
+  explicit WhiskerCore(const CoreParams& params);
 
   // One received frame; mono_us is the receive time on the monotonic clock.
   void on_frame(uint32_t id, bool fd, std::span<const uint8_t> data, int64_t mono_us);
@@ -147,7 +156,7 @@ class WhiskerCore {
   // handed back (a dropped period) only costs one allocation at a later completion.
   static constexpr int kCyclePool = 4;
 
-  Params params_;
+  CoreParams params_;
   rcp::Controller controller_;
   std::array<std::unique_ptr<rcp::WhiskCycle>, kCyclePool> cycle_pool_;
   int pooled_cycles_ = 0;

@@ -1,4 +1,5 @@
-// Visual template (paper Fig. 2 / Algorithm 1 "visual process"): decode → greyscale → crop →
+// Visual template (paper Fig. 2 / Algorithm 1 "visual process"): greyscale (a compressed frame
+// decoded by the injected FrameDecoder) → crop →
 // block-average subsample → normalise. The result is stored compactly as one byte per pixel
 // (intensity in [0, 1] quantised to 0..255), which is what the matcher compares.
 #pragma once
@@ -6,7 +7,9 @@
 #include "whiskeye/common/params.h"
 #include "whiskeye/slam/types.h"
 
+#include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace whiskeye::slam {
@@ -35,9 +38,21 @@ struct VisualTemplate {
   float mean = 0.0f;            // mean intensity in [0, 1] (for the matcher's prefilter)
 };
 
-// Throws InputError naming the problem (size/stride/data length mismatch, unknown FourCC, corrupt
-// JPEG, empty crop).
-VisualTemplate make_visual_template(const ImageView& image, const VisualParams& params);
+// A compressed pixel format (MJPEG) is not decoded by the core, which holds no image codec: the
+// daemon's edge injects a decoder for it (slamd: slamd::mjpeg_decoder(), slamd/daemon/mjpeg_decode.h).
+struct FrameDecoder {
+  uint32_t pixelformat = 0;  // the format it decodes
+  // Refuses a frame (InputError) before anything is allocated for what it claims.
+  std::function<void(const ImageView& frame)> check;
+  // Decodes a checked frame to 8-bit grey into `out` (`stride` bytes a row, frame.height rows);
+  // throws InputError.
+  std::function<void(const ImageView& frame, uint8_t* out, std::size_t stride)> decode;
+};
+
+// Throws InputError naming the problem (size/stride/data length mismatch, unknown FourCC, a frame
+// `decoder` refuses, empty crop). `decoder`: for its compressed format, else none.
+VisualTemplate make_visual_template(const ImageView& image, const VisualParams& params,
+                                    const FrameDecoder* decoder = nullptr);
 
 // From an already greyscale float image in [0, 1] (tests, and the path every format ends in).
 VisualTemplate make_visual_template_from_grey(const float* grey, int width, int height, int stride_floats,

@@ -90,6 +90,10 @@ class VitaSlam {
   }
   bool localise_only() const { return localise_only_; }
 
+  // The decoder of a compressed camera format (MJPEG), injected by the daemon's edge; without it such
+  // a frame is refused (counted in bad_images) like any format the core does not read.
+  void set_frame_decoder(FrameDecoder decoder) { decoder_ = std::move(decoder); }
+
   // The whole state as a checkpoint blob: serialise_unsealed() + seal().
   std::vector<uint8_t> serialise() const;
   // The same in two steps, so that a daemon takes only the copy on its loop's thread and leaves the
@@ -127,6 +131,7 @@ class VitaSlam {
   int64_t last_odometry_utime_ = 0;
   bool have_odometry_time_ = false;
   bool localise_only_ = false;  // not serialised: a property of the run, not of the map
+  std::optional<FrameDecoder> decoder_;  // not serialised either
 };
 
 }  // namespace whiskeye::slam

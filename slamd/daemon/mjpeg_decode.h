@@ -1,7 +1,9 @@
-// slamd's MJPEG decoder: one camera frame (a JPEG) to 8-bit grey, refusing a damaged one with a
-// reason instead of decoding it to grey. The visual template uses it (make_visual_template for
-// kPixMjpeg); the VM test of camerad's MJPEG path decodes the published frames with it too, and
-// bench/slamd_core/bench_mjpeg.cpp measures it against cv::imdecode and libturbojpeg.
+// slamd's MJPEG decoder, at the daemon's edge (the SLAM core holds no image codec): one camera frame
+// (a JPEG) to 8-bit grey, refusing a damaged one with a reason instead of decoding it to grey.
+// SlamNode gives it to the core as its FrameDecoder (mjpeg_decoder()), so make_visual_template reads
+// MJPEG frames; the viewer shows frames with it, the VM test of camerad's MJPEG path decodes the
+// published frames with it too, and bench/slamd_core/bench_mjpeg.cpp measures it against
+// cv::imdecode and libturbojpeg.
 #pragma once
 
 #include <cstddef>
@@ -9,8 +11,9 @@
 #include <span>
 
 #include "whiskeye/slam/types.h"
+#include "whiskeye/slam/visual_template.h"
 
-namespace whiskeye::slam {
+namespace whiskeye::slamd {
 
 // What is checked before decoding, without allocating (so the caller may allocate `out` after it):
 // the size in the JPEG's header must be the message's (`width` x `height`) and at most 4096 x 4096
@@ -24,4 +27,7 @@ void check_mjpeg_frame(std::span<const uint8_t> jpeg, int width, int height);
 // writes nothing to stderr. Throws InputError ("image: MJPEG frame ...").
 void decode_mjpeg_grey(std::span<const uint8_t> jpeg, int width, int height, uint8_t* out, std::size_t stride);
 
-}  // namespace whiskeye::slam
+// The two above as the SLAM core's decoder of kPixMjpeg frames.
+slam::FrameDecoder mjpeg_decoder();
+
+}  // namespace whiskeye::slamd

@@ -1,5 +1,5 @@
 // slamd's MJPEG decoder (see mjpeg_decode.h), over libjpeg's C API (libjpeg-turbo in Debian).
-#include "whiskeye/slam/mjpeg_decode.h"
+#include "mjpeg_decode.h"
 
 #include <whiskeye/common/jpeg_markers.h>
 
@@ -10,7 +10,10 @@
 // libjpeg's C API, after <cstdio> (it needs FILE).
 #include <jpeglib.h>
 
-namespace whiskeye::slam {
+namespace whiskeye::slamd {
+
+using slam::InputError;
+
 namespace {
 
 // MJPEG frames are decoded with libjpeg directly (as OpenCV's imdecode does underneath) so that its
@@ -115,4 +118,14 @@ void decode_mjpeg_grey(std::span<const uint8_t> jpeg, int width, int height, uin
   throw InputError("image: MJPEG frame does not decode");
 }
 
-}  // namespace whiskeye::slam
+slam::FrameDecoder mjpeg_decoder() {
+  slam::FrameDecoder d;
+  d.pixelformat = slam::kPixMjpeg;
+  d.check = [](const slam::ImageView& f) { check_mjpeg_frame(f.data, f.width, f.height); };
+  d.decode = [](const slam::ImageView& f, uint8_t* out, std::size_t stride) {
+    decode_mjpeg_grey(f.data, f.width, f.height, out, stride);
+  };
+  return d;
+}
+
+}  // namespace whiskeye::slamd

@@ -1,0 +1,60 @@
+// slamd's two ways of running, each the wiring of one SlamNode (main.cpp parses the command line and
+// picks one): live (run_live.cpp: LCM in and out, checkpoints through the writer thread, systemd
+// notifications, signals) and offline (run_replay.cpp: --replay, a log in and a log out through a
+// MemoryBus, checkpoints written at once). What map they start from: startup.h.
+#pragma once
+
+#include "checkpoint_store.h"
+#include "slam_node.h"
+#include "startup.h"
+
+#include "whiskeye/common/robot_geometry.h"
+#include "whiskeye/slam/vita_slam.h"
+
+#include <cstdio>
+#include <memory>
+#include <string>
+
+namespace whiskeye::slamd {
+
+// The command line.
+struct Options {
+  std::string config;
+  std::string robot;
+  std::string mode;
+  std::string lcm_url;
+  std::string state_dir;
+  int checkpoint_every = 1;
+  int checkpoint_keep = 3;
+  bool fresh = false;
+  std::string map_file;
+  bool localise = false;
+  std::string replay_in;
+  std::string replay_out;
+  bool timing = false;
+  bool print_config = false;
+};
+
+struct Loaded {
+  slam::SlamParams slam;
+  NodeParams node;
+  RobotGeometry robot = default_robot_geometry();
+  std::string dump;
+};
+
+// "slamd: <line>" on stderr.
+inline void log_line(const std::string& line) { std::fprintf(stderr, "slamd: %s\n", line.c_str()); }
+
+// The map slamd starts from (slamd/daemon/startup.h: --map, resume or --fresh).
+inline std::unique_ptr<slam::VitaSlam> make_slam(const Loaded& cfg, const Options& o, CheckpointStore* store) {
+  return start_slam(cfg.slam, cfg.robot, StartupOptions{o.map_file, o.localise, o.fresh}, store,
+                           log_line);
+}
+
+
+// Until SIGTERM / SIGINT, or a failed LCM receive (exit 1); the final state is checkpointed.
+int run_live(const Loaded& cfg, const Options& o);
+// The whole of --replay's log; 1 if the log was damaged or the final checkpoint failed.
+int run_replay(const Loaded& cfg, const Options& o);
+
+}  // namespace whiskeye::slamd

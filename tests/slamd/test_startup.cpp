@@ -1,0 +1,117 @@
+// slamd's startup policy (slamd/daemon/startup.h) on scratch state directories: a new map, resuming
+// from the newest checkpoint, --fresh, --map refused where it would rotate out another map, a
+// checkpoint that cannot be loaded refusing the start, and when a store is opened at all.
+#include "startup.h"
+
+#include "scratch.h"
+
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+namespace whiskeye::slamd {
+namespace {
+
+class SlamdStartup : public ::testing::Test {
+ protected:
+  std::unique_ptr<slam::VitaSlam> start(const StartupOptions& o, CheckpointStore* store) {
+    return start_slam(params_, robot_, o, store, [this](const std::string& line) { log_.push_back(line); });
+  }
+  bool logged(const std::string& text) const {
+    for (const std::string& l : log_) {
+      if (l.find(text) != std::string::npos) return true;
+    }
+    return false;
+  }
+  // A checkpoint of an empty map in `mode`, written into `store`; its path.
+  std::string write_map(CheckpointStore& store, uint64_t sequence, slam::Mode mode = slam::Mode::Vita) {
+    slam::SlamParams p = params_;
+    p.mode = mode;
+    return store.write(sequence, slam::VitaSlam(p, robot_).serialise());
+  }
+
+  slam::SlamParams params_;
+  RobotGeometry robot_ = default_robot_geometry();
+  std::vector<std::string> log_;
+};
+
+TEST_F(SlamdStartup, AnEmptyStateDirectoryStartsANewMap) {
+  CheckpointStore store(testing::scratch_dir("startup_empty"), 3);
+  auto s = start({}, &store);
+  ASSERT_NE(s, nullptr);
+  EXPECT_EQ(s->stats().cycles, 0);
+  EXPECT_TRUE(log_.empty());
+}
+
+TEST_F(SlamdStartup, ResumesFromTheNewestCheckpoint) {
+  CheckpointStore store(testing::scratch_dir("startup_resume"), 3);
+  write_map(store, 4);
+  const std::string newest = write_map(store, 9);
+  auto s = start({}, &store);
+  ASSERT_NE(s, nullptr);
+  EXPECT_TRUE(logged("resuming from " + newest + " (after cycle 9)"))
+      << (log_.empty() ? "" : log_[0]);
+}
+
+TEST_F(SlamdStartup, FreshIgnoresTheCheckpointsHeld) {
+  CheckpointStore store(testing::scratch_dir("startup_fresh"), 3);
+  write_map(store, 9);
+  StartupOptions o;
+  o.fresh = true;
+  ASSERT_NE(start(o, &store), nullptr);
+  EXPECT_FALSE(logged("resuming")) << log_[0];
+}
+
+TEST_F(SlamdStartup, ACheckpointThatCannotBeLoadedHereRefusesTheStart) {
+  CheckpointStore store(testing::scratch_dir("startup_other_mode"), 3);
+  write_map(store, 9, slam::Mode::Visual);  // params_ are vita's
+  try {
+    start({}, &store);
+    FAIL() << "started although the newest checkpoint is another mode's map";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot resume from"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("--fresh"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(store.list().size(), 1u) << "the map is left where it is";
+}
+
+TEST_F(SlamdStartup, GrowingAMapIsRefusedWhereItWouldRotateOutAnotherOne) {
+  const std::string map_file = testing::scratch_file("startup_map", ".vslam");
+  write_checkpoint_file(map_file, 5, slam::VitaSlam(params_, robot_).serialise());
+  CheckpointStore store(testing::scratch_dir("startup_map_dir"), 3);
+  write_map(store, 9);
+  StartupOptions o;
+  o.map_file = map_file;
+  EXPECT_THROW(start(o, &store), std::runtime_error);
+  o.fresh = true;  // the operator lets the held map go
+  ASSERT_NE(start(o, &store), nullptr);
+  EXPECT_TRUE(logged("loaded map " + map_file + " (0 experiences)"));
+  o.fresh = false;
+  o.localise = true;  // writes no checkpoints: nothing is rotated out
+  auto s = start(o, &store);
+  ASSERT_NE(s, nullptr);
+  EXPECT_TRUE(s->localise_only());
+  EXPECT_TRUE(logged("localising without growing it"));
+}
+
+TEST_F(SlamdStartup, NoStoreWithLocaliseOrWithoutADirectory) {
+  std::optional<CheckpointStore> store;
+  open_store(store, testing::scratch_dir("startup_store"), 3, /*localise=*/true);
+  EXPECT_FALSE(store.has_value());
+  open_store(store, "", 3, false);
+  EXPECT_FALSE(store.has_value());
+  open_store(store, testing::scratch_dir("startup_store2"), 3, false);
+  EXPECT_TRUE(store.has_value());
+}
+
+TEST_F(SlamdStartup, LiveStateDirectoryIsTheOptionThenSystemdsThenVarLib) {
+  EXPECT_EQ(live_state_directory("/tmp/given"), "/tmp/given");
+  ::setenv("STATE_DIRECTORY", "/run/state", 1);
+  EXPECT_EQ(live_state_directory(""), "/run/state");
+  ::unsetenv("STATE_DIRECTORY");
+  EXPECT_EQ(live_state_directory(""), "/var/lib/slamd");
+}
+
+}  // namespace
+}  // namespace whiskeye::slamd
