@@ -5,7 +5,7 @@
 // match); odd = the bytes are VitaSlam's unsealed state, sealed and wrapped in a header here, with
 // byte 0's bits 1-2 choosing the mode the loader expects (visual, tactile, vita).
 // Seeds: fuzz/corpus/checkpoint, states of a short simulator run (fuzz_make_seeds).
-#include "checkpoint_store.h"
+#include "whiskeye/slamd/checkpoint_store.h"
 
 #include "whiskeye/common/robot_geometry.h"
 #include "whiskeye/slam/vita_slam.h"

@@ -3,8 +3,8 @@
 //   fuzz_make_seeds SIM.lcmlog SIM.candump OUT_DIR
 // Writes OUT_DIR/{slamd_edge,lcm_log,checkpoint,odometry_reply,whisker_frame}/seed-*. The YAML
 // corpora (params, world) are the files of config/, copied by scripts/fuzz.
-#include "checkpoint_store.h"
-#include "slam_node.h"
+#include "whiskeye/slamd/checkpoint_store.h"
+#include "whiskeye/slamd/slam_node.h"
 
 #include "whiskeye/common/bus.h"
 #include "whiskeye/common/robot_geometry.h"

@@ -4,7 +4,7 @@
 // the rest is the YAML text. A loader may refuse the text (ParamError naming what was wrong) but must
 // not crash, hang or throw anything else. camerad's loader is not here: it lives in camerad's main.
 // Seeds: fuzz/corpus/params, the files of config/ with their selector byte.
-#include "slam_node.h"
+#include "whiskeye/slamd/slam_node.h"
 #include "whiskeye/whiskerd/whiskerd_core.h"
 
 #include "whiskeye/based/params.h"

@@ -4,7 +4,7 @@
 // Input: records of [1 byte channel: 0 WHISK_CYCLE, 1 CAMERA, 2 ODOMETRY (mod 3)][2 bytes length,
 // big-endian][that many bytes of an encoded LCM message] (the last record takes what is left).
 // Seeds: fuzz/corpus/slamd_edge, simulator messages shortened by fuzz_make_seeds.
-#include "slam_node.h"
+#include "whiskeye/slamd/slam_node.h"
 
 #include "whiskeye/common/bus.h"
 #include "whiskeye/common/robot_geometry.h"

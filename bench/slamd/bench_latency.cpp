@@ -12,8 +12,8 @@
 //   BM_CycleLatency/<n>              the core as configured in config/slam.yaml
 //   BM_CycleLatencyNoPrefilter/<n>   the same with the matcher's exact lower-bound prefilter off,
 //                                    i.e. every stored template compared in full (the plain scan)
-#include "checkpoint_store.h"
-#include "checkpoint_writer.h"
+#include "whiskeye/slamd/checkpoint_store.h"
+#include "whiskeye/slamd/checkpoint_writer.h"
 #include "synthetic.h"
 #include "whiskeye/slam/vita_slam.h"
 

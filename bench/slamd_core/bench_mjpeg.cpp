@@ -17,7 +17,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "mjpeg_decode.h"
+#include "whiskeye/slamd/mjpeg_decode.h"
 #include "mjpeg_pattern.h"
 
 namespace {

@@ -3,7 +3,7 @@
 // (the silent disconnection the configurable names guard against: docs/lcm-channels.md, "Renaming a
 // channel"). Through the bus seam: whiskerd's conversion publishes on its configured channel, the
 // slamd node reads its own, on one in-memory bus.
-#include "slam_node.h"
+#include "whiskeye/slamd/slam_node.h"
 #include "whiskeye/whiskerd/whiskerd_core.h"
 
 #include <whiskeye/odometry_t.hpp>

@@ -1,5 +1,5 @@
-#include "checkpoint_store.h"
-#include "checkpoint_writer.h"
+#include "whiskeye/slamd/checkpoint_store.h"
+#include "whiskeye/slamd/checkpoint_writer.h"
 #include "scratch.h"
 
 #include <gmock/gmock.h>

@@ -1,5 +1,5 @@
 // The slamd node on an in-memory bus: what it publishes per cycle, and how it survives bad input.
-#include "slam_node.h"
+#include "whiskeye/slamd/slam_node.h"
 
 #include <whiskeye/driver_status_t.hpp>
 #include <whiskeye/slam_status_t.hpp>

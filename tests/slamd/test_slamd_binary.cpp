@@ -1,7 +1,7 @@
 // The real slamd binary on a short simulator run: deterministic replay, checkpoints and resume,
 // reuse of a saved map, bad configuration, and a live run fed by lcm-logplayer over udpm:// (inside
 // a private network namespace) that takes the same decisions as --replay.
-#include "checkpoint_store.h"
+#include "whiskeye/slamd/checkpoint_store.h"
 #include "slamd_files.h"
 #include "subprocess.h"
 

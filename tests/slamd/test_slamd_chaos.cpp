@@ -10,8 +10,8 @@
 // cycle handed out, a whisk cycle waiting for its camera frame): held in memory, not yet a cycle, so
 // in no checkpoint. Every cycle handed out was checkpointed before the kill (the injector waits for
 // the newest checkpoint to hold it), so nothing processed is lost; the test proves that.
-#include "checkpoint_store.h"
-#include "cycle_sync.h"
+#include "whiskeye/slamd/checkpoint_store.h"
+#include "whiskeye/slamd/cycle_sync.h"
 #include "slamd_files.h"
 #include "scratch.h"
 #include "subprocess.h"

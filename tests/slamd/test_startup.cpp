@@ -1,7 +1,7 @@
-// slamd's startup policy (slamd/daemon/startup.h) on scratch state directories: a new map, resuming
+// slamd's startup policy (whiskeye/slamd/startup.h) on scratch state directories: a new map, resuming
 // from the newest checkpoint, --fresh, --map refused where it would rotate out another map, a
 // checkpoint that cannot be loaded refusing the start, and when a store is opened at all.
-#include "startup.h"
+#include "whiskeye/slamd/startup.h"
 
 #include "scratch.h"
 

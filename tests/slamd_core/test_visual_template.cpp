@@ -1,7 +1,7 @@
 // Visual template: formats, crop/subsample/normalise, and refusal of bad frames.
 #include "whiskeye/slam/visual_template.h"
 
-#include "mjpeg_decode.h"  // slamd's, at the daemon's edge: the core decodes no MJPEG itself
+#include "whiskeye/slamd/mjpeg_decode.h"  // slamd's, at the daemon's edge: the core decodes no MJPEG itself
 #include "synthetic.h"
 
 #include <gtest/gtest.h>

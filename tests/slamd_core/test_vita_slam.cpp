@@ -1,7 +1,7 @@
 // The ViTa-SLAM cycle: modes, degraded senses, loop closure, parameters and exact checkpoints.
 #include "whiskeye/slam/vita_slam.h"
 
-#include "mjpeg_decode.h"  // slamd's MJPEG decoder, which SlamNode gives the core
+#include "whiskeye/slamd/mjpeg_decode.h"  // slamd's MJPEG decoder, which SlamNode gives the core
 #include "synthetic.h"
 
 #include <gtest/gtest.h>

@@ -17,7 +17,7 @@
 #include <whiskeye/common/clock.h>
 #include <whiskeye/image_t.hpp>
 
-#include "mjpeg_decode.h"
+#include "whiskeye/slamd/mjpeg_decode.h"
 #include "mjpeg_pattern.h"
 
 #include "vm_report.h"

@@ -96,7 +96,7 @@ void load(const ParamNode& root, Params& p) {
   ids.get("command_base", command, 0, 0x7ff - wp::kNumBoards);
   ids.get("heartbeat_base", heartbeat, 0, 0x7ff - wp::kNumBoards);
   // whiskerd receives samples and heartbeats through kernel filters on the aligned 8-id block
-  // (mask 0x7f8, see whiskerd_main.cpp, `run`): node ids 1..6 must fall in base's own block.
+  // (mask 0x7f8, see main.cpp, `run`): node ids 1..6 must fall in base's own block.
   static_assert(wp::kNumBoards < 8, "node ids 1..kNumBoards fit one block of 8 ids");
   for (const auto& [key, base] : {std::pair<const char*, int>{"sample_base", sample}, {"heartbeat_base", heartbeat}}) {
     if (base % 8 != 0) {

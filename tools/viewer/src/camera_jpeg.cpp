@@ -1,8 +1,8 @@
 // Camera frame → small JPEG for the page (camera_jpeg.h).
 #include "whiskeye/viewer/camera_jpeg.h"
 
-#include "mjpeg_decode.h"
-#include "slam_node.h"
+#include "whiskeye/slamd/mjpeg_decode.h"
+#include "whiskeye/slamd/slam_node.h"
 
 #include <whiskeye/image_t.hpp>
 

@@ -1,7 +1,7 @@
 // The viewer's aggregated state and its JSON (viewer_state.h).
 #include "whiskeye/viewer/viewer_state.h"
 
-#include "slam_node.h"  // slamd's checks of WHISK_CYCLE and CAMERA messages, applied before showing them
+#include "whiskeye/slamd/slam_node.h"  // slamd's checks of WHISK_CYCLE and CAMERA messages, applied before showing them
 #include "whiskeye/common/channels.h"
 #include "whiskeye/common/robot_geometry.h"
 #include "whiskeye/common/wire_names.h"

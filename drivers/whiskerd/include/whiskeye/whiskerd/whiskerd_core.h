@@ -3,7 +3,7 @@
 // -> calibration -> rcp_whisking controller -> motor command -> the messages to publish — plus the
 // safety state machine (GPIO fault: motors off at once and latched; stop request, stale bus or a
 // silent board: retract, then drop enable). The daemon (ControlLoop,
-// control_loop.h, and whiskerd_main.cpp) is the thin wiring around it.
+// control_loop.h, and src/main.cpp) is the thin wiring around it.
 #pragma once
 
 #include <whiskeye/common/channels.h>

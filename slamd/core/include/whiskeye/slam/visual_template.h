@@ -39,7 +39,7 @@ struct VisualTemplate {
 };
 
 // A compressed pixel format (MJPEG) is not decoded by the core, which holds no image codec: the
-// daemon's edge injects a decoder for it (slamd: slamd::mjpeg_decoder(), slamd/daemon/mjpeg_decode.h).
+// daemon's edge injects a decoder for it (slamd: slamd::mjpeg_decoder(), whiskeye/slamd/mjpeg_decode.h).
 struct FrameDecoder {
   uint32_t pixelformat = 0;  // the format it decodes
   // Refuses a frame (InputError) before anything is allocated for what it claims.

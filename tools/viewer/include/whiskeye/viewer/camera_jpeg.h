@@ -2,7 +2,7 @@
 // for a browser: converted, downscaled, encoded. Pure computation (OpenCV and libjpeg), no I/O.
 #pragma once
 
-#include "cycle_sync.h"  // slamd::CameraFrame: image_t's header, the pixels as a view
+#include "whiskeye/slamd/cycle_sync.h"  // slamd::CameraFrame: image_t's header, the pixels as a view
 
 #include <memory>
 #include <string>

@@ -1,4 +1,4 @@
-#include "checkpoint_store.h"
+#include "whiskeye/slamd/checkpoint_store.h"
 
 #include <zlib.h>
 

@@ -2,7 +2,7 @@
 // systemd notifications, SIGTERM / SIGINT (run.h).
 #include "run.h"
 
-#include "checkpoint_writer.h"
+#include "whiskeye/slamd/checkpoint_writer.h"
 
 #include "whiskeye/common/bus.h"
 #include "whiskeye/common/clock.h"

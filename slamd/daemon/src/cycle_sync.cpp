@@ -1,4 +1,4 @@
-#include "cycle_sync.h"
+#include "whiskeye/slamd/cycle_sync.h"
 
 #include "whiskeye/common/bus.h"
 #include "whiskeye/common/utime.h"

@@ -4,8 +4,8 @@
 // writer thread live) stays with the caller.
 #pragma once
 
-#include "checkpoint_store.h"
-#include "slam_node.h"
+#include "whiskeye/slamd/checkpoint_store.h"
+#include "whiskeye/slamd/slam_node.h"
 
 #include "whiskeye/common/robot_geometry.h"
 #include "whiskeye/slam/vita_slam.h"

@@ -1,6 +1,6 @@
-#include "slam_node.h"
+#include "whiskeye/slamd/slam_node.h"
 
-#include "mjpeg_decode.h"
+#include "whiskeye/slamd/mjpeg_decode.h"
 
 #include "whiskeye/common/clock.h"
 #include "whiskeye/common/robot_geometry.h"

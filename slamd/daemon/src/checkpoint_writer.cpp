@@ -1,4 +1,4 @@
-#include "checkpoint_writer.h"
+#include "whiskeye/slamd/checkpoint_writer.h"
 
 #include "whiskeye/common/clock.h"
 

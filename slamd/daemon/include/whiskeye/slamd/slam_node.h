@@ -11,7 +11,7 @@
 // the defaults those of common/channels.h.
 #pragma once
 
-#include "cycle_sync.h"
+#include "whiskeye/slamd/cycle_sync.h"
 
 #include "whiskeye/common/bus.h"
 #include "whiskeye/common/channels.h"

@@ -1,5 +1,5 @@
 // slamd's startup policy: state directory, store, resume / --map / --fresh, checkpoint cadence.
-#include "startup.h"
+#include "whiskeye/slamd/startup.h"
 
 #include <cstdlib>
 #include <stdexcept>

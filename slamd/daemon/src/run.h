@@ -4,9 +4,9 @@
 // MemoryBus, checkpoints written at once). What map they start from: startup.h.
 #pragma once
 
-#include "checkpoint_store.h"
-#include "slam_node.h"
-#include "startup.h"
+#include "whiskeye/slamd/checkpoint_store.h"
+#include "whiskeye/slamd/slam_node.h"
+#include "whiskeye/slamd/startup.h"
 
 #include "whiskeye/common/robot_geometry.h"
 #include "whiskeye/slam/vita_slam.h"
@@ -45,7 +45,7 @@ struct Loaded {
 // "slamd: <line>" on stderr.
 inline void log_line(const std::string& line) { std::fprintf(stderr, "slamd: %s\n", line.c_str()); }
 
-// The map slamd starts from (slamd/daemon/startup.h: --map, resume or --fresh).
+// The map slamd starts from (whiskeye/slamd/startup.h: --map, resume or --fresh).
 inline std::unique_ptr<slam::VitaSlam> make_slam(const Loaded& cfg, const Options& o, CheckpointStore* store) {
   return start_slam(cfg.slam, cfg.robot, StartupOptions{o.map_file, o.localise, o.fresh}, store,
                            log_line);

@@ -1,5 +1,5 @@
 // slamd's MJPEG decoder (see mjpeg_decode.h), over libjpeg's C API (libjpeg-turbo in Debian).
-#include "mjpeg_decode.h"
+#include "whiskeye/slamd/mjpeg_decode.h"
 
 #include <whiskeye/common/jpeg_markers.h>
 
