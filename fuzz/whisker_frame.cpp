@@ -3,7 +3,7 @@
 // bit 1: classic bus mode), then the frame's data (at most 64 bytes, as on the bus).
 // Checks beyond "no crash": a rejected frame has a reason that formats without allocating, and an FD
 // sample that decodes re-encodes to the same bytes.
-#include "whiskeye/drivers/whisker_protocol.h"
+#include "whiskeye/whisker_protocol/whisker_protocol.h"
 
 #include <cstdlib>
 #include <cstring>

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "whiskeye/whiskerd/whiskerd_core.h"
-#include "whiskeye/drivers/whisker_protocol.h"
+#include "whiskeye/whisker_protocol/whisker_protocol.h"
 
 using namespace whiskeye;
 

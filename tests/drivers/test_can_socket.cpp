@@ -6,7 +6,7 @@
 
 #include <array>
 
-#include "whiskeye/drivers/can_socket.h"
+#include "whiskeye/can/can_socket.h"
 
 using namespace whiskeye::can;
 

@@ -6,7 +6,7 @@
 #include <string>
 
 #include "mjpeg_pattern.h"
-#include "whiskeye/drivers/v4l2_capture.h"
+#include "whiskeye/camera/v4l2_capture.h"
 
 using namespace whiskeye::v4l2;
 

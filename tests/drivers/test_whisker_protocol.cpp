@@ -6,7 +6,7 @@
 #include <random>
 #include <vector>
 
-#include "whiskeye/drivers/whisker_protocol.h"
+#include "whiskeye/whisker_protocol/whisker_protocol.h"
 
 using namespace whiskeye::wp;
 

@@ -3,7 +3,7 @@
 // outside world is gpio-mockup's debugfs folder: reading a line's file gives its value, writing 0/1
 // pulls an input there (and raises its edge interrupt). One PASS/FAIL line per behaviour.
 //   gpio_vm_check --chip-debugfs DIR --results FILE
-#include "whiskeye/drivers/motor_lines.h"
+#include "whiskeye/gpio/motor_lines.h"
 
 #include <CLI/CLI.hpp>
 

@@ -33,8 +33,8 @@
 #include <whiskeye/whisk_cycle_t.hpp>
 #include <whiskeye/whisker_sample_t.hpp>
 
-#include "whiskeye/drivers/can_socket.h"
-#include "whiskeye/drivers/whisker_protocol.h"
+#include "whiskeye/can/can_socket.h"
+#include "whiskeye/whisker_protocol/whisker_protocol.h"
 
 using namespace whiskeye;
 

@@ -1,5 +1,5 @@
 // V4L2 mmap streaming capture (see v4l2_capture.h).
-#include "whiskeye/drivers/v4l2_capture.h"
+#include "whiskeye/camera/v4l2_capture.h"
 
 #include <whiskeye/common/jpeg_markers.h>
 

@@ -1,5 +1,5 @@
 // SocketCAN raw socket (see can_socket.h).
-#include "whiskeye/drivers/can_socket.h"
+#include "whiskeye/can/can_socket.h"
 
 #include <linux/can.h>
 #include <linux/can/error.h>

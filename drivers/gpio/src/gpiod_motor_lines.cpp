@@ -5,7 +5,7 @@
 #include <chrono>
 #include <stdexcept>
 
-#include "whiskeye/drivers/motor_lines.h"
+#include "whiskeye/gpio/motor_lines.h"
 
 namespace whiskeye::gpio {
 namespace {

@@ -1,5 +1,5 @@
 // Whisker CAN protocol v1: byte layouts as documented in docs/can-protocol.md (all little-endian).
-#include "whiskeye/drivers/whisker_protocol.h"
+#include "whiskeye/whisker_protocol/whisker_protocol.h"
 
 #include <algorithm>
 #include <cmath>

@@ -16,7 +16,7 @@
 #include <whiskeye/common/clock.h>
 #include <whiskeye/common/service.h>
 
-#include "whiskeye/drivers/can_socket.h"
+#include "whiskeye/can/can_socket.h"
 #include "whiskeye/whiskerd/control_loop.h"
 #include "whiskeye/whiskerd/whiskerd_core.h"
 

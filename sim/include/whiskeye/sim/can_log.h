@@ -7,7 +7,7 @@
 // clocks: frames carry the samples' utime.
 #pragma once
 
-#include "whiskeye/drivers/whisker_protocol.h"
+#include "whiskeye/whisker_protocol/whisker_protocol.h"
 #include "whiskeye/sim/simulator.h"
 
 #include <whiskeye/rcp/types.h>

@@ -11,7 +11,7 @@
 
 #include "whiskeye/common/bus.h"
 #include "whiskeye/common/channels.h"
-#include "whiskeye/drivers/v4l2_capture.h"
+#include "whiskeye/camera/v4l2_capture.h"
 
 #include <whiskeye/driver_status_t.hpp>
 #include <whiskeye/image_t.hpp>

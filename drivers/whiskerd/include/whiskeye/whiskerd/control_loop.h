@@ -13,7 +13,7 @@
 #include "whiskeye/common/service.h"
 #include "whiskeye/common/socket_custody.h"
 #include "whiskeye/common/spsc_ring.h"
-#include "whiskeye/drivers/can_socket.h"
+#include "whiskeye/can/can_socket.h"
 #include "whiskeye/whiskerd/whiskerd_core.h"
 
 #include <time.h>

@@ -19,8 +19,8 @@
 #include <string>
 
 #include "whiskeye/common/latency_stats.h"
-#include "whiskeye/drivers/motor_lines.h"
-#include "whiskeye/drivers/whisker_protocol.h"
+#include "whiskeye/gpio/motor_lines.h"
+#include "whiskeye/whisker_protocol/whisker_protocol.h"
 
 namespace whiskeye {
 struct driver_status_t;
