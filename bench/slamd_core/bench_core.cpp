@@ -5,9 +5,13 @@
 //   BM_TemplateMatchReference/<n>  the same computation as a plain double-precision scalar loop (the
 //                                  way OpenRatSLAM / the original ViTa-SLAM code compute it)
 //   BM_TemplateMatchVisualOnly/<n>/<on>  visual terms only, random pixels, prefilter on (1) / off (0)
+//   BM_TemplateMatchPlainScan/<n>/<isa>  the plain scan (visual only, prefilter off) on each SAD
+//                                  implementation the CPU has: 0 scalar, 1 baseline SSE2 (the plain
+//                                  reference in the same run), 2 AVX2, 3 AVX-512BW (slamd/core/src/sad.h)
 //   BM_PoseCellUpdate              one pose-cell step (21×21×36) with motion
 //   BM_ExperienceRelax/<n>         20 relaxation loops over n experiences (chain + loop closures)
 //   BM_VisualTemplate, BM_TactileTemplate, BM_Cycle   per-cycle costs around them
+#include "sad.h"
 #include "synthetic.h"
 #include "whiskeye/slam/vita_slam.h"
 
@@ -186,7 +190,51 @@ void BM_TemplateMatchVisualOnly(benchmark::State& state) {
   }
   per_template_counter(state, n);
 }
-BENCHMARK(BM_TemplateMatchVisualOnly)->Args({10000, 1})->Args({10000, 0})->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_TemplateMatchVisualOnly)
+    ->Args({10000, 1})
+    ->Args({10000, 0})
+    ->Args({100000, 0})
+    ->Unit(benchmark::kMicrosecond);
+
+// The plain scan (every template, every shift: issue 27's ≤ 2 ms at 10,000 and ≤ 20 ms at 100,000)
+// with one SAD implementation forced, so the dispatched one (the fastest the CPU has) is compared
+// with the baseline-x86-64 build's in the same run. Skipped where the CPU lacks the instructions.
+void BM_TemplateMatchPlainScan(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const auto isa = static_cast<sad::Isa>(state.range(1));
+  state.SetLabel(sad::name(isa));
+  if (!sad::supported(isa)) {
+    state.SkipWithError("this CPU lacks the instructions");
+    for (auto _ : state) {
+    }
+    return;
+  }
+  const Data d = random_data(n + 1, 11);
+  TemplateStore store(kW, kH);
+  for (int i = 0; i < n; ++i) store.add({&d.visual[static_cast<size_t>(i)], nullptr}, 0, 0, 0);
+  const Query q{&d.visual.back(), nullptr};
+  MatchParams p = bench_match_params();
+  p.lower_bound_prefilter = false;
+  const sad::Isa before = sad::force(sad::Isa::kScalar);
+  const BestMatch want = store.match(q, {true, false}, p);
+  sad::force(isa);
+  const BestMatch got = store.match(q, {true, false}, p);
+  if (got.id != want.id || got.error != want.error || got.shift != want.shift) {
+    std::fprintf(stderr, "vita-bench: %s disagrees with the scalar SAD\n", sad::name(isa));
+    std::abort();
+  }
+  for (auto _ : state) {
+    BestMatch m = store.match(q, {true, false}, p);
+    benchmark::DoNotOptimize(m);
+  }
+  sad::force(before);
+  per_template_counter(state, n);
+}
+BENCHMARK(BM_TemplateMatchPlainScan)
+    ->ArgsProduct({{100, 10000}, {1, 2, 3}})
+    ->Args({100000, 1})
+    ->Args({100000, 3})
+    ->Unit(benchmark::kMicrosecond);
 
 void BM_TemplateMatchReference(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));

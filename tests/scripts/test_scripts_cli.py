@@ -20,6 +20,8 @@ BAD = {
     "netns-run": [[]],
     "test": [["--no-such-stage"]],
     "lcm-spy": [],
+    "bench": [["--bogus"], ["--filter"], ["--repetitions", "x"], ["--only", "no-such-bench"]],
+    "replay-speed": [["--bogus"], ["--runs", "0"], ["--mode", "x"], ["--log", "/no/such/log"]],
 }
 
 

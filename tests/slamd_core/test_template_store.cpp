@@ -201,6 +201,9 @@ TEST(TemplateMatch, StoresATemplateInAtMostThreeKilobytes) {
   for (int i = 0; i < 100; ++i) s.add({&v, &t}, 1, 2, 3);
   s.serialise(full);
   EXPECT_LE(static_cast<double>(full.size() - empty.size()) / 100.0, 3072.0);
+  // Exactly what template_store.h says: 2,906 bytes of parts plus 42 of bookkeeping.
+  EXPECT_EQ(full.size() - empty.size(), 100u * (64 * 40 + 125 * 2 + 24 * 4 + 42));
+  EXPECT_EQ(s.serialised_bytes(), full.size());
 }
 
 TEST(TemplateMatch, SerialisationRoundTripsExactly) {

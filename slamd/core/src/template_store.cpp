@@ -1,14 +1,17 @@
 // Template memory and matching. The visual term is the hot loop (every stored template, every
-// shift, every cycle): see visual_distance() for how it stays a single contiguous, auto-vectorised
-// sum of absolute byte differences per shift.
+// shift, every cycle): templates are stored column-major, so each shift's overlap is one contiguous
+// run, and all shifts' sums of absolute byte differences are taken in one pass (sad.h: AVX-512BW /
+// AVX2 chosen at run time, the same integers as the plain loop).
 #include "whiskeye/slam/template_store.h"
 
 #include "binary_io.h"
+#include "sad.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
+#include <optional>
 
 namespace whiskeye::slam {
 
@@ -26,18 +29,9 @@ void load(const ParamNode& n, MatchParams& p) {
 
 namespace {
 
-// Sum of |a[i] − b[i]|: GCC turns this exact shape into psadbw (SSE2) at -O3; unrolled so the
-// loop overhead does not dominate one psadbw per 16 bytes. On x86-64 a second clone uses AVX2
-// (32-byte vpsadbw), chosen at load time when the CPU has it: still runs on any x86-64.
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(__SANITIZE_ADDRESS__)
-__attribute__((target_clones("avx2", "default")))
-#endif
-uint32_t sad_u8(const uint8_t* __restrict a, const uint8_t* __restrict b, size_t n) {
-  uint32_t s = 0;
-#pragma GCC unroll 8
-  for (size_t i = 0; i < n; ++i) s += static_cast<uint32_t>(std::abs(static_cast<int>(a[i]) - static_cast<int>(b[i])));
-  return s;
-}
+// Σ|a[i] − b[i]| (sad.h): the plain C++ loop or its SSE2 / AVX2 / AVX-512BW versions, the fastest
+// the CPU has picked at run time; all give the same integer.
+uint32_t sad_u8(const uint8_t* a, const uint8_t* b, size_t n) { return sad::sad_u8(a, b, n); }
 
 // Row-major → column-major. Stored column-major, a column shift s is a flat offset of s·h and the
 // overlap of two templates is ONE contiguous run of (w − |s|)·h bytes: no per-row tails, no
@@ -119,32 +113,49 @@ uint32_t overlap_sad(const uint8_t* cur, const uint8_t* st, int s, Overlap o) {
   return s >= 0 ? sad_u8(cur + o.off, st, o.len) : sad_u8(cur, st + o.off, o.len);
 }
 
-// The block-mean bound of shift s's SAD; hb blocks per column.
-uint32_t shift_bound(const uint8_t* cur_blocks, const uint8_t* st_blocks, int w, int hb, int s) {
-  const Overlap o = overlap(w, hb, s);
-  const uint64_t raw = kBlockRows * static_cast<uint64_t>(overlap_sad(cur_blocks, st_blocks, s, o));
-  const uint64_t slack = o.len * (kBlockRows - 1);
+// The block-mean bound of shift s's SAD from the SAD of its coarse overlap; hb blocks per column.
+uint32_t block_bound(uint32_t coarse_sad, int w, int hb, int s) {
+  const uint64_t raw = kBlockRows * static_cast<uint64_t>(coarse_sad);
+  const uint64_t slack = overlap(w, hb, s).len * (kBlockRows - 1);
   return raw > slack ? static_cast<uint32_t>(raw - slack) : 0;
+}
+uint32_t shift_bound(const uint8_t* cur_blocks, const uint8_t* st_blocks, int w, int hb, int s) {
+  return block_bound(overlap_sad(cur_blocks, st_blocks, s, overlap(w, hb, s)), w, hb, s);
+}
+
+// The shifts in for_each_shift() order; sad::ShiftedImage compares a stored template with the
+// current one at all of them in one pass (kBatch at most, the size of the buffers below).
+constexpr size_t kBatch = 32;
+std::vector<int> shift_list(int w, int shift_max, int shift_step) {
+  std::vector<int> shifts;
+  for_each_shift(w, shift_max, shift_step, [&](int s) { shifts.push_back(s); });
+  return shifts;
 }
 
 // visual_distance(), optionally skipping a shift whose bound (`bounds`, from shift_bounds(), in
 // for_each_shift() order; nullptr: none) shows it cannot beat the best shift so far: the same
 // result either way.
+// `shifted`: the current image prepared for these shifts (nullptr: one SAD per shift).
 double visual_distance_impl(const uint8_t* cur, const uint8_t* st, const uint32_t* bounds, int w, int h,
-                            int shift_max, int shift_step, int* best_shift) {
+                            int shift_max, int shift_step, const sad::ShiftedImage* shifted, int* best_shift) {
   constexpr uint64_t kNone = std::numeric_limits<uint64_t>::max();
   uint64_t best_num = kNone;
   uint64_t best_den = 1;
   int best_s = 0;
   size_t j = 0;
+  // Without bounds every shift is compared: all in one pass. With them, shift by shift, so that a
+  // hopeless shift costs nothing.
+  uint32_t sads[kBatch];
+  const bool batch = bounds == nullptr && shifted != nullptr;
+  if (batch) shifted->sads(st, sads);
   for_each_shift(w, shift_max, shift_step, [&](int s) {
     const Overlap o = overlap(w, h, s);
     const uint64_t den = o.len;
     // SAD ≥ bound, so bound·best_den ≥ best_num·den rules out the strict improvement below.
     const bool hopeless = bounds != nullptr && best_num != kNone && bounds[j] * best_den >= best_num * den;
-    ++j;
+    const size_t at = j++;
     if (hopeless) return;
-    const uint32_t sad = overlap_sad(cur, st, s, o);
+    const uint32_t sad = batch ? sads[at] : overlap_sad(cur, st, s, o);
     // Compare sad/den exactly (cross-multiplied) so the choice never depends on rounding.
     if (best_num == kNone || static_cast<uint64_t>(sad) * best_den < best_num * den) {
       best_num = sad;
@@ -161,12 +172,16 @@ double visual_distance_impl(const uint8_t* cur, const uint8_t* st, const uint32_
 // bound/den ≤ the minimum of SAD/den, and the conversions and the division by 255 are monotone, so
 // the double returned is ≤ visual_distance()'s.
 double shift_bounds(const uint8_t* cur_blocks, const uint8_t* st_blocks, int w, int h, int shift_max, int shift_step,
-                    std::vector<uint32_t>& bounds) {
+                    const sad::ShiftedImage* shifted_blocks, std::vector<uint32_t>& bounds) {
   uint64_t best_num = std::numeric_limits<uint64_t>::max();
   uint64_t best_den = 1;
   bounds.clear();
+  uint32_t sads[kBatch];
+  const int hb = blocks_per_column(h);
+  const bool batch = shifted_blocks != nullptr;
+  if (batch) shifted_blocks->sads(st_blocks, sads);
   for_each_shift(w, shift_max, shift_step, [&](int s) {
-    const uint32_t b = shift_bound(cur_blocks, st_blocks, w, blocks_per_column(h), s);
+    const uint32_t b = batch ? block_bound(sads[bounds.size()], w, hb, s) : shift_bound(cur_blocks, st_blocks, w, hb, s);
     const uint64_t den = overlap(w, h, s).len;
     if (bounds.empty() || static_cast<uint64_t>(b) * best_den < best_num * den) {
       best_num = b;
@@ -237,7 +252,10 @@ int TemplateStore::add(const Query& q, double pc_x, double pc_y, double pc_theta
 
 double TemplateStore::visual_distance(const uint8_t* cur, const uint8_t* st, int w, int h, int shift_max,
                                       int shift_step, int* best_shift) {
-  return visual_distance_impl(cur, st, nullptr, w, h, shift_max, shift_step, best_shift);
+  const std::vector<int> shifts = shift_list(w, shift_max, shift_step);
+  if (shifts.size() > kBatch) return visual_distance_impl(cur, st, nullptr, w, h, shift_max, shift_step, nullptr, best_shift);
+  const sad::ShiftedImage shifted(cur, w, h, shifts.data(), static_cast<int>(shifts.size()));
+  return visual_distance_impl(cur, st, nullptr, w, h, shift_max, shift_step, &shifted, best_shift);
 }
 
 BestMatch TemplateStore::match(const Query& q, const Terms& terms, const MatchParams& p) const {
@@ -263,6 +281,14 @@ BestMatch TemplateStore::match(const Query& q, const Terms& terms, const MatchPa
   if (bound) {
     cur_blocks.resize(blocks());
     block_means(cur.data(), width_, height_, cur_blocks.data());
+  }
+  // The current template (and its block means) prepared for the shifts, once for every comparison.
+  const std::vector<int> shifts = shift_list(width_, p.shift_max, p.shift_step);
+  const int n_shifts = static_cast<int>(shifts.size());
+  std::optional<sad::ShiftedImage> cur_shifted, blocks_shifted;
+  if (terms.visual && shifts.size() <= kBatch) {
+    cur_shifted.emplace(cur.data(), width_, height_, shifts.data(), n_shifts);
+    if (bound) blocks_shifted.emplace(cur_blocks.data(), width_, blocks_per_column(height_), shifts.data(), n_shifts);
   }
   BoundProbe probe;
   const double inv_v = 1.0 / p.sigma_visual;
@@ -292,7 +318,7 @@ BestMatch TemplateStore::match(const Query& q, const Terms& terms, const MatchPa
         // ε with the visual term's lower bound, by the same operations as e below: ≤ e. (The
         // library is built with -ffp-contract=off so both sums round alike.)
         const double lower = shift_bounds(cur_blocks.data(), blocks_.row(iu), width_, height_, p.shift_max,
-                                          p.shift_step, bounds) *
+                                          p.shift_step, blocks_shifted ? &*blocks_shifted : nullptr, bounds) *
                              inv_v;
         const bool pruned = best.id >= 0 && lower + ep + es >= best.error;  // e ≥ best.error: cannot replace it
         probe.record(pruned);
@@ -300,7 +326,7 @@ BestMatch TemplateStore::match(const Query& q, const Terms& terms, const MatchPa
       }
       // A fresh minimum per stored template (the original code carried it across templates).
       ev = visual_distance_impl(cur.data(), visual_.row(iu), use_bound ? bounds.data() : nullptr, width_, height_,
-                                p.shift_max, p.shift_step, &shift) *
+                                p.shift_max, p.shift_step, cur_shifted ? &*cur_shifted : nullptr, &shift) *
            inv_v;
     }
     const double e = ev + ep + es;
