@@ -14,6 +14,7 @@
 #include <whiskeye/common/channels.h>
 #include <whiskeye/common/cli.h>
 #include <whiskeye/common/clock.h>
+#include <whiskeye/common/log.h>
 #include <whiskeye/common/params.h>
 #include <whiskeye/common/service.h>
 #include <whiskeye/driver_status_t.hpp>
@@ -75,7 +76,7 @@ int run(const Params& p) {
   try {
     bus = std::make_unique<LcmBus>(p.lcm_url);
   } catch (const std::exception& e) {
-    std::cerr << "camerad: " << e.what() << "\n";
+    log_error(std::string("camerad: ") + e.what());
     return 1;
   }
   struct sigaction sa {};
@@ -83,7 +84,8 @@ int run(const Params& p) {
   sigaction(SIGTERM, &sa, nullptr);
   sigaction(SIGINT, &sa, nullptr);
 
-  auto log = [](const std::string& line) { std::cerr << line << "\n"; };
+  // What Capture logs is the driver refusing what was asked (a size, a rate): warnings.
+  auto log = [](const std::string& line) { log_warning(line); };
   std::unique_ptr<v4l2::Capture> cap;
   v4l2::Backoff backoff(p.reopen_initial_s, p.reopen_max_s);
   int64_t next_open_us = 0;
@@ -134,7 +136,7 @@ int run(const Params& p) {
         healthy_gap_us = static_cast<int64_t>(std::max(1.0, three_periods_s) * 1e6);
       } catch (const v4l2::CaptureError& e) {
         ++open_failures;
-        if (e.what() != last_open_error) std::cerr << "camerad: " << e.what() << "; retrying\n";
+        if (e.what() != last_open_error) log_warning(std::string("camerad: ") + e.what() + "; retrying");
         last_open_error = e.what();
         next_open_us = now + static_cast<int64_t>(backoff.next() * 1e6);
       }
@@ -168,13 +170,13 @@ int run(const Params& p) {
       } else if (r == v4l2::Capture::Result::kSkipped &&
                  !(corrupt_logged & (1u << static_cast<unsigned>(cap->last_skip())))) {
         // Not a frame: last_frame_us stays, so a camera sending only damaged frames gets reopened.
-        std::cerr << "camerad: " << cap->device() << ": skipping a frame "
-                  << v4l2::frame_check_name(cap->last_skip()) << " (counted in corrupt_frames)\n";
+        log_warning("camerad: " + cap->device() + ": skipping a frame " + v4l2::frame_check_name(cap->last_skip()) +
+                    " (counted in corrupt_frames)");
         corrupt_logged |= 1u << static_cast<unsigned>(cap->last_skip());
       } else if (r == v4l2::Capture::Result::kError) {
         ++dequeue_errors;
         if (!dequeue_error_logged) {
-          std::cerr << "camerad: " << cap->last_error() << " (counted in dequeue_errors)\n";
+          log_warning("camerad: " + std::string(cap->last_error()) + " (counted in dequeue_errors)");
           dequeue_error_logged = true;
         }
         // The driver may keep failing at once: do not spin. No frames -> reopened after frame_timeout.
@@ -184,8 +186,9 @@ int run(const Params& p) {
           (r == v4l2::Capture::Result::kGone ||
            monotonic_us() - last_frame_us > frame_timeout_us)) {
         ++device_lost;
-        std::cerr << "camerad: " << (r == v4l2::Capture::Result::kGone ? cap->last_error() : cap->device() + ": no frames")
-                  << "; closing and reopening\n";
+        log_warning("camerad: " +
+                    (r == v4l2::Capture::Result::kGone ? std::string(cap->last_error()) : cap->device() + ": no frames") +
+                    "; closing and reopening");
         close_capture();
         next_open_us = monotonic_us() + static_cast<int64_t>(backoff.next() * 1e6);
       }

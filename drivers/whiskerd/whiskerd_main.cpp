@@ -25,6 +25,7 @@
 #include <whiskeye/common/bus.h>
 #include <whiskeye/common/cli.h>
 #include <whiskeye/common/clock.h>
+#include <whiskeye/common/log.h>
 #include <whiskeye/common/service.h>
 #include <whiskeye/driver_status_t.hpp>
 #include <whiskeye/rcp_state_t.hpp>
@@ -51,6 +52,7 @@ struct Item {
   PeriodOutput period;
   StatusSnapshot status;
   std::array<char, 192> text{};
+  LogLevel level = LogLevel::kInfo;  // of a kLog item
 };
 using Ring = SpscRing<Item, 256>;
 
@@ -72,15 +74,15 @@ void add_ns(timespec& t, int64_t ns) {
 bool make_realtime(const Params& p) {
   bool ok = true;
   if (p.lock_memory && mlockall(MCL_CURRENT | MCL_FUTURE) != 0) {
-    std::cerr << "whiskerd: warning: mlockall failed (" << std::strerror(errno)
-              << "); page faults may delay the control loop (needs CAP_IPC_LOCK or LimitMEMLOCK)\n";
+    log_warning(std::string("whiskerd: warning: mlockall failed (") + std::strerror(errno) +
+                "); page faults may delay the control loop (needs CAP_IPC_LOCK or LimitMEMLOCK)");
     ok = false;
   }
   sched_param sp{};
   sp.sched_priority = p.rt_priority;
   if (const int e = pthread_setschedparam(pthread_self(), SCHED_FIFO, &sp); e != 0) {
-    std::cerr << "whiskerd: warning: SCHED_FIFO priority " << p.rt_priority << " not permitted ("
-              << std::strerror(e) << "); running the control loop with normal scheduling, expect jitter\n";
+    log_warning("whiskerd: warning: SCHED_FIFO priority " + std::to_string(p.rt_priority) + " not permitted (" +
+                std::strerror(e) + "); running the control loop with normal scheduling, expect jitter");
     ok = false;
   }
   if (p.rt_cpu >= 0) {
@@ -88,8 +90,8 @@ bool make_realtime(const Params& p) {
     CPU_ZERO(&set);
     CPU_SET(p.rt_cpu, &set);
     if (const int e = pthread_setaffinity_np(pthread_self(), sizeof(set), &set); e != 0) {
-      std::cerr << "whiskerd: warning: cannot pin the control thread to CPU " << p.rt_cpu << " ("
-                << std::strerror(e) << ")\n";
+      log_warning("whiskerd: warning: cannot pin the control thread to CPU " + std::to_string(p.rt_cpu) + " (" +
+                  std::strerror(e) + ")");
     }
   }
   return ok;
@@ -141,11 +143,13 @@ struct Shared {
   std::atomic<int> exit_code{0};
 };
 
-// printf-style log line from the control thread: formatted into a fixed buffer, no allocation.
-void rt_log(Shared& shared, const char* fmt, ...) __attribute__((format(printf, 2, 3)));
-void rt_log(Shared& shared, const char* fmt, ...) {
+// printf-style log line from the control thread: formatted into a fixed buffer, no allocation. The
+// publisher thread writes it at `level` (common/log.h).
+void rt_log(Shared& shared, LogLevel level, const char* fmt, ...) __attribute__((format(printf, 3, 4)));
+void rt_log(Shared& shared, LogLevel level, const char* fmt, ...) {
   static Item item;  // only the control thread logs; reused to avoid a 6 kB stack object per call
   item.kind = Item::Kind::kLog;
+  item.level = level;
   va_list args;
   va_start(args, fmt);
   std::vsnprintf(item.text.data(), item.text.size(), fmt, args);
@@ -201,7 +205,7 @@ void control_thread(const Params& p, std::unique_ptr<can::Socket> sock, gpio::Mo
           if (rx == can::Socket::Rx::kFrame) {
             core.on_frame(frame.id, frame.fd, frame.payload(), mono_now_us());
           } else if (rx == can::Socket::Rx::kDown) {
-            rt_log(shared, "whiskerd: %s; reopening", sock->last_error());
+            rt_log(shared, LogLevel::kWarning, "whiskerd: %s; reopening", sock->last_error());
             can_counters = sock->counters();
             shared.can_socket.give_up(sock);
             break;
@@ -212,22 +216,23 @@ void control_thread(const Params& p, std::unique_ptr<can::Socket> sock, gpio::Mo
       }
 
       if (const char* line = core.take_rejection_line()) {
-        rt_log(shared, "whiskerd: rejected frame: %s (%lld rejected so far; logged at the 1st, 10th, 100th, ...)",
+        rt_log(shared, LogLevel::kWarning, "whiskerd: rejected frame: %s (%lld rejected so far; logged at the 1st, 10th, 100th, ...)",
                line, static_cast<long long>(core.rejected_frames()));
       }
 
       if (sock && sock->state() != bus_state) {
-        rt_log(shared, "whiskerd: CAN %s %s -> %s", sock->interface().c_str(), can::bus_state_name(bus_state),
+        rt_log(shared, LogLevel::kWarning, "whiskerd: CAN %s %s -> %s", sock->interface().c_str(), can::bus_state_name(bus_state),
                can::bus_state_name(sock->state()));
         bus_state = sock->state();
       }
-      if (guard.poll_fault(core)) rt_log(shared, "whiskerd: motor fault / emergency stop: motors disabled");
+      if (guard.poll_fault(core)) rt_log(shared, LogLevel::kError, "whiskerd: motor fault / emergency stop: motors disabled");
       if (g_stop.load(std::memory_order_relaxed)) core.request_stop();
 
       const Safety before = core.safety();
       core.step(woke_utime, woke, item.period);
       if (core.safety() != before) {
-        rt_log(shared, "whiskerd: %s -> %s%s%s%s", safety_name(before), safety_name(core.safety()),
+        rt_log(shared, core.safety() == Safety::kFault ? LogLevel::kError : LogLevel::kNotice,
+               "whiskerd: %s -> %s%s%s%s", safety_name(before), safety_name(core.safety()),
                core.reason()[0] ? " (" : "", core.reason(), core.reason()[0] ? ")" : "");
       }
       if (sock) send_command(*sock, p, item.period.command, core);
@@ -282,8 +287,8 @@ void control_thread(const Params& p, std::unique_ptr<can::Socket> sock, gpio::Mo
   // anything that may block (stderr into a full journal pipe); then say why.
   if (!sock) shared.can_socket.take_back(sock);
   const std::string not_dropped = disable_motors(lines, sock.get(), p, core);
-  if (!fatal.empty()) std::cerr << "whiskerd: fatal: " << fatal << "; motors disabled\n";
-  if (!not_dropped.empty()) std::cerr << "whiskerd: the enable line could not be dropped: " << not_dropped << "\n";
+  if (!fatal.empty()) log_error("whiskerd: fatal: " + fatal + "; motors disabled");
+  if (!not_dropped.empty()) log_error("whiskerd: the enable line could not be dropped: " + not_dropped);
   if (!fatal.empty() || !not_dropped.empty()) shared.exit_code.store(1);
   shared.rt_done.store(true);
 }
@@ -310,7 +315,7 @@ void publisher_thread(const Params& p, Bus& bus, Shared& shared, ServiceNotifier
           shared.used_cycles.try_push(item.period.completed_cycle);
         }
       } else if (item.kind == Item::Kind::kLog) {
-        std::cerr << item.text.data() << "\n";
+        log_line(item.level, item.text.data());
       } else if (item.kind == Item::Kind::kStatus) {
         to_lcm(item.status, status);
         status.counter_names.push_back("lcm_publish_errors");
@@ -322,13 +327,13 @@ void publisher_thread(const Params& p, Bus& bus, Shared& shared, ServiceNotifier
     // After the control thread's log lines, so its "reopening" comes before this "reopened".
     switch (shared.can_socket.service(monotonic_us())) {
       case SocketCustody<can::Socket>::Attempt::kReopened:
-        std::cerr << "whiskerd: CAN " << p.interface << " reopened\n";
+        log_notice("whiskerd: CAN " + p.interface + " reopened");
         reopen_failed = false;
         break;
       case SocketCustody<can::Socket>::Attempt::kFailed:
         if (!reopen_failed) {
-          std::cerr << "whiskerd: " << shared.can_socket.held()->last_error() << "; retrying, every "
-                    << SocketCustody<can::Socket>::kMaxBackoffUs / 1000000 << " s at the most\n";
+          log_warning("whiskerd: " + std::string(shared.can_socket.held()->last_error()) + "; retrying, every " +
+                      std::to_string(SocketCustody<can::Socket>::kMaxBackoffUs / 1000000) + " s at the most");
         }
         reopen_failed = true;
         break;
@@ -369,7 +374,7 @@ int run(const Params& params) {
     }
     bus = std::make_unique<LcmBus>(params.lcm_url);
   } catch (const std::exception& e) {
-    std::cerr << "whiskerd: " << e.what() << "\n";
+    log_error(std::string("whiskerd: ") + e.what());
     return 1;
   }
   std::cerr << "whiskerd: " << params.interface << " (" << (params.mode == wp::BusMode::kFd ? "CAN FD" : "classic CAN")

@@ -9,6 +9,7 @@
 #include "whiskeye/common/bus.h"
 #include "whiskeye/common/cli.h"
 #include "whiskeye/common/clock.h"
+#include "whiskeye/common/log.h"
 #include "whiskeye/common/log_throttle.h"
 #include "whiskeye/common/params.h"
 #include "whiskeye/common/robot_geometry.h"
@@ -40,7 +41,11 @@ constexpr std::pair<const char*, int> kInputQueues[] = {{"ODOMETRY", 3000}, {"WH
 
 void on_signal(int) { g_stop = true; }
 
-void log_line(const std::string& line) { std::fprintf(stderr, "slamd: %s\n", line.c_str()); }
+// Each line with its journal priority (common/log.h): `journalctl -p warning -u slamd` shows the
+// rejected inputs, the failed checkpoints and the errors, not the progress.
+void log_line(const std::string& line) { log_info("slamd: " + line); }
+void warn_line(const std::string& line) { log_warning("slamd: " + line); }
+void error_line(const std::string& line) { log_error("slamd: " + line); }
 
 struct Options {
   std::string config;
@@ -133,7 +138,7 @@ std::unique_ptr<slam::VitaSlam> make_slam(const Loaded& cfg, const Options& o, s
     return s;
   }
   if (store != nullptr) {
-    for (const auto& f : store->removed_temp_files()) log_line("removed " + f + " (an unfinished write)");
+    for (const auto& f : store->removed_temp_files()) warn_line("removed " + f + " (an unfinished write)");
   }
   if (store != nullptr && !o.fresh) {
     std::vector<std::string> problems;
@@ -150,7 +155,7 @@ std::unique_ptr<slam::VitaSlam> make_slam(const Loaded& cfg, const Options& o, s
                                " first; then start with --fresh for a new map, whose checkpoints rotate the "
                                "older ones out)");
     }
-    for (const auto& p : problems) log_line("skipped unusable checkpoint " + p);
+    for (const auto& p : problems) warn_line("skipped unusable checkpoint " + p);
     if (cp) {
       log_line("resuming from " + cp->path + " (after cycle " + std::to_string(cp->sequence) + ")");
       return resumed;
@@ -168,7 +173,7 @@ int run_replay(const Loaded& cfg, const Options& o) {
   std::optional<slamd::CheckpointStore> store;
   if (!o.state_dir.empty() && !o.localise) store.emplace(o.state_dir, o.checkpoint_keep);
   slamd::SlamNode node(in, out, make_slam(cfg, o, store ? &*store : nullptr), cfg.node, errors);
-  node.set_logger(log_line);
+  node.set_logger(warn_line);
   if (o.timing) node.set_latency_clock(monotonic_us);
   int64_t checkpointed_cycles = -1;
   LogThrottle throttle;
@@ -180,7 +185,7 @@ int run_replay(const Loaded& cfg, const Options& o) {
     } catch (const std::exception& e) {
       // As live: the replay goes on, and the log is rate-limited.
       if (auto line = throttle.admit("checkpoint", std::string("checkpoint failed: ") + e.what(), monotonic_us())) {
-        log_line(*line);
+        warn_line(*line);
       }
       return false;
     }
@@ -235,7 +240,7 @@ int run_replay(const Loaded& cfg, const Options& o) {
   // A damaged log (a corrupt event, a last event cut off): every readable event was replayed and the
   // output is complete; the exit status still says the input was damaged.
   if (reader.damage().damaged()) {
-    std::fprintf(stderr, "slamd: %s (every readable event was replayed)\n", reader.damage().summary().c_str());
+    error_line(reader.damage().summary() + " (every readable event was replayed)");
     return 1;
   }
   return final_saved ? 0 : 1;
@@ -258,7 +263,7 @@ int run_live(const Loaded& cfg, const Options& o) {
   // burst of input (a sender catching up, a busy cycle) then cost the map odometry and frames that a
   // replay of the same messages had (docs/slamd.md, "Input queues").
   for (const auto& [channel, messages] : kInputQueues) bus.set_queue_capacity(channel, messages);
-  node.set_logger(log_line);
+  node.set_logger(warn_line);
   node.set_latency_clock(monotonic_us);
   // The loop only copies the state out; the checksum and the disk are the writer thread's work.
   slamd::CheckpointWriter writer(
@@ -266,7 +271,7 @@ int run_live(const Loaded& cfg, const Options& o) {
         slam::VitaSlam::seal(payload);
         store->write(sequence, payload);
       },
-      log_line);
+      warn_line);
   auto checkpoint = [&] {
     writer.submit(static_cast<uint64_t>(node.slam().stats().cycles), node.slam().serialise_unsealed());
   };
@@ -287,7 +292,7 @@ int run_live(const Loaded& cfg, const Options& o) {
   int exit_code = 0;
   while (!g_stop) {
     if (bus.handle_timeout(100) < 0 && !g_stop) {  // a signal interrupting the wait is not a failure
-      log_line("LCM receive failed; saving the state and exiting for systemd to restart slamd");
+      error_line("LCM receive failed; saving the state and exiting for systemd to restart slamd");
       exit_code = 1;
       break;
     }
@@ -303,7 +308,7 @@ int run_live(const Loaded& cfg, const Options& o) {
                                          "LCM: " + std::to_string(drops) + " datagram(s) dropped by the kernel so far "
                                          "(receive buffer full: raise recv_buf_size in the LCM URL and net.core.rmem_max)",
                                          now)) {
-            log_line(*line);
+            warn_line(*line);
           }
         }
         receive_drops = drops;
@@ -324,7 +329,7 @@ int run_live(const Loaded& cfg, const Options& o) {
   log_line("stopped after " + std::to_string(node.counters().cycles) + " cycles");
   if (writer.counters().errors > errors_before_final) {
     // Logged by the writer; the exit status says so too, for systemd and whoever stopped slamd.
-    log_line("the final checkpoint was not written: the state since the last one is lost");
+    error_line("the final checkpoint was not written: the state since the last one is lost");
     return 1;
   }
   return exit_code;
