@@ -1,4 +1,5 @@
 #include "whiskeye/common/bus.h"
+#include "whiskeye/common/log.h"
 
 #include <lcm/lcm-cpp.hpp>
 
@@ -159,8 +160,9 @@ void LcmBus::publish_raw(const std::string& channel, std::span<const uint8_t> da
   int64_t power = 1;
   while (power * 10 <= n) power *= 10;
   if (n == power) {
-    std::fprintf(stderr, "LCM: cannot send on %s (%zu bytes): %s; %lld message(s) dropped so far\n", channel.c_str(),
-                 data.size(), err != 0 ? std::strerror(err) : "send failed", static_cast<long long>(n));
+    log_warning("LCM: cannot send on " + channel + " (" + std::to_string(data.size()) +
+                " bytes): " + (err != 0 ? std::strerror(err) : "send failed") + "; " + std::to_string(n) +
+                " message(s) dropped so far");
   }
 }
 

@@ -1,5 +1,6 @@
 // The command-line convention shared by every program (whiskeye/common/cli.h).
 #include "whiskeye/common/cli.h"
+#include "whiskeye/common/log.h"
 
 #include "whiskeye/common/params.h"
 
@@ -33,7 +34,7 @@ void Program::error(const std::string& reason) const {
   for (std::size_t at = line.find('\n'); at != std::string::npos; at = line.find('\n', at)) {
     line.replace(at, 1, at + 1 == line.size() ? "" : "; ");
   }
-  std::fprintf(stderr, "%s: %s\n", name_.c_str(), line.c_str());
+  log_error(name_ + ": " + line);  // priority 3 in the journal (common/log.h)
 }
 
 int Program::run(int argc, char** argv, const std::function<int()>& body) {

@@ -1,5 +1,6 @@
 // sd_notify wrapper and the test-only stalls; see service.h.
 #include "whiskeye/common/service.h"
+#include "whiskeye/common/log.h"
 
 #include <systemd/sd-daemon.h>
 
@@ -49,7 +50,7 @@ ServiceNotifier::ServiceNotifier(std::string daemon, int64_t start_mono_us)
   const char* spec = std::getenv(kFaultInjectEnv);
   faults_ = parse_fault_injection(spec ? spec : "");
   if (faults_.any()) {
-    std::fprintf(stderr, "%s: TEST-ONLY fault injection active: %s=%s\n", daemon_.c_str(), kFaultInjectEnv, spec);
+    log_warning(daemon_ + ": TEST-ONLY fault injection active: " + kFaultInjectEnv + "=" + spec);
   }
 }
 
@@ -83,7 +84,7 @@ void ServiceNotifier::stall_once(int64_t after_us, bool& stalled, int64_t now_mo
                                  const std::function<bool()>& stop) const {
   if (stalled || after_us < 0 || now_mono_us - start_us_ < after_us) return;
   stalled = true;  // once: after the stop request the loop runs on to shut down normally
-  std::fprintf(stderr, "%s: fault injection: %s\n", daemon_.c_str(), what.c_str());
+  log_warning(daemon_ + ": fault injection: " + what);
   while (!stop()) std::this_thread::sleep_for(std::chrono::milliseconds(50));
 }
 

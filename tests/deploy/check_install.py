@@ -18,7 +18,8 @@ CHECK is one of:
             --robot or --whiskerd-config, finds the configs installed in <sysconfdir>/whiskeye; with
             robot.yaml removed it exits non-zero naming the path it tried.
   deb       `cpack -G DEB` builds a package whose contents (`dpkg-deb -c`) are the /usr + /etc layout
-            and whose control files mark the configs as conffiles.
+            with copyright, changelog and a man page per program, whose control files mark the
+            configs as conffiles, with postinst, prerm and postrm and a real Maintainer.
 Exit status 0 only if every assertion held; each failure is printed on its own line.
 """
 import argparse
@@ -240,8 +241,23 @@ def check_deb(a, destdir):
     print(field.strip())
     if "Package: whiskeye" not in field:
         fail("package name is not whiskeye")
-    if "postinst" not in run(["dpkg-deb", "-I", deb]).stdout:
-        fail("no postinst (service user, sysctl)")
+    control = run(["dpkg-deb", "-I", deb]).stdout
+    for script in ["postinst", "prerm", "postrm"]:
+        if script not in control:
+            fail(f"no {script} (service user, sysctl; units stopped on removal, state purged)")
+    # Debian's documentation: copyright, changelog, a man page per program (help2man at build time).
+    for f in ["usr/share/doc/whiskeye/copyright", "usr/share/doc/whiskeye/changelog.Debian.gz"]:
+        if f not in paths:
+            fail("not in the .deb: /" + f)
+    for d in DAEMONS:
+        if f"usr/share/man/man8/{d}.8.gz" not in paths:
+            fail(f"no man page /usr/share/man/man8/{d}.8.gz")
+    for t in TOOLS:
+        if f"usr/share/man/man1/{t}.1.gz" not in paths:
+            fail(f"no man page /usr/share/man/man1/{t}.1.gz")
+    maintainer = run(["dpkg-deb", "-f", deb, "Maintainer"]).stdout.strip()
+    if not re.fullmatch(r"[^<>]+ <[^@<>\s]+@[^@<>\s]+\.[a-z]+>", maintainer) or "localhost" in maintainer:
+        fail("not a real Maintainer: " + maintainer)
     print(f"{debs[0]}: {len(paths)} entries")
 
 

@@ -131,7 +131,10 @@ class CameraNodeTest : public ::testing::Test {
         return s;
       };
       node_ = std::make_unique<CameraNode>(bus_, params_, open, clock,
-                                           [this](const std::string& line) { log_.push_back(line); });
+                                           [this](LogLevel level, const std::string& line) {
+                                             log_.push_back(line);
+                                             levels_.push_back(level);
+                                           });
       node_->set_ready_hook([this] { ++ready_calls_; });
     }
     return *node_;
@@ -155,6 +158,13 @@ class CameraNodeTest : public ::testing::Test {
     for (const std::string& l : log_) n += l.find(text) != std::string::npos;
     return n;
   }
+  // The priority of the first line containing `text` (common/log.h), or -1 when there is none.
+  int level_of(const std::string& text) const {
+    for (std::size_t i = 0; i < log_.size(); ++i) {
+      if (log_[i].find(text) != std::string::npos) return static_cast<int>(levels_[i]);
+    }
+    return -1;
+  }
 
   camerad::Params params_;
   MemoryBus bus_;
@@ -166,6 +176,7 @@ class CameraNodeTest : public ::testing::Test {
   std::vector<image_t> images_;
   std::vector<driver_status_t> statuses_;
   std::vector<std::string> log_;
+  std::vector<LogLevel> levels_;
   int ready_calls_ = 0;
 };
 
@@ -182,6 +193,7 @@ TEST_F(CameraNodeTest, FailedOpenBacksOffDoublingAndReportsDegraded) {
   EXPECT_EQ(counter(st, "open_failures"), 3);
   EXPECT_EQ(counter(st, "frames"), 0);
   EXPECT_EQ(log_lines_containing("; retrying"), 1) << "the same error is logged once";
+  EXPECT_EQ(level_of("; retrying"), static_cast<int>(LogLevel::kWarning));
   EXPECT_TRUE(images_.empty());
 }
 
@@ -211,6 +223,7 @@ TEST_F(CameraNodeTest, FramesArrivingArePublishedAndReportOk) {
   EXPECT_DOUBLE_EQ(st.stat_values[0], static_cast<double>(images_.size()));
   EXPECT_DOUBLE_EQ(st.stat_values[1], 1000.0) << "latency: captured 1 ms before it was read";
   EXPECT_EQ(log_lines_containing("camerad: streaming /dev/video0 2x2 GREY at 10 fps, 4 buffers"), 1);
+  EXPECT_EQ(level_of("camerad: streaming"), static_cast<int>(LogLevel::kInfo)) << "opening is progress, not a warning";
 }
 
 TEST_F(CameraNodeTest, SkippedSequenceNumbersAreCountedAsGaps) {
@@ -239,6 +252,7 @@ TEST_F(CameraNodeTest, SilenceIsDegradedThenTheDeviceIsReopened) {
   ASSERT_EQ(open_attempts_us_.size(), 2u);
   EXPECT_EQ(open_attempts_us_[1], 2'900'000) << "lost at 2.7 s (the first timeout past 2.5 s), + 0.2 s";
   EXPECT_EQ(log_lines_containing("/dev/video0: no frames; closing and reopening"), 1);
+  EXPECT_EQ(level_of("no frames; closing and reopening"), static_cast<int>(LogLevel::kWarning));
   const driver_status_t& st = statuses_.back();
   EXPECT_EQ(counter(st, "device_lost"), 1);
   EXPECT_EQ(counter(st, "reopens"), 1);

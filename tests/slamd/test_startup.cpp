@@ -16,7 +16,10 @@ namespace {
 class SlamdStartup : public ::testing::Test {
  protected:
   std::unique_ptr<slam::VitaSlam> start(const StartupOptions& o, CheckpointStore* store) {
-    return start_slam(params_, robot_, o, store, [this](const std::string& line) { log_.push_back(line); });
+    return start_slam(params_, robot_, o, store, [this](LogLevel level, const std::string& line) {
+      log_.push_back(line);
+      levels_.push_back(level);
+    });
   }
   bool logged(const std::string& text) const {
     for (const std::string& l : log_) {
@@ -34,6 +37,7 @@ class SlamdStartup : public ::testing::Test {
   slam::SlamParams params_;
   RobotGeometry robot_ = default_robot_geometry();
   std::vector<std::string> log_;
+  std::vector<LogLevel> levels_;
 };
 
 TEST_F(SlamdStartup, AnEmptyStateDirectoryStartsANewMap) {
@@ -52,6 +56,7 @@ TEST_F(SlamdStartup, ResumesFromTheNewestCheckpoint) {
   ASSERT_NE(s, nullptr);
   EXPECT_TRUE(logged("resuming from " + newest + " (after cycle 9)"))
       << (log_.empty() ? "" : log_[0]);
+  EXPECT_EQ(levels_.at(0), LogLevel::kInfo) << "resuming is progress, not a warning";
 }
 
 TEST_F(SlamdStartup, FreshIgnoresTheCheckpointsHeld) {

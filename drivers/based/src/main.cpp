@@ -3,6 +3,7 @@
 #include "whiskeye/based/node.h"
 #include "whiskeye/common/cli.h"
 #include "whiskeye/common/clock.h"
+#include "whiskeye/common/log.h"
 #include "whiskeye/common/service.h"
 
 #include <CLI/CLI.hpp>
@@ -67,7 +68,7 @@ int run(const whiskeye::based::BasedParams& params, const std::string& lcm_url,
     node.stop();
     std::fprintf(stderr, "based: stopped\n");
   } catch (const std::exception& e) {
-    std::cerr << "based: " << e.what() << "\n";
+    log_error(std::string("based: ") + e.what());
     return 1;
   }
   return 0;

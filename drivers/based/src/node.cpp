@@ -2,6 +2,7 @@
 #include "whiskeye/based/node.h"
 
 #include "whiskeye/common/clock.h"
+#include "whiskeye/common/log.h"
 #include "whiskeye/common/utime.h"
 
 #include <whiskeye/base_cmd_t.hpp>
@@ -27,7 +28,8 @@ const char* const kCounterNames[] = {
 // Added to each thread's longest legitimate block before it counts as stalled.
 constexpr double kWorkerSlackS = 1.0;
 
-void log_line(const std::string& line) { std::fprintf(stderr, "based: %s\n", line.c_str()); }
+// Each line with its journal priority (common/log.h): faults are warnings, recoveries and states notices.
+void based_log(LogLevel level, const std::string& line) { log_line(level, "based: " + line); }
 
 std::chrono::steady_clock::duration seconds(double s) {
   return std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(s));
@@ -105,7 +107,7 @@ std::string BasedNode::check_workers(int64_t now_mono_us) {
   if (!stalled.empty() && !stall_reported_) {
     count_fault("worker_stalls", stalled + "; watchdog keep-alives withheld");
   } else if (stalled.empty() && stall_reported_) {
-    log_line("every thread runs again; watchdog keep-alives resume");
+    based_log(LogLevel::kNotice, "every thread runs again; watchdog keep-alives resume");
   }
   stall_reported_ = !stalled.empty();
   return stalled;
@@ -130,7 +132,7 @@ void BasedNode::count_fault(const std::string& counter, const std::string& detai
     if (degrades) health_.fault(counter + ": " + detail, now);
     line = burst_.fault(counter, detail, now);
   }
-  if (!line.empty()) log_line(line);
+  if (!line.empty()) based_log(LogLevel::kWarning, line);
 }
 
 int64_t BasedNode::counter(const std::string& name) const {
@@ -299,7 +301,7 @@ void BasedNode::command_loop() {
         trips_seen = gate_.deadman_trips();
         const std::string line = burst_.fault(
             "deadman_stops", "no BASE_CMD for " + std::to_string(params_.command.deadman_s).substr(0, 5) + " s, base stopped", now);
-        if (!line.empty()) log_line(line);
+        if (!line.empty()) based_log(LogLevel::kWarning, line);
       }
     }
     if (std::chrono::steady_clock::now() >= retry_after) {
@@ -319,7 +321,7 @@ void BasedNode::command_loop() {
       }
     }
     if (circle_done && out == Velocity{} && !finished_) {
-      log_line("circle finished, base stopped");
+      based_log(LogLevel::kInfo, "circle finished, base stopped");
       finished_ = true;
     }
     next += period;
@@ -334,7 +336,7 @@ void BasedNode::command_loop() {
     ++counters_["commands_sent"];
     last_sent_ = Velocity{};
   } else {
-    log_line("could not send the final zero velocity: " + r.error);
+    based_log(LogLevel::kError, "could not send the final zero velocity: " + r.error);
   }
 }
 
@@ -381,7 +383,7 @@ void BasedNode::log_lines() {
     std::lock_guard<std::mutex> lock(mutex_);
     lines = burst_.flush(monotonic_us());
   }
-  for (const std::string& l : lines) log_line(l);
+  for (const std::string& l : lines) based_log(LogLevel::kWarning, l);
 }
 
 void BasedNode::status_loop() {
@@ -393,7 +395,8 @@ void BasedNode::status_loop() {
     const driver_status_t s = make_status();
     const auto state = static_cast<HealthState>(s.state);
     if (state != last_state) {
-      log_line(std::string("state ") + to_string(state) + (s.message.empty() ? "" : ": " + s.message));
+      based_log(state == HealthState::kOk || state == HealthState::kStarting ? LogLevel::kNotice : LogLevel::kWarning,
+               std::string("state ") + to_string(state) + (s.message.empty() ? "" : ": " + s.message));
       last_state = state;
     }
     {

@@ -114,7 +114,7 @@ void CameraNode::open(int64_t now) {
     line << "camerad: streaming " << cap_->device() << " " << cap_->width() << "x" << cap_->height() << " "
          << v4l2::fourcc_name(cap_->pixelformat()) << " at " << cap_->fps() << " fps, " << cap_->num_buffers()
          << " buffers";
-    log_(line.str());
+    log_(LogLevel::kInfo, line.str());
     if (frames_ > 0 || device_lost_ > 0) ++reopens_;
     // The backoff is reset by the session's first frame, not by the open: a camera that opens
     // but sends nothing (USB bandwidth) is reopened ever more slowly, not every few seconds.
@@ -130,7 +130,7 @@ void CameraNode::open(int64_t now) {
     healthy_gap_us_ = static_cast<int64_t>(std::max(1.0, three_periods_s) * 1e6);
   } catch (const v4l2::CaptureError& e) {
     ++open_failures_;
-    if (e.what() != last_open_error_) log_(std::string("camerad: ") + e.what() + "; retrying");
+    if (e.what() != last_open_error_) log_(LogLevel::kWarning, std::string("camerad: ") + e.what() + "; retrying");
     last_open_error_ = e.what();
     next_open_us_ = now + static_cast<int64_t>(backoff_.next() * 1e6);
   }
@@ -161,13 +161,13 @@ void CameraNode::read_frame() {
   } else if (r == v4l2::Capture::Result::kSkipped &&
              !(corrupt_logged_ & (1u << static_cast<unsigned>(cap_->last_skip())))) {
     // Not a frame: last_frame_us_ stays, so a camera sending only damaged frames gets reopened.
-    log_("camerad: " + cap_->device() + ": skipping a frame " + v4l2::frame_check_name(cap_->last_skip()) +
+    log_(LogLevel::kWarning, "camerad: " + cap_->device() + ": skipping a frame " + v4l2::frame_check_name(cap_->last_skip()) +
          " (counted in corrupt_frames)");
     corrupt_logged_ |= 1u << static_cast<unsigned>(cap_->last_skip());
   } else if (r == v4l2::Capture::Result::kError) {
     ++dequeue_errors_;
     if (!dequeue_error_logged_) {
-      log_("camerad: " + cap_->last_error() + " (counted in dequeue_errors)");
+      log_(LogLevel::kWarning, "camerad: " + cap_->last_error() + " (counted in dequeue_errors)");
       dequeue_error_logged_ = true;
     }
     // The driver may keep failing at once: do not spin. No frames -> reopened after frame_timeout.
@@ -176,7 +176,7 @@ void CameraNode::read_frame() {
   if (r != v4l2::Capture::Result::kFrame &&
       (r == v4l2::Capture::Result::kGone || clock_.monotonic_us() - last_frame_us_ > frame_timeout_us_)) {
     ++device_lost_;
-    log_("camerad: " + (r == v4l2::Capture::Result::kGone ? cap_->last_error() : cap_->device() + ": no frames") +
+    log_(LogLevel::kWarning, "camerad: " + (r == v4l2::Capture::Result::kGone ? cap_->last_error() : cap_->device() + ": no frames") +
          "; closing and reopening");
     close_capture();
     next_open_us_ = clock_.monotonic_us() + static_cast<int64_t>(backoff_.next() * 1e6);

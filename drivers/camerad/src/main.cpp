@@ -14,6 +14,7 @@
 #include <whiskeye/common/channels.h>
 #include <whiskeye/common/cli.h>
 #include <whiskeye/common/clock.h>
+#include <whiskeye/common/log.h>
 #include <whiskeye/common/params.h>
 #include <whiskeye/common/service.h>
 
@@ -32,7 +33,7 @@ int run(const camerad::Params& p) {
   try {
     bus = std::make_unique<LcmBus>(p.lcm_url);
   } catch (const std::exception& e) {
-    std::cerr << "camerad: " << e.what() << "\n";
+    log_error(std::string("camerad: ") + e.what());
     return 1;
   }
   struct sigaction sa {};
@@ -40,8 +41,10 @@ int run(const camerad::Params& p) {
   sigaction(SIGTERM, &sa, nullptr);
   sigaction(SIGINT, &sa, nullptr);
 
-  auto log = [](const std::string& line) { std::cerr << line << "\n"; };
-  camerad::CameraNode node(*bus, p, camerad::v4l2_factory(log), camerad::system_clock(), log);
+  // What the V4L2 driver refuses (a size, a rate) is a warning.
+  auto driver_log = [](const std::string& line) { log_warning(line); };
+  auto log = [](LogLevel level, const std::string& line) { log_line(level, line); };
+  camerad::CameraNode node(*bus, p, camerad::v4l2_factory(driver_log), camerad::system_clock(), log);
   node.set_ready_hook([&service] { service.ready(); });
   while (!g_stop.load()) {
     const int64_t t = node.step();

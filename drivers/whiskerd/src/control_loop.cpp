@@ -43,15 +43,15 @@ void add_ns(timespec& t, int64_t ns) {
 bool make_realtime(const Params& p) {
   bool ok = true;
   if (p.lock_memory && mlockall(MCL_CURRENT | MCL_FUTURE) != 0) {
-    std::cerr << "whiskerd: warning: mlockall failed (" << std::strerror(errno)
-              << "); page faults may delay the control loop (needs CAP_IPC_LOCK or LimitMEMLOCK)\n";
+    log_warning(std::string("whiskerd: warning: mlockall failed (") + std::strerror(errno) +
+                "); page faults may delay the control loop (needs CAP_IPC_LOCK or LimitMEMLOCK)");
     ok = false;
   }
   sched_param sp{};
   sp.sched_priority = p.rt_priority;
   if (const int e = pthread_setschedparam(pthread_self(), SCHED_FIFO, &sp); e != 0) {
-    std::cerr << "whiskerd: warning: SCHED_FIFO priority " << p.rt_priority << " not permitted ("
-              << std::strerror(e) << "); running the control loop with normal scheduling, expect jitter\n";
+    log_warning("whiskerd: warning: SCHED_FIFO priority " + std::to_string(p.rt_priority) + " not permitted (" +
+                std::strerror(e) + "); running the control loop with normal scheduling, expect jitter");
     ok = false;
   }
   if (p.rt_cpu >= 0) {
@@ -59,8 +59,8 @@ bool make_realtime(const Params& p) {
     CPU_ZERO(&set);
     CPU_SET(p.rt_cpu, &set);
     if (const int e = pthread_setaffinity_np(pthread_self(), sizeof(set), &set); e != 0) {
-      std::cerr << "whiskerd: warning: cannot pin the control thread to CPU " << p.rt_cpu << " ("
-                << std::strerror(e) << ")\n";
+      log_warning("whiskerd: warning: cannot pin the control thread to CPU " + std::to_string(p.rt_cpu) + " (" +
+                  std::strerror(e) + ")");
     }
   }
   return ok;
@@ -93,8 +93,9 @@ ControlLoop::ControlLoop(const Params& p, std::unique_ptr<can::Socket> sock, gpi
   add_ns(next_, period_ns_);
 }
 
-void ControlLoop::log(const char* fmt, ...) {
+void ControlLoop::log(LogLevel level, const char* fmt, ...) {
   log_item_.kind = Item::Kind::kLog;
+  log_item_.level = level;
   va_list args;
   va_start(args, fmt);
   std::vsnprintf(log_item_.text.data(), log_item_.text.size(), fmt, args);
@@ -141,8 +142,8 @@ void ControlLoop::run() {
   // anything that may block (stderr into a full journal pipe); then say why.
   if (!sock_) shared_.can_socket.take_back(sock_);
   const std::string not_dropped = disable_motors();
-  if (!fatal.empty()) std::cerr << "whiskerd: fatal: " << fatal << "; motors disabled\n";
-  if (!not_dropped.empty()) std::cerr << "whiskerd: the enable line could not be dropped: " << not_dropped << "\n";
+  if (!fatal.empty()) log_error("whiskerd: fatal: " + fatal + "; motors disabled");
+  if (!not_dropped.empty()) log_error("whiskerd: the enable line could not be dropped: " + not_dropped);
   if (!fatal.empty() || !not_dropped.empty()) shared_.exit_code.store(1);
   shared_.rt_done.store(true);
 }
@@ -157,7 +158,7 @@ void ControlLoop::receive_frames() {
     if (rx == can::Socket::Rx::kFrame) {
       core_.on_frame(frame_.id, frame_.fd, frame_.payload(), mono_now_us());
     } else if (rx == can::Socket::Rx::kDown) {
-      log("whiskerd: %s; reopening", sock_->last_error());
+      log(LogLevel::kWarning, "whiskerd: %s; reopening", sock_->last_error());
       can_counters_ = sock_->counters();
       shared_.can_socket.give_up(sock_);
       break;
@@ -185,22 +186,22 @@ void ControlLoop::period() {
   receive_frames();
 
   if (const char* line = core_.take_rejection_line()) {
-    log("whiskerd: rejected frame: %s (%lld rejected so far; logged at the 1st, 10th, 100th, ...)", line,
+    log(LogLevel::kWarning, "whiskerd: rejected frame: %s (%lld rejected so far; logged at the 1st, 10th, 100th, ...)", line,
         static_cast<long long>(core_.rejected_frames()));
   }
 
   if (sock_ && sock_->state() != bus_state_) {
-    log("whiskerd: CAN %s %s -> %s", sock_->interface().c_str(), can::bus_state_name(bus_state_),
+    log(LogLevel::kWarning, "whiskerd: CAN %s %s -> %s", sock_->interface().c_str(), can::bus_state_name(bus_state_),
         can::bus_state_name(sock_->state()));
     bus_state_ = sock_->state();
   }
-  if (guard_.poll_fault(core_)) log("whiskerd: motor fault / emergency stop: motors disabled");
+  if (guard_.poll_fault(core_)) log(LogLevel::kError, "whiskerd: motor fault / emergency stop: motors disabled");
   if (stop_.load(std::memory_order_relaxed)) core_.request_stop();
 
   const Safety before = core_.safety();
   core_.step(woke_utime, woke, item_.period);
   if (core_.safety() != before) {
-    log("whiskerd: %s -> %s%s%s%s", safety_name(before), safety_name(core_.safety()), core_.reason()[0] ? " (" : "",
+    log(core_.safety() == Safety::kFault ? LogLevel::kError : LogLevel::kNotice, "whiskerd: %s -> %s%s%s%s", safety_name(before), safety_name(core_.safety()), core_.reason()[0] ? " (" : "",
         core_.reason(), core_.reason()[0] ? ")" : "");
   }
   if (sock_) send_command(item_.period.command);
@@ -273,7 +274,7 @@ void publish_loop(const Params& p, Bus& bus, Shared& shared, ServiceNotifier& se
           shared.used_cycles.try_push(item.period.completed_cycle);
         }
       } else if (item.kind == Item::Kind::kLog) {
-        std::cerr << item.text.data() << "\n";
+        log_line(item.level, item.text.data());
       } else if (item.kind == Item::Kind::kStatus) {
         to_lcm(item.status, status);
         status.counter_names.push_back("lcm_publish_errors");
@@ -285,13 +286,13 @@ void publish_loop(const Params& p, Bus& bus, Shared& shared, ServiceNotifier& se
     // After the control thread's log lines, so its "reopening" comes before this "reopened".
     switch (shared.can_socket.service(monotonic_us())) {
       case SocketCustody<can::Socket>::Attempt::kReopened:
-        std::cerr << "whiskerd: CAN " << p.interface << " reopened\n";
+        log_notice("whiskerd: CAN " + p.interface + " reopened");
         reopen_failed = false;
         break;
       case SocketCustody<can::Socket>::Attempt::kFailed:
         if (!reopen_failed) {
-          std::cerr << "whiskerd: " << shared.can_socket.held()->last_error() << "; retrying, every "
-                    << SocketCustody<can::Socket>::kMaxBackoffUs / 1000000 << " s at the most\n";
+          log_warning("whiskerd: " + std::string(shared.can_socket.held()->last_error()) + "; retrying, every " +
+                      std::to_string(SocketCustody<can::Socket>::kMaxBackoffUs / 1000000) + " s at the most");
         }
         reopen_failed = true;
         break;

@@ -14,6 +14,7 @@
 #include <whiskeye/common/bus.h>
 #include <whiskeye/common/cli.h>
 #include <whiskeye/common/clock.h>
+#include <whiskeye/common/log.h>
 #include <whiskeye/common/service.h>
 
 #include "whiskeye/can/can_socket.h"
@@ -50,7 +51,7 @@ int run(const Params& params) {
     }
     bus = std::make_unique<LcmBus>(params.lcm_url);
   } catch (const std::exception& e) {
-    std::cerr << "whiskerd: " << e.what() << "\n";
+    log_error(std::string("whiskerd: ") + e.what());
     return 1;
   }
   std::cerr << "whiskerd: " << params.interface << " (" << (params.mode == wp::BusMode::kFd ? "CAN FD" : "classic CAN")

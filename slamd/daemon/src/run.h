@@ -8,6 +8,7 @@
 #include "whiskeye/slamd/slam_node.h"
 #include "whiskeye/slamd/startup.h"
 
+#include "whiskeye/common/log.h"
 #include "whiskeye/common/robot_geometry.h"
 #include "whiskeye/slam/vita_slam.h"
 
@@ -42,13 +43,16 @@ struct Loaded {
   std::string dump;
 };
 
-// "slamd: <line>" on stderr.
-inline void log_line(const std::string& line) { std::fprintf(stderr, "slamd: %s\n", line.c_str()); }
+// "slamd: <line>" on stderr with its journal priority (common/log.h): `journalctl -p warning -u slamd`
+// shows the rejected inputs, the failed checkpoints and the errors, not the progress.
+inline void log_line(const std::string& line) { log_info("slamd: " + line); }
+inline void warn_line(const std::string& line) { log_warning("slamd: " + line); }
+inline void error_line(const std::string& line) { log_error("slamd: " + line); }
 
 // The map slamd starts from (whiskeye/slamd/startup.h: --map, resume or --fresh).
 inline std::unique_ptr<slam::VitaSlam> make_slam(const Loaded& cfg, const Options& o, CheckpointStore* store) {
   return start_slam(cfg.slam, cfg.robot, StartupOptions{o.map_file, o.localise, o.fresh}, store,
-                           log_line);
+                    [](LogLevel level, const std::string& line) { whiskeye::log_line(level, "slamd: " + line); });
 }
 
 

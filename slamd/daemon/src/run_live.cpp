@@ -40,7 +40,7 @@ int run_live(const Loaded& cfg, const Options& o) {
   // burst of input (a sender catching up, a busy cycle) then cost the map odometry and frames that a
   // replay of the same messages had (docs/slamd.md, "Input queues").
   for (const auto& [channel, messages] : kInputQueues) bus.set_queue_capacity(channel, messages);
-  node.set_logger(log_line);
+  node.set_logger(warn_line);
   node.set_latency_clock(monotonic_us);
   // The loop only copies the state out; the checksum and the disk are the writer thread's work.
   CheckpointWriter writer(
@@ -48,7 +48,7 @@ int run_live(const Loaded& cfg, const Options& o) {
         slam::VitaSlam::seal(payload);
         store->write(sequence, payload);
       },
-      log_line);
+      warn_line);
   auto checkpoint = [&] {
     writer.submit(static_cast<uint64_t>(node.slam().stats().cycles), node.slam().serialise_unsealed());
   };
@@ -65,7 +65,7 @@ int run_live(const Loaded& cfg, const Options& o) {
   int exit_code = 0;
   while (!g_stop) {
     if (bus.handle_timeout(100) < 0 && !g_stop) {  // a signal interrupting the wait is not a failure
-      log_line("LCM receive failed; saving the state and exiting for systemd to restart slamd");
+      error_line("LCM receive failed; saving the state and exiting for systemd to restart slamd");
       exit_code = 1;
       break;
     }
@@ -81,7 +81,7 @@ int run_live(const Loaded& cfg, const Options& o) {
                                          "LCM: " + std::to_string(drops) + " datagram(s) dropped by the kernel so far "
                                          "(receive buffer full: raise recv_buf_size in the LCM URL and net.core.rmem_max)",
                                          now)) {
-            log_line(*line);
+            warn_line(*line);
           }
         }
         receive_drops = drops;
@@ -102,7 +102,7 @@ int run_live(const Loaded& cfg, const Options& o) {
   log_line("stopped after " + std::to_string(node.counters().cycles) + " cycles");
   if (writer.counters().errors > errors_before_final) {
     // Logged by the writer; the exit status says so too, for systemd and whoever stopped slamd.
-    log_line("the final checkpoint was not written: the state since the last one is lost");
+    error_line("the final checkpoint was not written: the state since the last one is lost");
     return 1;
   }
   return exit_code;

@@ -51,7 +51,7 @@ int run_replay(const Loaded& cfg, const Options& o) {
   std::optional<CheckpointStore> store;
   open_store(store, o.state_dir, o.checkpoint_keep, o.localise);
   SlamNode node(in, out, make_slam(cfg, o, store ? &*store : nullptr), cfg.node, errors);
-  node.set_logger(log_line);
+  node.set_logger(warn_line);
   if (o.timing) node.set_latency_clock(monotonic_us);
   int64_t checkpointed_cycles = -1;
   LogThrottle throttle;
@@ -63,7 +63,7 @@ int run_replay(const Loaded& cfg, const Options& o) {
     } catch (const std::exception& e) {
       // As live: the replay goes on, and the log is rate-limited.
       if (auto line = throttle.admit("checkpoint", std::string("checkpoint failed: ") + e.what(), monotonic_us())) {
-        log_line(*line);
+        warn_line(*line);
       }
       return false;
     }
@@ -114,7 +114,7 @@ int run_replay(const Loaded& cfg, const Options& o) {
   // A damaged log (a corrupt event, a last event cut off): every readable event was replayed and the
   // output is complete; the exit status still says the input was damaged.
   if (reader.damage().damaged()) {
-    std::fprintf(stderr, "slamd: %s (every readable event was replayed)\n", reader.damage().summary().c_str());
+    error_line(reader.damage().summary() + " (every readable event was replayed)");
     return 1;
   }
   return final_saved ? 0 : 1;

@@ -22,7 +22,7 @@ namespace {
 
 std::unique_ptr<slam::VitaSlam> load_map(const slam::SlamParams& params, const RobotGeometry& robot,
                                          const StartupOptions& o, CheckpointStore* store,
-                                         const std::function<void(const std::string&)>& log) {
+                                         const StartupLog& log) {
   // Growing the loaded map writes its checkpoints into the state directory: whatever map is there
   // would be rotated out within --checkpoint-keep cycles. The operator says so with --fresh.
   if (!o.localise && !o.fresh && store != nullptr) {
@@ -42,14 +42,14 @@ std::unique_ptr<slam::VitaSlam> load_map(const slam::SlamParams& params, const R
     throw std::runtime_error(o.map_file + ": " + e.what());
   }
   if (o.localise) s->set_localise_only(true);
-  log("loaded map " + o.map_file + " (" + std::to_string(s->map().experiences().size()) + " experiences)" +
+  log(LogLevel::kInfo, "loaded map " + o.map_file + " (" + std::to_string(s->map().experiences().size()) + " experiences)" +
       (o.localise ? ", localising without growing it" : ""));
   return s;
 }
 
 // The newest usable checkpoint in `store`, or null when it holds none.
 std::unique_ptr<slam::VitaSlam> resume(const slam::SlamParams& params, const RobotGeometry& robot,
-                                       CheckpointStore& store, const std::function<void(const std::string&)>& log) {
+                                       CheckpointStore& store, const StartupLog& log) {
   std::vector<std::string> problems;
   std::unique_ptr<slam::VitaSlam> resumed;
   std::optional<Checkpoint> cp;
@@ -64,9 +64,9 @@ std::unique_ptr<slam::VitaSlam> resume(const slam::SlamParams& params, const Rob
                              " first; then start with --fresh for a new map, whose checkpoints rotate the "
                              "older ones out)");
   }
-  for (const auto& p : problems) log("skipped unusable checkpoint " + p);
+  for (const auto& p : problems) log(LogLevel::kWarning, "skipped unusable checkpoint " + p);
   if (!cp) return nullptr;
-  log("resuming from " + cp->path + " (after cycle " + std::to_string(cp->sequence) + ")");
+  log(LogLevel::kInfo, "resuming from " + cp->path + " (after cycle " + std::to_string(cp->sequence) + ")");
   return resumed;
 }
 
@@ -74,10 +74,10 @@ std::unique_ptr<slam::VitaSlam> resume(const slam::SlamParams& params, const Rob
 
 std::unique_ptr<slam::VitaSlam> start_slam(const slam::SlamParams& params, const RobotGeometry& robot,
                                            const StartupOptions& options, CheckpointStore* store,
-                                           const std::function<void(const std::string&)>& log) {
+                                           const StartupLog& log) {
   if (!options.map_file.empty()) return load_map(params, robot, options, store, log);
   if (store != nullptr) {
-    for (const auto& f : store->removed_temp_files()) log("removed " + f + " (an unfinished write)");
+    for (const auto& f : store->removed_temp_files()) log(LogLevel::kWarning, "removed " + f + " (an unfinished write)");
   }
   if (store != nullptr && !options.fresh) {
     if (auto resumed = resume(params, robot, *store, log)) return resumed;

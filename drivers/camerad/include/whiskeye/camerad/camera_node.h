@@ -11,6 +11,7 @@
 
 #include "whiskeye/common/bus.h"
 #include "whiskeye/common/channels.h"
+#include "whiskeye/common/log.h"
 #include "whiskeye/camera/v4l2_capture.h"
 
 #include <whiskeye/driver_status_t.hpp>
@@ -75,7 +76,9 @@ Clock system_clock();
 // Channels: CAMERA (Params::channel) and DRIVER_STATUS (Params::channel_status) out.
 class CameraNode {
  public:
-  using Log = std::function<void(const std::string&)>;  // one line, without its newline
+  // One line, without its newline, with its priority (common/log.h): what the camera did wrong is a
+  // warning, opening it is info.
+  using Log = std::function<void(LogLevel, const std::string&)>;
   CameraNode(Bus& bus, const Params& params, CaptureFactory open, Clock clock, Log log);
   CameraNode(const CameraNode&) = delete;
   CameraNode& operator=(const CameraNode&) = delete;

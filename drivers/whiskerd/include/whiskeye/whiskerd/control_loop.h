@@ -10,6 +10,7 @@
 
 #include "whiskeye/common/bus.h"
 #include "whiskeye/common/latency_stats.h"
+#include "whiskeye/common/log.h"
 #include "whiskeye/common/service.h"
 #include "whiskeye/common/socket_custody.h"
 #include "whiskeye/common/spsc_ring.h"
@@ -31,6 +32,7 @@ struct Item {
   PeriodOutput period;
   StatusSnapshot status;
   std::array<char, 192> text{};
+  LogLevel level = LogLevel::kInfo;  // of a kLog item (common/log.h)
 };
 using Ring = SpscRing<Item, 256>;
 
@@ -70,8 +72,9 @@ class ControlLoop {
   // while shutting down must not end in std::terminate with the line high. Returns "" or why the
   // line could not be dropped (the boards' disabled command went out regardless).
   std::string disable_motors();
-  // printf-style log line: formatted into a fixed buffer, no allocation; a full ring loses it.
-  void log(const char* fmt, ...) __attribute__((format(printf, 2, 3)));
+  // printf-style log line: formatted into a fixed buffer, no allocation; a full ring loses it. The
+  // publisher thread writes it at `level` (common/log.h).
+  void log(LogLevel level, const char* fmt, ...) __attribute__((format(printf, 3, 4)));
 
   const Params& p_;
   const bool rt_;  // first: real-time scheduling before anything below allocates

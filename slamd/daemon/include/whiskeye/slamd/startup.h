@@ -7,6 +7,7 @@
 #include "whiskeye/slamd/checkpoint_store.h"
 #include "whiskeye/slamd/slam_node.h"
 
+#include "whiskeye/common/log.h"
 #include "whiskeye/common/robot_geometry.h"
 #include "whiskeye/slam/vita_slam.h"
 
@@ -32,6 +33,9 @@ std::string live_state_directory(const std::string& given);
 // directory (nor its lock) and can run next to the service. Throws CheckpointError.
 void open_store(std::optional<CheckpointStore>& store, const std::string& directory, int keep, bool localise);
 
+// Where start_slam says what it chose (info) and what it skipped or cleaned up (warning).
+using StartupLog = std::function<void(LogLevel, const std::string&)>;
+
 // The SLAM state to start from, logging what was chosen:
 //   --map FILE: that map (refused, if it would grow into a state directory holding another map's
 //     checkpoints, unless --fresh or --localise);
@@ -41,7 +45,7 @@ void open_store(std::optional<CheckpointStore>& store, const std::string& direct
 // Throws std::runtime_error (or CheckpointError) with the reason and what the operator can do.
 std::unique_ptr<slam::VitaSlam> start_slam(const slam::SlamParams& params, const RobotGeometry& robot,
                                            const StartupOptions& options, CheckpointStore* store,
-                                           const std::function<void(const std::string&)>& log);
+                                           const StartupLog& log);
 
 // Calls `checkpoint` after every `every`-th cycle the node processes; nothing when every <= 0.
 void checkpoint_every(SlamNode& node, int every, std::function<void()> checkpoint);
