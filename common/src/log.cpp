@@ -10,7 +10,9 @@ namespace whiskeye {
 
 std::string format_log_line(LogLevel level, std::string_view line, bool to_journal) {
   if (!line.empty() && line.back() == '\n') line.remove_suffix(1);
-  const std::string prefix = to_journal ? "<" + std::to_string(static_cast<int>(level)) + ">" : "";
+  // Appended, not "<" + std::string: GCC 12's -Wrestrict misfires on that at -O3 (GCC bug 105329).
+  std::string prefix;
+  if (to_journal) prefix.append("<").append(std::to_string(static_cast<int>(level))).append(">");
   std::string out;
   out.reserve(line.size() + prefix.size() + 1);
   // Every line of a multi-line message carries the priority: the journal reads each line on its own.

@@ -144,7 +144,8 @@ struct Draft {
 // A wall landmark pattern, drawn; `k` makes the name unique.
 PatternSpec draw_pattern(Rng& rng, int k) {
   PatternSpec p;
-  p.name = "p" + std::to_string(k);
+  p.name = "p";  // appended, not "p" + std::string: GCC 12 -O3 -Wrestrict (bug 105329)
+  p.name += std::to_string(k);
   const double low = rng.uniform(0.05, 0.2);
   const double high = rng.uniform(0.8, 0.95);
   const std::string lh = ", low: " + num(low, 2) + ", high: " + num(high, 2);
