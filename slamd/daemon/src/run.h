@@ -45,14 +45,14 @@ struct Loaded {
 
 // "slamd: <line>" on stderr with its journal priority (common/log.h): `journalctl -p warning -u slamd`
 // shows the rejected inputs, the failed checkpoints and the errors, not the progress.
-inline void log_line(const std::string& line) { log_info("slamd: " + line); }
-inline void warn_line(const std::string& line) { log_warning("slamd: " + line); }
-inline void error_line(const std::string& line) { log_error("slamd: " + line); }
+inline void slamd_log(LogLevel level, const std::string& line) { whiskeye::log_line(level, "slamd: " + line); }
+inline void log_line(const std::string& line) { slamd_log(LogLevel::kInfo, line); }
+inline void warn_line(const std::string& line) { slamd_log(LogLevel::kWarning, line); }
+inline void error_line(const std::string& line) { slamd_log(LogLevel::kError, line); }
 
 // The map slamd starts from (whiskeye/slamd/startup.h: --map, resume or --fresh).
 inline std::unique_ptr<slam::VitaSlam> make_slam(const Loaded& cfg, const Options& o, CheckpointStore* store) {
-  return start_slam(cfg.slam, cfg.robot, StartupOptions{o.map_file, o.localise, o.fresh}, store,
-                    [](LogLevel level, const std::string& line) { whiskeye::log_line(level, "slamd: " + line); });
+  return start_slam(cfg.slam, cfg.robot, StartupOptions{o.map_file, o.localise, o.fresh}, store, slamd_log);
 }
 
 
