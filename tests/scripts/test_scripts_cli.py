@@ -20,7 +20,8 @@ BAD = {
     "netns-run": [[]],
     "test": [["--no-such-stage"]],
     "lcm-spy": [],
-    "bench": [["--bogus"], ["--filter"], ["--repetitions", "x"], ["--only", "no-such-bench"]],
+    "bench": [["--bogus"], ["--filter"], ["--repetitions", "x"], ["--only", "no-such-bench"], ["--table"],
+              ["--table", "/no/such.json"], ["--table", "/etc/hostname"]],
     "replay-speed": [["--bogus"], ["--runs", "0"], ["--mode", "x"], ["--log", "/no/such/log"]],
 }
 
@@ -52,6 +53,35 @@ class Scripts(unittest.TestCase):
                     self.assertEqual(r.stdout, "")
                     self.assertEqual(len(r.stderr.splitlines()), 1, r.stderr)
                     self.assertTrue(r.stderr.startswith(f"{name}: "), r.stderr)
+
+
+class BenchTable(unittest.TestCase):
+    def test_a_results_file_becomes_one_markdown_table_per_binary_with_medians_only(self):
+        import json
+        import tempfile
+        doc = {"date": "2026-12-04T12:00:00Z", "git_describe": "abc123", "build_type": "RelWithDebInfo",
+               "compiler": "/usr/bin/c++", "cpus": 2, "cpu": "Some CPU", "load_average_before": [0.5, 0.4, 0.3],
+               "load_average_after": [1.0, 0.9, 0.8],
+               "binaries": {"vita-bench": {"benchmarks": [
+                   {"name": "BM_A/10_mean", "run_type": "aggregate", "aggregate_name": "mean", "real_time": 9.0,
+                    "cpu_time": 9.0, "time_unit": "us"},
+                   {"name": "BM_A/10_median", "run_type": "aggregate", "aggregate_name": "median", "real_time": 2.5,
+                    "cpu_time": 2.25, "time_unit": "us", "label": "avx512bw", "per_template": 0.125},
+                   {"name": "BM_B", "run_type": "iteration", "real_time": 7.0, "cpu_time": 6.0, "time_unit": "ms",
+                    "error_occurred": True, "error_message": "this CPU lacks the instructions"}]},
+                   "viewer-bench": None}}
+        with tempfile.NamedTemporaryFile("w", suffix=".json") as f:
+            json.dump(doc, f)
+            f.flush()
+            r = run("bench", ["--table", f.name])
+        self.assertEqual(r.returncode, 0, r.stderr)
+        lines = r.stdout.splitlines()
+        self.assertEqual(lines[0], "2026-12-04T12:00:00Z, `abc123`, RelWithDebInfo build, /usr/bin/c++, 2 × Some CPU; "
+                                   "load average 0.50, 0.40, 0.30 before, 1.00, 0.90, 0.80 after.")
+        self.assertIn("| `BM_A/10_median` | 2.5 us | 2.25 us | avx512bw, per_template 0.125 |", lines)
+        self.assertIn("| `BM_B` | — | — | skipped: this CPU lacks the instructions |", lines)
+        self.assertNotIn("mean", r.stdout)
+        self.assertIn("(no benchmark selected)", lines)
 
 
 if __name__ == "__main__":

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <vector>
 
 namespace whiskeye::slam {
@@ -23,6 +24,18 @@ TEST(RowStore, RowsNeverMoveWhenTheStoreGrows) {
   for (int r = 0; r < 2000; ++r) {
     EXPECT_EQ(s.row(static_cast<size_t>(r)), where[static_cast<size_t>(r)]);  // same address as when appended
     EXPECT_EQ(s.row(static_cast<size_t>(r))[4], r * 10 + 4);
+  }
+}
+
+TEST(RowStore, RowsOfWholeCacheLinesStartOnACacheLine) {
+  // A 64×40 template (2,560 bytes) in every chunk, and its copy: the matcher's 64-byte loads of a row
+  // then never straddle two cache lines.
+  RowStore<unsigned char> s(2560);
+  for (int r = 0; r < 600; ++r) s.append();  // three chunks
+  const RowStore<unsigned char> copy = s;
+  for (size_t r = 0; r < 600; ++r) {
+    EXPECT_EQ(reinterpret_cast<uintptr_t>(s.row(r)) % 64, 0u) << "row " << r;
+    EXPECT_EQ(reinterpret_cast<uintptr_t>(copy.row(r)) % 64, 0u) << "copied row " << r;
   }
 }
 

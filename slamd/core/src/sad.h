@@ -29,12 +29,15 @@ uint32_t sad_u8(Isa isa, const uint8_t* a, const uint8_t* b, size_t n);
 // The SAD of every column shift's overlap at once, for two COLUMN-MAJOR images of w columns of h
 // bytes: out[k] = Σ |cur(c) − st(c − shifts[k])| over the columns c where both exist
 // (|shifts[k]| < w). The current image is prepared once (per match), the stored ones compared with
-// it one after the other. With 11 shifts (±5, step 1: the configured matcher) on AVX2 or AVX-512BW:
-// one pass over the stored bytes that every shift overlaps, each stored vector loaded once and
-// compared with the 11 current ones, one register accumulator per shift; the current image is
-// copied once per shift, 64-byte aligned, so that none of these loads straddles a cache line; the
-// few hundred bytes at the edges (where some shifts have no partner) follow. Otherwise one sad_u8()
-// per shift. The same integers either way.
+// it one after the other. With 11 shifts (±5, step 1: the configured matcher):
+// - AVX-512BW: one pass over all the stored vectors, each loaded once and compared with its 11
+//   partners, one register accumulator per shift. The partners are prepared per vector and shift,
+//   64-byte aligned, zero where the shift has none; in the few edge vectors where some shift lacks a
+//   partner the stored bytes are masked to zero as well (in registers: |0 − 0| adds nothing), so the
+//   loop has no scalar edges and no tail. The bytes that follow the stored image (the store's next
+//   row) are prefetched as it goes: the scan of a large store is bound by memory, not arithmetic.
+// - AVX2: the same with 32-byte vectors, the edge vectors' stored bytes ANDed with byte masks.
+// Otherwise one sad_u8() per shift. The same integers either way.
 class ShiftedImage {
  public:
   // `cur` must outlive this object; `isa` must be supported.
@@ -49,11 +52,18 @@ class ShiftedImage {
   const uint8_t* cur_;
   ptrdiff_t total_;
   std::vector<ptrdiff_t> d_;  // flat offset of each shift (shift·h)
-  bool fused_ = false;
-  ptrdiff_t j0_ = 0, j1_ = 0;  // the stored bytes every shift overlaps (whole vectors)
-  std::vector<uint8_t> buf_;    // the aligned copies
+  std::vector<uint8_t> buf_;  // the aligned copies (and AVX2's byte masks)
+  // With 11 shifts on AVX-512BW (vec_ 64) or AVX2 (vec_ 32): the partners of stored vector v for
+  // shift k at copies_ + (v·11 + k)·vec_, zero where it has none; nv_ vectors, every partner present
+  // in [va_, vb_); outside it, which stored bytes count: masks_ (bits, 11 per edge vector) and for
+  // AVX2 mask_bytes_ (0xFF/0x00, 11·32 per edge vector). The last vector holds in_last_ image bytes.
   const uint8_t* copies_ = nullptr;
-  size_t stride_ = 0;
+  ptrdiff_t vec_ = 0, nv_ = 0, va_ = 0, vb_ = 0, in_last_ = 0;
+  std::vector<uint64_t> masks_;
+  const uint8_t* mask_bytes_ = nullptr;
+
+  uint8_t* aligned_buffer(size_t bytes);  // buf_, zeroed, 64-byte aligned
+  void prepare_padded(ptrdiff_t vec, ptrdiff_t lo_all, ptrdiff_t hi_all);
 };
 
 void shift_sads(Isa isa, const uint8_t* cur, const uint8_t* st, int w, int h, const int* shifts, int n_shifts,
