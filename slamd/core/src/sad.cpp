@@ -93,7 +93,9 @@ __attribute__((target("avx512bw"))) uint32_t sad_avx512bw(const uint8_t* a, cons
 // partner bytes, zero where shift k has none), one register accumulator per shift. In the interior
 // [va, vb) every shift has a partner for every byte; in the edge vectors the stored bytes without a
 // partner (and those past the image) are masked to zero too (masks, NS per edge vector), so they add
-// |0 − 0|. `in_last`: how many bytes of the last vector lie inside the image (only those are read). The sums are exact integers, so this adds the same bytes as the plain loop.
+// |0 − 0|. `in_last`: how many bytes of the last vector lie inside the image (only those are read).
+// The sums are exact integers, so this adds the same bytes as the plain loop. The bytes after the
+// image are prefetched as it goes (the store's next row; see sad.h: a large store is memory-bound).
 template <int NS>
 __attribute__((target("avx512bw"))) void padded_avx512bw(const uint8_t* copies, const uint64_t* masks, ptrdiff_t nv,
                                                           ptrdiff_t va, ptrdiff_t vb, ptrdiff_t in_last,
