@@ -19,7 +19,10 @@ trap '' PIPE
 
 setup_lcm_loopback
 # One loopback device, /dev/video10, announcing capture and output at once (exclusive_caps=0), with
-# 8 buffers (v4l2loopback's default is 2).
+# 8 buffers (v4l2loopback's default is 2). camerad asks for the same 8 (buffers: 8 below): a reader
+# asking for fewer makes v4l2loopback 0.12.7 shrink the ring under the running writer and remap its
+# positions (vidioc_reqbufs), after which one position can name a buffer the writer fills next, and the
+# reader got one frame twice (CI: "frame 7 after 7"). A UVC camera has no such remapping.
 # Module autoloading would run the initramfs's modprobe: V4L2's core (videodev) is loaded explicitly.
 load_loopback() {
   modprobe videodev && insmod "$MODULE" devices=1 video_nr=10 card_label=WhiskEye-MJPEG-loopback max_buffers=8
@@ -42,7 +45,7 @@ start_writer "$RESULTS_DIR/writer.log" 0
 check writer_sets_mjpeg_on_the_device wait_for "$RESULTS_DIR/writer.log" "writing 640x480 MJPG" 30
 
 cat > /tmp/camerad_mjpeg.yaml <<'YAML'
-camera: {match_card: WhiskEye-MJPEG, width: 640, height: 480, fps: 10, formats: [MJPG],
+camera: {match_card: WhiskEye-MJPEG, width: 640, height: 480, fps: 10, formats: [MJPG], buffers: 8,
          frame_timeout_s: 4.0, reopen_initial_s: 0.2, reopen_max_s: 1.0}
 YAML
 log=$RESULTS_DIR/camerad.log
@@ -51,7 +54,7 @@ cam_pid=$!
 "$CHECK" --results "$RESULTS_DIR/results.txt" > "$RESULTS_DIR/check.log" 2>&1 &
 check_pid=$!
 check camerad_negotiates_640x480_mjpg_on_the_loopback_device \
-  wait_for "$log" "streaming /dev/video10 640x480 MJPG" 60
+  wait_for "$log" "streaming /dev/video10 640x480 MJPG at 10 fps, 8 buffers" 60
 
 probe() { "$PROBE" --driver camerad --seconds "${2:-2}" > "/tmp/status_$1.txt"; cp "/tmp/status_$1.txt" "$RESULTS_DIR/status_$1.txt"; }
 counter() { sed -n "s/^$2=//p" "/tmp/status_$1.txt"; }
