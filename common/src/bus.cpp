@@ -189,20 +189,142 @@ int LcmBus::fileno() { return lcm_->getFileno(); }
 
 // ---- LogReader ----
 
-// The log file mapped read-only; unmapped when the reader and every view's owner are gone.
-struct LogReader::Mapping {
-  const uint8_t* bytes = nullptr;
-  std::size_t size = 0;
-  bool mapped = true;  // false: bytes in memory the caller owns
-  Mapping() = default;
-  Mapping(const Mapping&) = delete;
-  Mapping& operator=(const Mapping&) = delete;
-  ~Mapping() {
+// Where the log's bytes come from. view(at, len) makes bytes [at, at + len) of the file readable
+// (len ≤ size() - at) and returns a pointer to byte `at`, valid until the next call; owner() keeps
+// the bytes of the last view alive for the caller (an event view's owner).
+class LogReader::Source {
+ public:
+  virtual ~Source() = default;
+  std::size_t size() const { return size_; }
+  virtual const uint8_t* view(std::size_t at, std::size_t len) = 0;
+  virtual std::shared_ptr<const void> owner() const = 0;
+  // How many bytes one view of a search for the next sync word covers (at least 4).
+  virtual std::size_t search_window() const = 0;
+
+ protected:
+  std::size_t size_ = 0;
+};
+
+namespace {
+
+// The log file mapped read-only, or the caller's bytes; unmapped when the last owner lets go.
+struct Whole {
+  const uint8_t* bytes;
+  std::size_t size;
+  bool mapped;  // false: bytes the caller owns
+  Whole(const uint8_t* b, std::size_t s, bool m) : bytes(b), size(s), mapped(m) {}
+  Whole(const Whole&) = delete;
+  Whole& operator=(const Whole&) = delete;
+  ~Whole() {
     if (mapped && bytes != nullptr) ::munmap(const_cast<uint8_t*>(bytes), size);
   }
 };
 
-namespace {
+// Maps `size` bytes of `fd` read-only (nothing for an empty file); throws naming `path`.
+std::shared_ptr<const Whole> map_file(int fd, std::size_t size, const std::string& path) {
+  if (size == 0) return std::make_shared<const Whole>(nullptr, 0, true);
+  void* p = ::mmap(nullptr, size, PROT_READ, MAP_PRIVATE, fd, 0);
+  if (p == MAP_FAILED) throw std::runtime_error(path + ": cannot map the LCM log: " + std::strerror(errno));
+  return std::make_shared<const Whole>(static_cast<const uint8_t*>(p), size, true);
+}
+
+// The whole log in memory (mapped, or the caller's bytes): a view is a pointer into it.
+class WholeSource final : public LogReader::Source {
+ public:
+  explicit WholeSource(std::shared_ptr<const Whole> whole) : whole_(std::move(whole)) { size_ = whole_->size; }
+  const uint8_t* view(std::size_t at, std::size_t) override { return whole_->bytes + at; }
+  std::shared_ptr<const void> owner() const override { return whole_; }
+  std::size_t search_window() const override { return size_; }
+
+ private:
+  std::shared_ptr<const Whole> whole_;
+};
+
+// The log read in file order with pread() into chunks: the current chunk holds the bytes of the last
+// view; a new one starts at the view asked for and is filled up to its capacity, or to the end of a
+// larger view (a camera frame gets a chunk of its own size). A chunk a view's owner still holds is
+// never written again; free ones are reused, so a replay that keeps few views runs in a few warm
+// chunks whatever the log's size. Every byte is copied, frames nobody reads too: on the development
+// VM that costs less than mapping the pages (docs/performance.md, "### Replay").
+class StreamSource final : public LogReader::Source {
+ public:
+  StreamSource(int fd, std::size_t size, std::size_t chunk_bytes, std::string path)
+      : fd_(fd), chunk_bytes_(std::max<std::size_t>(chunk_bytes, 1)), path_(std::move(path)) {
+    size_ = size;
+  }
+  ~StreamSource() override { ::close(fd_); }
+  StreamSource(const StreamSource&) = delete;
+  StreamSource& operator=(const StreamSource&) = delete;
+
+  const uint8_t* view(std::size_t at, std::size_t len) override {
+    if (current_ && at >= current_->start && at + len <= current_->start + current_->filled) {
+      return current_->bytes.get() + (at - current_->start);
+    }
+    const std::size_t want = std::min(std::max(chunk_bytes_, len), size_ - at);
+    std::shared_ptr<Chunk> next = take_free(want);
+    next->start = at;
+    next->filled = 0;
+    if (current_ && at >= current_->start && at < current_->start + current_->filled) {
+      // The part already read (the rest of an event whose end the old chunk lacks) is copied over.
+      next->filled = current_->start + current_->filled - at;
+      std::memcpy(next->bytes.get(), current_->bytes.get() + (at - current_->start), next->filled);
+    }
+    while (next->filled < want) {
+      const ssize_t got = ::pread(fd_, next->bytes.get() + next->filled, want - next->filled,
+                                  static_cast<off_t>(at + next->filled));
+      if (got < 0 && errno == EINTR) continue;
+      if (got < 0) throw std::runtime_error(path_ + ": cannot read the LCM log: " + std::strerror(errno));
+      if (got == 0) {
+        throw std::runtime_error(path_ + ": the LCM log got shorter while being read (" + std::to_string(at + next->filled) +
+                                 " of " + std::to_string(size_) + " bytes)");
+      }
+      next->filled += static_cast<std::size_t>(got);
+    }
+    if (current_) keep_free(std::move(current_));
+    current_ = std::move(next);
+    return current_->bytes.get();
+  }
+  std::shared_ptr<const void> owner() const override { return current_; }
+  std::size_t search_window() const override { return std::max<std::size_t>(chunk_bytes_, 8); }
+
+ private:
+  struct Chunk {
+    std::unique_ptr<uint8_t[]> bytes;
+    std::size_t capacity = 0;
+    std::size_t start = 0;   // file offset of bytes[0]
+    std::size_t filled = 0;  // bytes read
+  };
+  static constexpr std::size_t kKeptChunks = 16;  // chunks kept for reuse
+
+  // A chunk of at least `bytes` nobody holds: a kept one, or a new one.
+  std::shared_ptr<Chunk> take_free(std::size_t bytes) {
+    for (auto it = kept_.begin(); it != kept_.end(); ++it) {
+      if (it->use_count() == 1 && (*it)->capacity >= bytes) {
+        std::shared_ptr<Chunk> c = std::move(*it);
+        kept_.erase(it);
+        return c;
+      }
+    }
+    auto c = std::make_shared<Chunk>();
+    c->capacity = std::max(bytes, chunk_bytes_);
+    c->bytes = std::make_unique_for_overwrite<uint8_t[]>(c->capacity);
+    return c;
+  }
+  // Keeps a chunk for reuse (once its views are gone). Beyond kKeptChunks, the oldest one still
+  // held is let go (its holder frees it), else the oldest.
+  void keep_free(std::shared_ptr<Chunk> c) {
+    kept_.push_back(std::move(c));
+    if (kept_.size() <= kKeptChunks) return;
+    auto drop = std::find_if(kept_.begin(), kept_.end(), [](const auto& k) { return k.use_count() > 1; });
+    kept_.erase(drop != kept_.end() ? drop : kept_.begin());
+  }
+
+  int fd_;
+  std::size_t chunk_bytes_;
+  std::string path_;
+  std::shared_ptr<Chunk> current_;
+  std::vector<std::shared_ptr<Chunk>> kept_;
+};
 
 // LCM log event header (lcm/eventlog.c): sync word, event number, timestamp, channel length, data
 // length, all big-endian; then the channel name and the data.
@@ -210,20 +332,20 @@ constexpr uint32_t kLogSync = 0xEDA1DA01u;
 constexpr std::size_t kLogHeaderSize = 4 + 8 + 8 + 4 + 4;
 constexpr int32_t kMaxLogChannelLength = 1000;  // what lcm-logger's reader accepts
 
-// Checks that a plausible event starts at byte `at`: sync word, channel length in (0, 1000), data
-// length ≥ 0, the whole event inside the file. `size` 0: implausible, then `truncated` says whether
-// the file ends first, and `why` (if given) gets the reason; nothing is formatted for a good event.
+// Checks that a plausible event starts at byte `at` of a file of `size` bytes, whose first
+// min(kLogHeaderSize, size - at) bytes are `h`: sync word, channel length in (0, 1000), data length
+// ≥ 0, the whole event inside the file. `size` 0: implausible, then `truncated` says whether the
+// file ends first, and `why` (if given) gets the reason; nothing is formatted for a good event.
 struct EventCheck {
   std::size_t size = 0;
   bool truncated = false;
 };
-EventCheck check_event(const uint8_t* base, std::size_t size, std::size_t at, std::string* why) {
+EventCheck check_event(const uint8_t* h, std::size_t size, std::size_t at, std::string* why) {
   const auto at_byte = [at] { return " at byte " + std::to_string(at); };
   if (size - at < kLogHeaderSize) {
     if (why) *why = "truncated LCM log: incomplete event header" + at_byte() + " (file size " + std::to_string(size) + ")";
     return {0, true};
   }
-  const uint8_t* h = base + at;
   if (static_cast<uint32_t>(read_be_i32(h)) != kLogSync) {
     if (why) *why = "corrupt LCM log: no event sync word" + at_byte();
     return {0, false};
@@ -249,39 +371,39 @@ EventCheck check_event(const uint8_t* base, std::size_t size, std::size_t at, st
   return {total, false};
 }
 
+// The bytes of a header at `at` that the file has (fewer than a header at its end).
+std::size_t header_bytes(std::size_t size, std::size_t at) { return std::min(kLogHeaderSize, size - at); }
+
 }  // namespace
 
-LogReader::LogReader(const std::string& path) : path_(path) {
+LogReader::LogReader(const std::string& path, Access access, std::size_t chunk_bytes) : path_(path) {
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) throw std::runtime_error(path + ": cannot open the LCM log for reading: " + std::strerror(errno));
-  auto map = std::make_shared<Mapping>();
   struct stat st {};
   if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
     ::close(fd);
     throw std::runtime_error(path + ": cannot open the LCM log for reading: not a regular file");
   }
-  map->size = static_cast<std::size_t>(st.st_size);
-  if (map->size > 0) {
-    void* p = ::mmap(nullptr, map->size, PROT_READ, MAP_PRIVATE, fd, 0);
-    if (p == MAP_FAILED) {
-      const int err = errno;
-      ::close(fd);
-      throw std::runtime_error(path + ": cannot map the LCM log: " + std::strerror(err));
-    }
-    map->bytes = static_cast<const uint8_t*>(p);
-    ::madvise(p, map->size, MADV_SEQUENTIAL);
+  const auto size = static_cast<std::size_t>(st.st_size);
+  if (access == Access::kStreamed) {
+    ::posix_fadvise(fd, 0, 0, POSIX_FADV_SEQUENTIAL);
+    source_ = std::make_unique<StreamSource>(fd, size, chunk_bytes, path);  // owns fd
+    return;
+  }
+  std::shared_ptr<const Whole> whole;
+  try {
+    whole = map_file(fd, size, path);
+  } catch (...) {
+    ::close(fd);
+    throw;
   }
   ::close(fd);  // the mapping keeps the file
-  map_ = std::move(map);
+  if (size > 0) ::madvise(const_cast<uint8_t*>(whole->bytes), size, MADV_SEQUENTIAL);
+  source_ = std::make_unique<WholeSource>(std::move(whole));
 }
 
-LogReader::LogReader(std::span<const uint8_t> bytes, std::string name) : path_(std::move(name)) {
-  auto map = std::make_shared<Mapping>();
-  map->bytes = bytes.data();
-  map->size = bytes.size();
-  map->mapped = false;
-  map_ = std::move(map);
-}
+LogReader::LogReader(std::span<const uint8_t> bytes, std::string name)
+    : path_(std::move(name)), source_(std::make_unique<WholeSource>(std::make_shared<const Whole>(bytes.data(), bytes.size(), false))) {}
 
 LogReader::~LogReader() = default;
 
@@ -295,11 +417,11 @@ bool LogReader::next(LogEvent& event) {
 }
 
 bool LogReader::next(EventView& event) {
-  const std::size_t size = map_->size;
-  const uint8_t* const base = map_->bytes;
+  Source& src = *source_;
+  const std::size_t size = src.size();
   if (pos_ >= size) return false;
   std::string why;  // stays empty (no allocation) for a good event
-  const EventCheck check = check_event(base, size, pos_, &why);
+  const EventCheck check = check_event(src.view(pos_, header_bytes(size, pos_)), size, pos_, &why);
   std::size_t total = check.size;
   if (total == 0) {
     // Damaged: note the first problem, then look for the next plausible event, as LCM's own reader
@@ -309,36 +431,52 @@ bool LogReader::next(EventView& event) {
     const uint8_t sync[4] = {kLogSync >> 24, (kLogSync >> 16) & 0xff, (kLogSync >> 8) & 0xff, kLogSync & 0xff};
     std::size_t at = pos_ + 1;
     for (;;) {
-      const auto* found = static_cast<const uint8_t*>(
-          at < size ? ::memmem(base + at, size - at, sync, sizeof sync) : nullptr);
-      if (found == nullptr) {
+      // The next sync word, looked for a window at a time (a match across two windows is found in
+      // the second, which starts 3 bytes before the first one's end).
+      std::size_t found = size;
+      for (std::size_t from = at; from + sizeof sync <= size;) {
+        const std::size_t len = std::min(size - from, src.search_window());
+        const uint8_t* w = src.view(from, len);
+        if (const auto* hit = static_cast<const uint8_t*>(::memmem(w, len, sync, sizeof sync))) {
+          found = from + static_cast<std::size_t>(hit - w);
+          break;
+        }
+        from += len - (sizeof sync - 1);
+      }
+      if (found == size) {
         damage_.skipped_bytes += size - pos_;
         damage_.truncated_tail = check.truncated;
         pos_ = size;
         return false;
       }
-      at = static_cast<std::size_t>(found - base);
-      total = check_event(base, size, at, nullptr).size;
+      at = found;
+      total = check_event(src.view(at, header_bytes(size, at)), size, at, nullptr).size;
       if (total != 0) break;
       ++at;
     }
     damage_.skipped_bytes += at - pos_;
     pos_ = at;
   }
-  const uint8_t* h = base + pos_;
+  // The event and the header after it in one view. The events ahead are only looked at, not
+  // consumed.
+  const std::size_t next_at = pos_ + total;
+  const std::size_t next_header = next_at < size ? header_bytes(size, next_at) : 0;
+  const uint8_t* h = src.view(pos_, total + next_header);
   const auto channel_len = static_cast<std::size_t>(read_be_i32(h + 20));
   const auto data_len = static_cast<std::size_t>(read_be_i32(h + 24));
   event.utime = read_be_i64(h + 12);
+  const uint8_t* next_h = next_header == 0 ? nullptr : h + total;
   // A time far from both neighbours while they agree with each other is a flipped bit: not a clock
   // step (the events after a step agree with it) nor a lone message in a pause (its neighbours do
   // not agree). The first and the last event have one neighbour: only a day off is damage there (the
-  // first: from the next two, which agree). The events ahead are only looked at, not consumed.
+  // first: from the next two, which agree).
   const auto distance = [](int64_t a, int64_t b) {
     return a > b ? static_cast<uint64_t>(a) - static_cast<uint64_t>(b) : static_cast<uint64_t>(b) - static_cast<uint64_t>(a);
   };
   const auto far = [&](int64_t a, int64_t b, int64_t limit) { return distance(a, b) > static_cast<uint64_t>(limit); };
-  const bool has_next = pos_ + total < size && check_event(base, size, pos_ + total, nullptr).size != 0;
-  const int64_t next_utime = has_next ? read_be_i64(base + pos_ + total + 12) : 0;
+  const std::size_t next_total = next_h != nullptr ? check_event(next_h, size, next_at, nullptr).size : 0;
+  const bool has_next = next_total != 0;
+  const int64_t next_utime = has_next ? read_be_i64(next_h + 12) : 0;
   bool wild = false;
   if (have_last_utime_ && has_next) {
     wild = !far(last_utime_, next_utime, kMaxTimeJumpUs) && far(event.utime, last_utime_, kMaxTimeJumpUs) &&
@@ -347,11 +485,13 @@ bool LogReader::next(EventView& event) {
     wild = far(event.utime, last_utime_, kMaxEdgeTimeJumpUs);
   } else if (has_next) {
     // The first event: the next one stands for its time only if the one after it agrees.
-    const std::size_t next_at = pos_ + total;
-    const std::size_t next_total = check_event(base, size, next_at, nullptr).size;
-    const bool has_second = next_at + next_total < size && check_event(base, size, next_at + next_total, nullptr).size != 0;
-    wild = has_second && !far(next_utime, read_be_i64(base + next_at + next_total + 12), kMaxTimeJumpUs) &&
-           far(event.utime, next_utime, kMaxEdgeTimeJumpUs);
+    const std::size_t second_at = next_at + next_total;
+    if (second_at < size) {
+      const uint8_t* second = src.view(second_at, header_bytes(size, second_at));
+      const bool has_second = check_event(second, size, second_at, nullptr).size != 0;
+      wild = has_second && !far(next_utime, read_be_i64(second + 12), kMaxTimeJumpUs) &&
+             far(event.utime, next_utime, kMaxEdgeTimeJumpUs);
+    }
   }
   if (wild) {
     const int64_t replacement = have_last_utime_ ? last_utime_ : next_utime;
@@ -365,9 +505,11 @@ bool LogReader::next(EventView& event) {
   }
   last_utime_ = event.utime;
   have_last_utime_ = true;
-  event.channel = std::string_view(reinterpret_cast<const char*>(h + kLogHeaderSize), channel_len);
-  event.data = std::span<const uint8_t>(h + kLogHeaderSize + channel_len, data_len);
-  if (event.owner != map_) event.owner = map_;
+  // Inside the view made above, unless the first event's look two ahead moved on (then read again).
+  const uint8_t* e = src.view(pos_, total);
+  event.channel = std::string_view(reinterpret_cast<const char*>(e + kLogHeaderSize), channel_len);
+  event.data = std::span<const uint8_t>(e + kLogHeaderSize + channel_len, data_len);
+  if (event.owner.get() != src.owner().get()) event.owner = src.owner();
   pos_ += total;
   return true;
 }
@@ -385,8 +527,8 @@ std::string LogReader::Damage::summary() const {
 }
 
 double LogReader::progress() const {
-  if (map_->size == 0) return 0.0;
-  return static_cast<double>(pos_) / static_cast<double>(map_->size);
+  if (source_->size() == 0) return 0.0;
+  return static_cast<double>(pos_) / static_cast<double>(source_->size());
 }
 
 // ---- LogWriterBus ----

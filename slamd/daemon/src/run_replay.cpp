@@ -44,7 +44,9 @@ class Progress {
 }  // namespace
 
 int run_replay(const Loaded& cfg, const Options& o) {
-  LogReader reader(o.replay_in);
+  // Read in order into reused chunks: one pass that keeps few views (the camera frames a cycle may
+  // still take), and mapping the log's pages costs more than copying them (LogReader::Access).
+  LogReader reader(o.replay_in, LogReader::Access::kStreamed);
   LogWriterBus out(o.replay_out);
   MemoryBus in;
   DecodeErrors errors;  // logged by the node, rate-limited
@@ -86,7 +88,7 @@ int run_replay(const Loaded& cfg, const Options& o) {
     if (channel == channels::kGroundTruth || channel == channels::kSimContactTruth || channel == channels::kSimFault) {
       out.publish_raw(channel, ev.data);
     }
-    in.publish_shared(channel, ev.data, ev.owner);  // views into the mapped log, valid while it is
+    in.publish_shared(channel, ev.data, ev.owner);  // views into the log's chunk, valid while it is held
     // First event, or log time stepped back (a recording across a clock step): 1 s from now.
     if (next_status == INT64_MIN || ev.utime < next_status - kUtimePerSecond) next_status = ev.utime + kUtimePerSecond;
     if (ev.utime >= next_status) {

@@ -48,7 +48,7 @@ bool decode_counted(const LogEvent& ev, T& msg, LoadedRun& run) {
 LoadedRun load_run(const std::string& path) {
   LoadedRun run;
   run.path = path;
-  LogReader reader(path);
+  LogReader reader(path, LogReader::Access::kStreamed);  // one pass; every event copied out
   LogEvent ev;
   vita_map_t last_map{};
   std::optional<int8_t> pose_mode;

@@ -19,7 +19,7 @@ int check_log(const std::string& file, double max_loss, double gap_factor) {
   logcheck::LogCheck check(gap_factor);
   std::string damage;
   try {
-    LogReader reader(file);
+    LogReader reader(file, LogReader::Access::kStreamed);  // one pass, nothing kept
     LogReader::EventView ev;
     while (reader.next(ev)) check.add(ev.channel, ev.utime, ev.data);
     damage = reader.damage().summary();

@@ -203,9 +203,16 @@ struct LogEvent {
   std::vector<uint8_t> data;
 };
 
-// Reads an LCM log (as written by lcm-logger) directly, in file order. The file is memory-mapped:
-// events are views into the mapping, and pages of payloads nobody reads are never loaded. Every
-// event header is checked (sync word, lengths within the file); damage is skipped and reported by
+// Reads an LCM log (as written by lcm-logger) directly, in file order, in one of two ways (Access):
+// - kMapped (the default): the file is memory-mapped and events are views into the mapping; pages of
+//   payloads nobody reads are never loaded, and a view costs nothing to keep (the viewer's timeline
+//   keeps one of every event).
+// - kStreamed: the file is read in order with pread() into chunks of `chunk_bytes` (a larger event
+//   gets a chunk of its size); a view keeps its chunk, and chunks nobody holds are reused. Every
+//   byte is copied once, read or not. For one pass that keeps few views (a replay, a check): on some
+//   machines mapping a page costs more than copying it (docs/performance.md, "### Replay"). An error
+//   reading the file, or the file getting shorter while read, throws std::runtime_error naming it.
+// Every event header is checked (sync word, lengths within the file); damage is skipped and reported by
 // damage(), never a silent early end. An event time out of line with both neighbours while they
 // agree with each other (more than kMaxTimeJumpUs from each: a flipped bit) is damage too: the event
 // is delivered with the time of the one before (the first event: of the one after) and counted, so
@@ -214,11 +221,14 @@ struct LogEvent {
 // with one neighbour, count as wild only more than kMaxEdgeTimeJumpUs from it.
 class LogReader {
  public:
+  enum class Access { kMapped, kStreamed };
+  static constexpr std::size_t kDefaultChunkBytes = 128 * 1024;
   // Throws std::runtime_error naming the file if it cannot be opened. A damaged log (a corrupt
   // event header, a last event cut off by a crash or a full disk) does not throw: next() skips what
   // cannot be read, resynchronising on the next event's sync word as LCM's own reader does, and
   // damage() says what was skipped, where first.
-  explicit LogReader(const std::string& path);
+  explicit LogReader(const std::string& path, Access access = Access::kMapped,
+                     std::size_t chunk_bytes = kDefaultChunkBytes);
   // How far an event's time may lie from both neighbours before it is taken as damage (slamd's
   // max_jump_s default).
   static constexpr int64_t kMaxTimeJumpUs = 10'000'000;
@@ -231,8 +241,9 @@ class LogReader {
   LogReader& operator=(const LogReader&) = delete;
   // False at the end of the log.
   bool next(LogEvent& event);
-  // Same without copying: channel and data point into the mapped file and stay valid while the
-  // reader lives, or while `owner` is held. For replaying large logs (camera frames) fast.
+  // Same without copying: channel and data point into the mapped file (kMapped) or a chunk
+  // (kStreamed) and stay valid while `owner` is held (kMapped: also while the reader lives). For
+  // replaying large logs (camera frames) fast.
   struct EventView {
     int64_t utime = 0;
     std::string_view channel;
@@ -253,10 +264,11 @@ class LogReader {
   };
   const Damage& damage() const { return damage_; }
 
+  class Source;  // where the bytes come from (bus.cpp)
+
  private:
-  struct Mapping;
   std::string path_;
-  std::shared_ptr<const Mapping> map_;
+  std::unique_ptr<Source> source_;
   std::size_t pos_ = 0;
   int64_t last_utime_ = 0;
   bool have_last_utime_ = false;
