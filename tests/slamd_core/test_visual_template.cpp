@@ -7,6 +7,9 @@
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <random>
 
 namespace whiskeye::slam {
 namespace {
@@ -103,6 +106,78 @@ TEST(VisualTemplate, AllPixelFormatsGiveTheSameTemplate) {
     int worst = 0;
     for (size_t i = 0; i < ref.pixels.size(); ++i) worst = std::max(worst, std::abs(t.pixels[i] - ref.pixels[i]));
     EXPECT_LE(worst, 3) << name;
+  }
+}
+
+// The pipeline as it was until 2026-12-04: the whole image converted with OpenCV, then cropped by
+// make_visual_template_from_grey. make_visual_template now converts only the crop, with its own
+// float conversion; the templates must be byte-identical (the demo's numbers must not move).
+VisualTemplate whole_image_reference(const ImageView& im, const VisualParams& p) {
+  auto* data = const_cast<uint8_t*>(im.data.data());
+  const auto stride = static_cast<size_t>(im.row_stride);
+  cv::Mat grey8;
+  if (im.pixelformat == kPixGrey) grey8 = cv::Mat(im.height, im.width, CV_8UC1, data, stride);
+  if (im.pixelformat == kPixYuyv) cv::cvtColor(cv::Mat(im.height, im.width, CV_8UC2, data, stride), grey8, cv::COLOR_YUV2GRAY_YUYV);
+  if (im.pixelformat == kPixRgb24) cv::cvtColor(cv::Mat(im.height, im.width, CV_8UC3, data, stride), grey8, cv::COLOR_RGB2GRAY);
+  if (im.pixelformat == kPixBgr24) cv::cvtColor(cv::Mat(im.height, im.width, CV_8UC3, data, stride), grey8, cv::COLOR_BGR2GRAY);
+  if (im.pixelformat == kPixMjpeg) {
+    grey8.create(im.height, im.width, CV_8UC1);
+    mjpeg()->decode(im, grey8.data, grey8.step[0]);
+  }
+  cv::Mat grey;
+  grey8.convertTo(grey, CV_32F, 1.0 / 255.0);
+  return make_visual_template_from_grey(grey.ptr<float>(), grey.cols, grey.rows, static_cast<int>(grey.step1()), p);
+}
+
+TEST(VisualTemplate, ConvertingOnlyTheCropGivesTheTemplatesOfConvertingTheWholeImage) {
+  std::mt19937 rng(4);
+  const int w = 640, h = 480;
+  std::vector<uint8_t> bytes(static_cast<size_t>((w * 3 + 8) * h));
+  for (uint8_t& b : bytes) b = static_cast<uint8_t>(rng());
+  const std::vector<uint8_t> grey = test::random_image(w, h, 3);  // smooth, for the JPEG
+  std::vector<uint8_t> jpeg;
+  cv::imencode(".jpg", cv::Mat(h, w, CV_8UC1, const_cast<uint8_t*>(grey.data())), jpeg, {cv::IMWRITE_JPEG_QUALITY, 90});
+  // The whole frame (integer ratios), slam.yaml's upper 640x300 (7.5 rows a template row), odd
+  // offsets and sizes, a crop past the edges (clamped), another template size.
+  const VisualParams crops[] = {
+      {.crop_x = 0, .crop_y = 0, .crop_width = 0, .crop_height = 0},
+      {.crop_x = 0, .crop_y = 0, .crop_width = 640, .crop_height = 300},
+      {.crop_x = 3, .crop_y = 5, .crop_width = 601, .crop_height = 377},
+      {.crop_x = 101, .crop_y = 77, .crop_width = 0, .crop_height = 0},
+      {.crop_x = 500, .crop_y = 400, .crop_width = 400, .crop_height = 400, .template_width = 33, .template_height = 17},
+      {.crop_x = 1, .crop_y = 1, .crop_width = 63, .crop_height = 41}};
+  int compared = 0;
+  for (const VisualParams& crop : crops) {
+    for (const double norm : {0.0, 0.5}) {
+      for (const int radius : {0, 2}) {
+        VisualParams p = crop;
+        p.global_normalisation = norm;
+        p.patch_radius = radius;
+        for (const auto& [format, stride] : {std::pair{kPixGrey, w + 8}, std::pair{kPixYuyv, w * 2 + 4},
+                                             std::pair{kPixRgb24, w * 3}, std::pair{kPixBgr24, w * 3 + 8}}) {
+          const ImageView im = view(bytes, w, h, stride, format);
+          const VisualTemplate got = make_visual_template(im, p), want = whole_image_reference(im, p);
+          EXPECT_EQ(got.pixels, want.pixels) << "format " << format << " crop " << p.crop_x << "," << p.crop_y << " " << p.crop_width << "x"
+                                      << p.crop_height;
+          EXPECT_EQ(got.mean, want.mean);
+          ++compared;
+        }
+        const ImageView im = view(jpeg, w, h, 0, kPixMjpeg);
+        EXPECT_EQ(make_visual_template(im, p, mjpeg()).pixels, whole_image_reference(im, p).pixels) << "MJPEG";
+      }
+    }
+  }
+  EXPECT_EQ(compared, 96);
+  // A crop outside the image is refused, naming the image's size, whatever the format.
+  VisualParams outside;
+  outside.crop_x = 700;
+  for (const auto& [format, stride] : {std::pair{kPixGrey, w}, std::pair{kPixYuyv, w * 2}, std::pair{kPixRgb24, w * 3}}) {
+    try {
+      make_visual_template(view(bytes, w, h, stride, format), outside);
+      ADD_FAILURE() << "no error";
+    } catch (const InputError& e) {
+      EXPECT_STREQ(e.what(), "image: crop (700, 0) lies outside the 640x480 image");
+    }
   }
 }
 

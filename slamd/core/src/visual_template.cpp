@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <string>
 
@@ -51,42 +52,8 @@ void check_raw(const ImageView& im, int bytes_per_pixel) {
   }
 }
 
-cv::Mat to_grey8(const ImageView& im, const FrameDecoder* decoder) {
-  // OpenCV wants a non-const pointer for a header over foreign data; it is only read.
-  auto* data = const_cast<uint8_t*>(im.data.data());
-  const auto stride = static_cast<size_t>(im.row_stride);
-  cv::Mat grey;
-  switch (im.pixelformat) {
-    case kPixGrey:
-      check_raw(im, 1);
-      return cv::Mat(im.height, im.width, CV_8UC1, data, stride);
-    case kPixYuyv:
-      check_raw(im, 2);
-      cv::cvtColor(cv::Mat(im.height, im.width, CV_8UC2, data, stride), grey, cv::COLOR_YUV2GRAY_YUYV);
-      return grey;
-    case kPixRgb24:
-      check_raw(im, 3);
-      cv::cvtColor(cv::Mat(im.height, im.width, CV_8UC3, data, stride), grey, cv::COLOR_RGB2GRAY);
-      return grey;
-    case kPixBgr24:
-      check_raw(im, 3);
-      cv::cvtColor(cv::Mat(im.height, im.width, CV_8UC3, data, stride), grey, cv::COLOR_BGR2GRAY);
-      return grey;
-    default:
-      if (decoder != nullptr && im.pixelformat == decoder->pixelformat) {
-        decoder->check(im);  // before allocating what the message claims
-        grey.create(im.height, im.width, CV_8UC1);
-        decoder->decode(im, grey.data, grey.step[0]);
-        return grey;
-      }
-      throw InputError("image: unsupported pixel format '" + fourcc_text(im.pixelformat) + "'");
-  }
-}
-
-}  // namespace
-
-VisualTemplate make_visual_template_from_grey(const float* grey, int width, int height, int stride_floats,
-                                              const VisualParams& p) {
+// The part of a width × height image that `p` crops; throws when nothing is left.
+cv::Rect crop_rect(const VisualParams& p, int width, int height) {
   const int x0 = std::min(p.crop_x, width);
   const int y0 = std::min(p.crop_y, height);
   const int cw = p.crop_width == 0 ? width - x0 : std::min(p.crop_width, width - x0);
@@ -95,10 +62,90 @@ VisualTemplate make_visual_template_from_grey(const float* grey, int width, int 
     throw InputError("image: crop (" + std::to_string(p.crop_x) + ", " + std::to_string(p.crop_y) +
                      ") lies outside the " + std::to_string(width) + "x" + std::to_string(height) + " image");
   }
+  return {x0, y0, cw, ch};
+}
+
+// 8-bit grey to [0, 1] exactly as cv::Mat::convertTo(CV_32F, 1.0 / 255) computes it: the byte as a
+// float times the scale as a float (OpenCV's cvt_32f; its b term is 0).
+const std::array<float, 256>& unit_grey() {
+  static const std::array<float, 256> lut = [] {
+    std::array<float, 256> l{};
+    const auto scale = static_cast<float>(1.0 / 255.0);
+    for (int v = 0; v < 256; ++v) l[static_cast<size_t>(v)] = static_cast<float>(v) * scale;
+    return l;
+  }();
+  return lut;
+}
+
+// The crop of `im` as a float grey image in [0, 1]. Only the crop is converted: every format's grey
+// value of a pixel depends on that pixel alone (YUYV: its Y byte; RGB/BGR: OpenCV's fixed-point
+// weights), so this equals converting the whole image and cropping it, which it did until
+// 2026-12-04 (docs/performance.md, "### Replay").
+cv::Mat crop_to_unit_grey(const ImageView& im, const VisualParams& p, const FrameDecoder* decoder) {
+  // OpenCV wants a non-const pointer for a header over foreign data; it is only read.
+  auto* data = const_cast<uint8_t*>(im.data.data());
+  const auto stride = static_cast<size_t>(im.row_stride);
+  cv::Rect c;
+  const uint8_t* bytes = nullptr;  // the crop's first grey byte
+  size_t step = 0;                 // between two grey bytes of a row
+  size_t row_step = 0;             // between two rows
+  cv::Mat grey8;
+  switch (im.pixelformat) {
+    case kPixGrey:
+      check_raw(im, 1);
+      c = crop_rect(p, im.width, im.height);
+      bytes = data + static_cast<size_t>(c.y) * stride + static_cast<size_t>(c.x);
+      step = 1;
+      row_step = stride;
+      break;
+    case kPixYuyv:
+      check_raw(im, 2);
+      c = crop_rect(p, im.width, im.height);
+      bytes = data + static_cast<size_t>(c.y) * stride + 2 * static_cast<size_t>(c.x);  // Y, U, Y, V: Y every other byte
+      step = 2;
+      row_step = stride;
+      break;
+    case kPixRgb24:
+    case kPixBgr24:
+      check_raw(im, 3);
+      c = crop_rect(p, im.width, im.height);
+      cv::cvtColor(cv::Mat(im.height, im.width, CV_8UC3, data, stride)(c), grey8,
+                   im.pixelformat == kPixRgb24 ? cv::COLOR_RGB2GRAY : cv::COLOR_BGR2GRAY);
+      bytes = grey8.data;
+      step = 1;
+      row_step = grey8.step[0];
+      break;
+    default:
+      if (decoder != nullptr && im.pixelformat == decoder->pixelformat) {
+        decoder->check(im);  // before allocating what the message claims
+        grey8.create(im.height, im.width, CV_8UC1);
+        decoder->decode(im, grey8.data, grey8.step[0]);
+        c = crop_rect(p, im.width, im.height);
+        bytes = grey8.ptr(c.y) + c.x;
+        step = 1;
+        row_step = grey8.step[0];
+        break;
+      }
+      throw InputError("image: unsupported pixel format '" + fourcc_text(im.pixelformat) + "'");
+  }
+  const std::array<float, 256>& unit = unit_grey();
+  cv::Mat out(c.height, c.width, CV_32FC1);
+  for (int y = 0; y < c.height; ++y) {
+    const uint8_t* in = bytes + static_cast<size_t>(y) * row_step;
+    auto* o = out.ptr<float>(y);
+    for (int x = 0; x < c.width; ++x) o[x] = unit[in[static_cast<size_t>(x) * step]];
+  }
+  return out;
+}
+
+}  // namespace
+
+VisualTemplate make_visual_template_from_grey(const float* grey, int width, int height, int stride_floats,
+                                              const VisualParams& p) {
+  const cv::Rect crop = crop_rect(p, width, height);
   const cv::Mat src(height, width, CV_32FC1, const_cast<float*>(grey), static_cast<size_t>(stride_floats) * 4);
   cv::Mat small;
-  cv::resize(src(cv::Rect(x0, y0, cw, ch)), small, cv::Size(p.template_width, p.template_height), 0, 0,
-             cv::INTER_AREA);
+  cv::resize(src(crop), small, cv::Size(p.template_width, p.template_height), 0, 0, cv::INTER_AREA);
 
   const int n = p.template_width * p.template_height;
   std::vector<float> v(small.begin<float>(), small.end<float>());
@@ -151,11 +198,11 @@ VisualTemplate make_visual_template_from_grey(const float* grey, int width, int 
 }
 
 VisualTemplate make_visual_template(const ImageView& image, const VisualParams& params, const FrameDecoder* decoder) {
-  const cv::Mat grey8 = to_grey8(image, decoder);
-  cv::Mat grey;
-  grey8.convertTo(grey, CV_32F, 1.0 / 255.0);
+  const cv::Mat grey = crop_to_unit_grey(image, params, decoder);
+  VisualParams whole = params;  // the crop is all there is now
+  whole.crop_x = whole.crop_y = whole.crop_width = whole.crop_height = 0;
   return make_visual_template_from_grey(grey.ptr<float>(), grey.cols, grey.rows, static_cast<int>(grey.step1()),
-                                        params);
+                                        whole);
 }
 
 }  // namespace whiskeye::slam
