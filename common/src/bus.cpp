@@ -190,14 +190,15 @@ int LcmBus::fileno() { return lcm_->getFileno(); }
 // ---- LogReader ----
 
 // Where the log's bytes come from. view(at, len) makes bytes [at, at + len) of the file readable
-// (len ≤ size() - at) and returns a pointer to byte `at`, valid until the next call; owner() keeps
-// the bytes of the last view alive for the caller (an event view's owner).
+// (len ≤ size() - at) and returns a pointer to byte `at`, valid until the next call; share(owner)
+// makes `owner` keep the bytes of the last view alive (an event view's owner), reassigning it only
+// when it holds something else.
 class LogReader::Source {
  public:
   virtual ~Source() = default;
   std::size_t size() const { return size_; }
   virtual const uint8_t* view(std::size_t at, std::size_t len) = 0;
-  virtual std::shared_ptr<const void> owner() const = 0;
+  virtual void share(std::shared_ptr<const void>& owner) const = 0;
   // How many bytes one view of a search for the next sync word covers (at least 4).
   virtual std::size_t search_window() const = 0;
 
@@ -220,20 +221,14 @@ struct Whole {
   }
 };
 
-// Maps `size` bytes of `fd` read-only (nothing for an empty file); throws naming `path`.
-std::shared_ptr<const Whole> map_file(int fd, std::size_t size, const std::string& path) {
-  if (size == 0) return std::make_shared<const Whole>(nullptr, 0, true);
-  void* p = ::mmap(nullptr, size, PROT_READ, MAP_PRIVATE, fd, 0);
-  if (p == MAP_FAILED) throw std::runtime_error(path + ": cannot map the LCM log: " + std::strerror(errno));
-  return std::make_shared<const Whole>(static_cast<const uint8_t*>(p), size, true);
-}
-
 // The whole log in memory (mapped, or the caller's bytes): a view is a pointer into it.
 class WholeSource final : public LogReader::Source {
  public:
   explicit WholeSource(std::shared_ptr<const Whole> whole) : whole_(std::move(whole)) { size_ = whole_->size; }
   const uint8_t* view(std::size_t at, std::size_t) override { return whole_->bytes + at; }
-  std::shared_ptr<const void> owner() const override { return whole_; }
+  void share(std::shared_ptr<const void>& owner) const override {
+    if (owner != whole_) owner = whole_;
+  }
   std::size_t search_window() const override { return size_; }
 
  private:
@@ -284,7 +279,9 @@ class StreamSource final : public LogReader::Source {
     current_ = std::move(next);
     return current_->bytes.get();
   }
-  std::shared_ptr<const void> owner() const override { return current_; }
+  void share(std::shared_ptr<const void>& owner) const override {
+    if (owner != current_) owner = current_;
+  }
   std::size_t search_window() const override { return std::max<std::size_t>(chunk_bytes_, 8); }
 
  private:
@@ -390,16 +387,19 @@ LogReader::LogReader(const std::string& path, Access access, std::size_t chunk_b
     source_ = std::make_unique<StreamSource>(fd, size, chunk_bytes, path);  // owns fd
     return;
   }
-  std::shared_ptr<const Whole> whole;
-  try {
-    whole = map_file(fd, size, path);
-  } catch (...) {
-    ::close(fd);
-    throw;
+  const uint8_t* bytes = nullptr;
+  if (size > 0) {
+    void* p = ::mmap(nullptr, size, PROT_READ, MAP_PRIVATE, fd, 0);
+    if (p == MAP_FAILED) {
+      const int err = errno;
+      ::close(fd);
+      throw std::runtime_error(path + ": cannot map the LCM log: " + std::strerror(err));
+    }
+    bytes = static_cast<const uint8_t*>(p);
+    ::madvise(p, size, MADV_SEQUENTIAL);
   }
   ::close(fd);  // the mapping keeps the file
-  if (size > 0) ::madvise(const_cast<uint8_t*>(whole->bytes), size, MADV_SEQUENTIAL);
-  source_ = std::make_unique<WholeSource>(std::move(whole));
+  source_ = std::make_unique<WholeSource>(std::make_shared<const Whole>(bytes, size, true));
 }
 
 LogReader::LogReader(std::span<const uint8_t> bytes, std::string name)
@@ -509,7 +509,7 @@ bool LogReader::next(EventView& event) {
   const uint8_t* e = src.view(pos_, total);
   event.channel = std::string_view(reinterpret_cast<const char*>(e + kLogHeaderSize), channel_len);
   event.data = std::span<const uint8_t>(e + kLogHeaderSize + channel_len, data_len);
-  if (event.owner.get() != src.owner().get()) event.owner = src.owner();
+  src.share(event.owner);
   pos_ += total;
   return true;
 }

@@ -466,18 +466,16 @@ TEST(LogFiles, StreamedViewsStayIntactWhileHeld) {
   const std::vector<uint8_t> bytes = random_log(path, rng, 300);
   LogReader whole(std::span<const uint8_t>(bytes), path);
   const ReadBack expected = read_back(whole);
-  {
-    LogReader in(path, LogReader::Access::kStreamed, 256);
-    std::vector<LogReader::EventView> held;
-    LogReader::EventView ev;
-    while (in.next(ev)) held.push_back(ev);
-    ASSERT_EQ(held.size(), expected.events.size());
-    for (std::size_t i = 0; i < held.size(); ++i) {
-      EXPECT_EQ(std::string(held[i].channel), std::get<1>(expected.events[i])) << i;
-      EXPECT_TRUE(std::equal(held[i].data.begin(), held[i].data.end(), std::get<2>(expected.events[i]).begin(),
-                             std::get<2>(expected.events[i]).end()))
-          << "event " << i << "'s bytes changed while held";
-    }
+  LogReader in(path, LogReader::Access::kStreamed, 256);
+  std::vector<LogReader::EventView> held;
+  LogReader::EventView ev;
+  while (in.next(ev)) held.push_back(ev);
+  ASSERT_EQ(held.size(), expected.events.size());
+  for (std::size_t i = 0; i < held.size(); ++i) {
+    EXPECT_EQ(std::string(held[i].channel), std::get<1>(expected.events[i])) << i;
+    EXPECT_TRUE(std::equal(held[i].data.begin(), held[i].data.end(), std::get<2>(expected.events[i]).begin(),
+                           std::get<2>(expected.events[i]).end()))
+        << "event " << i << "'s bytes changed while held";
   }
 }
 
