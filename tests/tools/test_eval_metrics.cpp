@@ -357,6 +357,125 @@ TEST_F(ScriptedExm, CountsReLocalisationsCorrectnessAtTheThresholdsAndValidity) 
   EXPECT_EQ(r.relocalise_unknown_target, 1u);
 }
 
+TEST(Closure, DefaultsAreThePapersThresholdsAndTheFalseClosureTolerance) {
+  const EvalParams p;
+  EXPECT_DOUBLE_EQ(p.correct_position_m, 0.08);
+  EXPECT_DOUBLE_EQ(rad_to_deg(p.correct_angle_rad), 4.6);
+  EXPECT_DOUBLE_EQ(p.false_closure_position_m, 0.25);
+  EXPECT_DOUBLE_EQ(rad_to_deg(p.false_closure_angle_rad), 15.0);
+}
+
+TEST(Closure, ThePaperThresholdsMakeCorrectAndTheToleranceSplitsTheWrongOnes) {
+  const EvalParams p;
+  EXPECT_EQ(classify_closure(0.08, deg_to_rad(4.6), p), Closure::kCorrect);  // bounds inclusive
+  EXPECT_EQ(classify_closure(0.0801, 0.0, p), Closure::kNeighbourMiss);
+  EXPECT_EQ(classify_closure(0.0, deg_to_rad(4.7), p), Closure::kNeighbourMiss);
+  EXPECT_EQ(classify_closure(0.25, deg_to_rad(15.0), p), Closure::kNeighbourMiss);
+  EXPECT_EQ(classify_closure(0.2501, 0.0, p), Closure::kFalse);
+  EXPECT_EQ(classify_closure(0.0, deg_to_rad(15.1), p), Closure::kFalse);  // heading alone suffices
+  EXPECT_EQ(classify_closure(3.0, kPi, p), Closure::kFalse);
+  EvalParams wide = p;
+  wide.false_closure_position_m = 0.5;
+  EXPECT_EQ(classify_closure(0.4, 0.0, wide), Closure::kNeighbourMiss);
+  EXPECT_STREQ(closure_name(Closure::kCorrect), "correct");
+  EXPECT_STREQ(closure_name(Closure::kNeighbourMiss), "neighbour");
+  EXPECT_STREQ(closure_name(Closure::kFalse), "false");
+}
+
+TEST_F(ScriptedExm, CountsFalseClosuresApartFromNeighbourMisses) {
+  using E = EventType;
+  for (int t = 0; t <= 8; ++t) at(t, {10.0 * t, 0.0, 0.0});  // far apart by default
+  gt_samples_[0].pose = {0.0, 0.0, 0.0};
+  gt_samples_[1].pose = {1.0, 0.0, 0.0};
+  gt_samples_[2].pose = {2.0, 0.0, 0.0};
+  gt_samples_[4].pose = {0.03, 0.0, 0.0};               // 3 cm from exp 0: correct
+  gt_samples_[5].pose = {1.1, 0.0, 0.0};                // 0.1 m from exp 1: a neighbour miss
+  gt_samples_[6].pose = {0.5, 0.0, 0.0};                // 1.5 m from exp 2: false
+  gt_samples_[7].pose = {0.0, 0.0, deg_to_rad(20.0)};   // on exp 0, 20 deg off: false
+  ev(0, E::kNewExperience, -1, 0);
+  ev(1, E::kNewExperience, 0, 1);
+  ev(2, E::kNewExperience, 1, 2);
+  ev(4, E::kRelocalise, 2, 0);
+  ev(5, E::kRelocalise, 0, 1);
+  ev(6, E::kRelocalise, 1, 2);
+  ev(7, E::kRelocalise, 2, 0);
+  const ExmResult r = run(2.5);
+
+  ASSERT_EQ(r.relocalisations.size(), 4u);
+  EXPECT_EQ(r.relocalisations[0].closure, Closure::kCorrect);
+  EXPECT_EQ(r.relocalisations[1].closure, Closure::kNeighbourMiss);
+  EXPECT_EQ(r.relocalisations[2].closure, Closure::kFalse);
+  EXPECT_EQ(r.relocalisations[3].closure, Closure::kFalse);
+  EXPECT_EQ(r.correct_total, 1u);
+  EXPECT_DOUBLE_EQ(*r.arcr, 0.25);  // ARCR stays the paper's
+  EXPECT_EQ(r.neighbour_misses, 1u);
+  EXPECT_EQ(r.false_closures, 2u);
+  ASSERT_TRUE(r.false_closure_worst_m.has_value());
+  EXPECT_NEAR(*r.false_closure_worst_m, 1.5, 1e-12);
+  ASSERT_TRUE(r.neighbour_miss_share.has_value());
+  EXPECT_DOUBLE_EQ(*r.neighbour_miss_share, 1.0 / 3.0);
+  // A neighbour miss is still paper-wrong: the experiences after it are invalid as before.
+  EXPECT_FALSE(r.relocalisations[1].correct);
+
+  // The trace carries each verdict.
+  EvalInput input;
+  input.ground_truth = gt_samples_;
+  input.events = events_;
+  input.map = map_;
+  const std::vector<CycleTrace> trace = trace_cycles(input, r);
+  ASSERT_EQ(trace.size(), 7u);
+  EXPECT_FALSE(trace[2].relocalisation.has_value());
+  EXPECT_EQ(trace[3].relocalisation->closure, Closure::kCorrect);
+  EXPECT_EQ(trace[4].relocalisation->closure, Closure::kNeighbourMiss);
+  EXPECT_EQ(trace[5].relocalisation->closure, Closure::kFalse);
+  EXPECT_EQ(trace[6].relocalisation->closure, Closure::kFalse);
+}
+
+TEST_F(ScriptedExm, NoWrongReLocalisationLeavesTheShareAndTheWorstUndefined) {
+  using E = EventType;
+  for (int t = 0; t <= 4; ++t) at(t, {0.01 * t, 0.0, 0.0});
+  ev(0, E::kNewExperience, -1, 0);
+  ev(1, E::kNewExperience, 0, 1);
+  ev(3, E::kRelocalise, 1, 0);  // 3 cm: correct
+  const ExmResult r = run(1.5);
+  EXPECT_EQ(r.false_closures, 0u);
+  EXPECT_EQ(r.neighbour_misses, 0u);
+  EXPECT_FALSE(r.false_closure_worst_m.has_value());
+  EXPECT_FALSE(r.neighbour_miss_share.has_value());
+}
+
+TEST_F(ScriptedExm, AWiderToleranceTurnsAFalseClosureIntoANeighbourMiss) {
+  using E = EventType;
+  for (int t = 0; t <= 3; ++t) at(t, {0.4 * t, 0.0, 0.0});
+  ev(0, E::kNewExperience, -1, 0);
+  ev(1, E::kNewExperience, 0, 1);
+  ev(2, E::kRelocalise, 1, 0);  // 0.8 m from where experience 0 was made
+  EvalParams params;
+  params.base_duration_s = 1.5;
+  EXPECT_EQ(compute_exm(events_, map_, GroundTruth(gt_samples_), params).false_closures, 1u);
+  params.false_closure_position_m = 1.0;
+  const ExmResult r = compute_exm(events_, map_, GroundTruth(gt_samples_), params);
+  EXPECT_EQ(r.false_closures, 0u);
+  EXPECT_EQ(r.neighbour_misses, 1u);
+}
+
+TEST_F(ScriptedExm, ExperienceSpacingIsTheMedianStepToEachNewExperience) {
+  using E = EventType;
+  // Steps of 0.1 m and 2 deg, one of 0.3 m and 10 deg; and a re-localisation back to experience 0
+  // before experience 5, which is then 0.12 m and 1 deg from it (not from experience 4).
+  const double xs[] = {0.0, 0.1, 0.2, 0.5, 0.6, 0.0, 0.12};
+  const double degs[] = {0.0, 2.0, 4.0, 14.0, 16.0, 0.0, 1.0};
+  for (int t = 0; t <= 6; ++t) at(t, {xs[t], 0.0, deg_to_rad(degs[t])});
+  for (int t = 0; t <= 4; ++t) ev(t, E::kNewExperience, t - 1, t);
+  ev(5, E::kRelocalise, 4, 0);
+  ev(6, E::kNewExperience, 0, 5);
+  const ExmResult r = run(10.0);
+  EXPECT_EQ(r.spacing_steps, 5u);  // 0->1, 1->2, 2->3, 3->4, 0->5
+  ASSERT_TRUE(r.spacing_median_m && r.spacing_median_heading_rad);
+  EXPECT_NEAR(*r.spacing_median_m, 0.1, 1e-12);               // 0.1 0.1 0.1 0.12 0.3
+  EXPECT_NEAR(*r.spacing_median_heading_rad, deg_to_rad(2.0), 1e-12);  // 1 2 2 2 10
+}
+
 TEST_F(ScriptedExm, ArcrIsUndefinedWithoutReLocalisationsNotOne) {
   using E = EventType;
   for (int t = 0; t <= 5; ++t) at(t, {static_cast<double>(t), 0.0, 0.0});

@@ -24,6 +24,10 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <utility>
+#include <vector>
+
+#include <sys/wait.h>
 
 namespace whiskeye {
 namespace {
@@ -76,13 +80,17 @@ struct Script {
   int64_t pose_delay_us = 0;  // VITA_POSE stamped this much later (past the ground truth: no LEM)
   bool board_fault = false;   // SIM_FAULT: board 2 offline from 10 s to 25 s
   bool ground_truth = true;   // false: no GROUND_TRUTH (a real robot's log)
+  // The re-localisation of 35 s made 0.3 s later (0.094 m and 5.4 deg past where experience 15 was
+  // made): wrong by the paper's thresholds, within the false-closure tolerance.
+  bool neighbour_miss = false;
 };
 
 // Two revolutions. Experiences 0..19 are created once a second in the first; in the second the
 // robot re-localises to the experience of the same place each second (correct), except at 30 s it
 // jumps to experience 3 (incorrect), creates experience 20 at 30.5 s (invalid, heading off by
 // 0.2 rad in the map) and re-localises correctly again at 31 s.
-// Expected: ARR = 19/20, ARCR = 18/19, valid 20/21, LEM 0, EnM = 0.2² / 20 links.
+// Expected: ARR = 19/20, ARCR = 18/19, valid 20/21, LEM 0, EnM = 0.2² / 20 links; the wrong one a
+// false closure 1.78 m off; experiences 18 deg (0.3129 m) apart.
 void write_log(const std::string& path, const Script& script) {
   LogWriterBus bus(path);
   vita_map_t map{};
@@ -140,6 +148,8 @@ void write_log(const std::string& path, const Script& script) {
       const int64_t s = u / kSecond;
       if (s < 20) {
         add_experience(t, static_cast<int32_t>(s));
+      } else if (s == 35 && script.relocalise && script.neighbour_miss) {
+        // published 0.3 s later, below
       } else if (s > 20 && s < 40 && script.relocalise) {
         publish_event(t, vita_event_t::RELOCALISE, s == 30 ? 3 : static_cast<int32_t>(s - 20));
       } else if (s > 20 && s < 40) {
@@ -156,6 +166,9 @@ void write_log(const std::string& path, const Script& script) {
       }
     }
     if (u == 30 * kSecond + kSecond / 2 && script.relocalise) add_experience(t, 20, 0.2);
+    if (u == 35 * kSecond + 300'000 && script.relocalise && script.neighbour_miss) {
+      publish_event(t, vita_event_t::RELOCALISE, 15);
+    }
     if (u == 0) publish(bus, "SOMETHING_ELSE", gt);  // other channels are ignored
   }
   map.utime = kStart + static_cast<int64_t>(2 * kPeriodS) * kSecond;
@@ -187,6 +200,13 @@ int count_colour(const cv::Mat& img, int b, int g, int r) {
       if (std::abs(p[0] - b) < 30 && std::abs(p[1] - g) < 30 && std::abs(p[2] - r) < 30) ++n;
     }
   }
+  return n;
+}
+
+// Occurrences of `needle` in `text`.
+int count(const std::string& text, const std::string& needle) {
+  int n = 0;
+  for (std::size_t at = text.find(needle); at != std::string::npos; at = text.find(needle, at + needle.size())) ++n;
   return n;
 }
 
@@ -230,12 +250,35 @@ TEST_F(VitaEvalBinary, ComputesTheExpectedMetricsAndWritesJsonAndPlots) {
   EXPECT_NEAR(run["enm"]["enm"].get<double>(), 0.04 / 20.0, 1e-9);
   EXPECT_NEAR(run["enm"]["rotation_rad2"].get<double>(), 0.04 / 20.0, 1e-9);
   EXPECT_NEAR(run["enm"]["translation_m2"].get<double>(), 0.0, 1e-12);
+  // The wrong re-localisation (30 s, to experience 3) is a false closure: the robot at (-1, 0), the
+  // target made at (cos 54°, sin 54°).
+  const double worst = std::hypot(-1.0 - std::cos(deg_to_rad(54.0)), std::sin(deg_to_rad(54.0)));
+  EXPECT_EQ(run["exm"]["false_closures"], 1);
+  EXPECT_NEAR(run["exm"]["false_closure_worst_m"].get<double>(), worst, 1e-6);
+  EXPECT_EQ(run["exm"]["neighbour_misses"], 0);
+  EXPECT_DOUBLE_EQ(run["exm"]["neighbour_miss_share"].get<double>(), 0.0);
+  int false_in_list = 0;
+  for (const nlohmann::json& r : run["exm"]["relocalisations"]) false_in_list += r["closure"] == "false";
+  EXPECT_EQ(false_in_list, 1);
+  // Experiences one second apart on the circle: chords of 18 deg; 0->1..18->19 and 3->20.
+  EXPECT_EQ(run["exm"]["experience_spacing"]["steps"], 20);
+  EXPECT_NEAR(run["exm"]["experience_spacing"]["median_m"].get<double>(), 2.0 * std::sin(deg_to_rad(9.0)), 1e-6);
+  EXPECT_NEAR(run["exm"]["experience_spacing"]["median_heading_deg"].get<double>(), 18.0, 1e-4);
+  EXPECT_DOUBLE_EQ(j["params"]["false_closure_position_m"].get<double>(), 0.25);
+  EXPECT_NEAR(j["params"]["false_closure_angle_rad"].get<double>(), deg_to_rad(15.0), 1e-12);
   ASSERT_EQ(j["paper_rows"].size(), 1u);
   EXPECT_DOUBLE_EQ(j["paper_rows"][0]["enm"].get<double>(), 0.4311);
 
   const std::string table = read_text(file("stdout.txt"));
   EXPECT_NE(table.find("paper ViTa-SLAM"), std::string::npos);
-  EXPECT_NE(table.find("0.9474"), std::string::npos);  // ARCR 18/19 in the table
+  EXPECT_NE(table.find("0.9474   1 "), std::string::npos) << table;  // ARCR 18/19 and one false closure
+  EXPECT_NE(table.find("closures"), std::string::npos) << table;
+  EXPECT_NE(table.find("1 false closures (target beyond 0.25 m or 15 deg; worst 1.782 m), 0 neighbour misses"),
+            std::string::npos)
+      << table;
+  EXPECT_NE(table.find("experience spacing (ground truth, 20 steps to a new experience): median 0.313 m, 18.00 deg"),
+            std::string::npos)
+      << table;
 
   const cv::Mat map_png = cv::imread(file("plots/vita_experience_map.png"));
   ASSERT_FALSE(map_png.empty());
@@ -244,8 +287,55 @@ TEST_F(VitaEvalBinary, ComputesTheExpectedMetricsAndWritesJsonAndPlots) {
   EXPECT_GT(count_colour(map_png, 170, 170, 170), 500);  // ground-truth trajectory (grey)
   const cv::Mat reloc_png = cv::imread(file("plots/vita_relocalisations.png"));
   ASSERT_FALSE(reloc_png.empty());
-  EXPECT_GT(count_colour(reloc_png, 40, 40, 220), 100);  // the incorrect one (red)
+  EXPECT_GT(count_colour(reloc_png, 40, 40, 220), 100);  // the false closure (red)
   EXPECT_GT(count_colour(reloc_png, 40, 160, 40), 100);  // correct ones (green)
+}
+
+TEST_F(VitaEvalBinary, DrawsAndCountsANeighbourMissApartFromAFalseClosure) {
+  Script script;
+  script.neighbour_miss = true;
+  write_log(file("vita.lcmlog"), script);
+  ASSERT_EQ(run_vita_eval("--input " + file("vita.lcmlog") + " --json " + file("out.json") + " --plots " +
+                              file("plots") + " --trace " + file("trace"),
+                          file("stdout.txt")),
+            0)
+      << read_text(file("stdout.txt"));
+  const nlohmann::json exm = nlohmann::json::parse(read_text(file("out.json")))["runs"][0]["exm"];
+  EXPECT_EQ(exm["correct_total"], 17);
+  EXPECT_EQ(exm["neighbour_misses"], 1);
+  EXPECT_EQ(exm["false_closures"], 1);
+  EXPECT_DOUBLE_EQ(exm["neighbour_miss_share"].get<double>(), 0.5);
+  const std::string svg = read_text(file("plots/vita_relocalisations.svg"));
+  EXPECT_EQ(count(svg, "class=\"relocalisation neighbour\""), 1);
+  EXPECT_EQ(count(svg, "class=\"relocalisation false\""), 1);
+  EXPECT_EQ(count(svg, "class=\"relocalisation correct\""), 17);
+  // The legend (wrapped at 44 characters) names the three verdicts, their bounds and counts.
+  EXPECT_NE(svg.find(">correct: within 0.08 m and 4.6 deg (17)<"), std::string::npos);
+  EXPECT_NE(svg.find(">neighbour miss: wrong, but within 0.25 m and<"), std::string::npos);
+  EXPECT_NE(svg.find(">15 deg (1)<"), std::string::npos);
+  EXPECT_NE(svg.find(">false closure: beyond 0.25 m or 15 deg (1)<"), std::string::npos);
+  // Amber beyond the legend's sample: the same run without the neighbour miss has only that.
+  write_log(file("plain.lcmlog"), Script{});
+  ASSERT_EQ(run_vita_eval("--input " + file("plain.lcmlog") + " --plots " + file("plain"), file("stdout0.txt")), 0);
+  const cv::Mat png = cv::imread(file("plots/vita_relocalisations.png"));
+  const cv::Mat plain = cv::imread(file("plain/vita_relocalisations.png"));
+  ASSERT_FALSE(png.empty() || plain.empty());
+  EXPECT_GT(count_colour(png, 0, 150, 235), count_colour(plain, 0, 150, 235) + 20);  // the neighbour miss (amber)
+  EXPECT_GT(count_colour(png, 40, 40, 220), 100);                                    // the false closure (red)
+  const std::string trace = read_text(file("trace/vita_trace.csv"));
+  const std::size_t row = trace.find(",35.300,relocalise,14,15,");
+  ASSERT_NE(row, std::string::npos) << trace;
+  EXPECT_NE(trace.substr(row, trace.find('\n', row) - row).find(",0,1,neighbour,"), std::string::npos)
+      << "correct 0, after the base set, a neighbour miss";
+  // With a tolerance narrower than 0.094 m both wrong ones are false closures.
+  ASSERT_EQ(run_vita_eval("--input " + file("vita.lcmlog") + " --json " + file("narrow.json") +
+                              " --false-closure-tolerance 0.09,15",
+                          file("stdout2.txt")),
+            0)
+      << read_text(file("stdout2.txt"));
+  const nlohmann::json narrow = nlohmann::json::parse(read_text(file("narrow.json")));
+  EXPECT_EQ(narrow["runs"][0]["exm"]["false_closures"], 2);
+  EXPECT_DOUBLE_EQ(narrow["params"]["false_closure_position_m"].get<double>(), 0.09);
 }
 
 TEST_F(VitaEvalBinary, WritesAPerCycleTraceThatAgreesWithTheMetrics) {
@@ -256,6 +346,7 @@ TEST_F(VitaEvalBinary, WritesAPerCycleTraceThatAgreesWithTheMetrics) {
   std::string line;
   ASSERT_TRUE(std::getline(csv, line));
   EXPECT_EQ(line.rfind("cycle,t_s,event,from_id,to_id,", 0), 0u) << line;
+  EXPECT_NE(line.find(",correct,after_base_set,closure,template_id,"), std::string::npos) << line;
   const auto split = [](const std::string& l) {
     std::vector<std::string> f;
     std::stringstream ss(l);
@@ -269,11 +360,13 @@ TEST_F(VitaEvalBinary, WritesAPerCycleTraceThatAgreesWithTheMetrics) {
     const std::vector<std::string> f = split(line);
     ASSERT_EQ(f.size(), columns) << line;
     ++rows;
-    EXPECT_EQ(f[12], f[4]) << "the match of the cycle is joined: " << line;  // template = target here
+    EXPECT_EQ(f[13], f[4]) << "the match of the cycle is joined: " << line;  // template = target here
     if (f[2] != "relocalise") {
       EXPECT_EQ(f[10], "") << line;
+      EXPECT_EQ(f[12], "") << line;
       continue;
     }
+    EXPECT_EQ(f[12], f[10] == "1" ? "correct" : "false") << line;  // the closure column
     if (f[11] == "1") {
       ++relocs_after_base;
       correct_after_base += f[10] == "1";
@@ -402,11 +495,20 @@ TEST_F(VitaEvalBinary, FailsWithAOneLineReasonOnALogThatIsNoSlamdOutputOrABadOpt
   EXPECT_NE(read_text(file("stdout5.txt")).find("--world " + file("missing.yaml")), std::string::npos);
 }
 
-// Occurrences of `needle` in `text`.
-int count(const std::string& text, const std::string& needle) {
-  int n = 0;
-  for (std::size_t at = text.find(needle); at != std::string::npos; at = text.find(needle, at + needle.size())) ++n;
-  return n;
+TEST_F(VitaEvalBinary, ABadFalseClosureToleranceExitsTwoWithOneLine) {
+  write_log(file("vita.lcmlog"), Script{});
+  for (const auto& [value, says] : std::vector<std::pair<std::string, std::string>>{
+           {"0.25", "vita-eval: --false-closure-tolerance must be M,DEG (metres, degrees), got '0.25'"},
+           {"0.25,-1", "vita-eval: --false-closure-tolerance: M must be a positive distance and DEG in (0, 180]"},
+           {"0.05,15", "vita-eval: --false-closure-tolerance 0.05,15 is narrower than the correct-relocalisation"}}) {
+    const int status = run_vita_eval("--input " + file("vita.lcmlog") + " --false-closure-tolerance " + value,
+                                     file("stdout.txt"));
+    ASSERT_TRUE(WIFEXITED(status)) << value;
+    EXPECT_EQ(WEXITSTATUS(status), 2) << value;
+    const std::string out = read_text(file("stdout.txt"));
+    EXPECT_EQ(out.rfind(says, 0), 0u) << value << ": " << out;
+    EXPECT_EQ(count(out, "\n"), 1) << "one line: " << out;
+  }
 }
 
 TEST_F(VitaEvalBinary, ARunWithoutGroundTruthIsDrawnAndItsTruthMetricsAreUnavailable) {

@@ -202,7 +202,33 @@ std::optional<int64_t> base_set_end(const GroundTruth& gt, const EvalParams& par
   return std::nullopt;
 }
 
+const char* closure_name(Closure c) {
+  switch (c) {
+    case Closure::kCorrect: return "correct";
+    case Closure::kNeighbourMiss: return "neighbour";
+    case Closure::kFalse: return "false";
+  }
+  return "false";
+}
+
+Closure classify_closure(double position_error_m, double angle_error_rad, const EvalParams& params) {
+  if (position_error_m <= params.correct_position_m && angle_error_rad <= params.correct_angle_rad) {
+    return Closure::kCorrect;
+  }
+  if (position_error_m > params.false_closure_position_m || angle_error_rad > params.false_closure_angle_rad) {
+    return Closure::kFalse;
+  }
+  return Closure::kNeighbourMiss;
+}
+
 namespace {
+
+// The median of a non-empty list (the mean of the middle two for an even count).
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
 
 // ExM over `events`, the base set ending at `end` (none: everything is base); `origin` is the time
 // base_end_s counts from. With ground truth every re-localisation is judged; without (`gt` empty),
@@ -227,6 +253,7 @@ ExmResult exm(const std::vector<ExperienceEvent>& events_in, const ExperienceMap
   }
 
   bool valid_state = true;  // experiences are valid until an incorrect re-localisation
+  std::vector<double> steps_m, steps_rad;  // experience spacing
   for (const ExperienceEvent& e : events) {
     if (e.type == EventType::kSameExperience) continue;
     if (e.to_id == e.from_id) {
@@ -243,6 +270,15 @@ ExmResult exm(const std::vector<ExperienceEvent>& events_in, const ExperienceMap
       ++r.experiences_created;
       if (judge && valid_state) ++r.valid_experiences;
       if (after) ++r.experience_events_after_base;
+      const auto prev = created.find(e.from_id);
+      if (judge && prev != created.end()) {
+        const std::optional<Pose2> a = gt.at(prev->second);
+        const std::optional<Pose2> b = gt.at(created.at(e.to_id));
+        if (a && b) {
+          steps_m.push_back(std::hypot(b->x - a->x, b->y - a->y));
+          steps_rad.push_back(std::abs(angle_diff(b->theta, a->theta)));
+        }
+      }
       continue;
     }
     const auto target = created.find(e.to_id);
@@ -271,11 +307,16 @@ ExmResult exm(const std::vector<ExperienceEvent>& events_in, const ExperienceMap
     rl.gt_target_created = *gt_target;
     rl.position_error_m = std::hypot(gt_now->x - gt_target->x, gt_now->y - gt_target->y);
     rl.angle_error_rad = std::abs(angle_diff(gt_now->theta, gt_target->theta));
-    rl.correct = rl.position_error_m <= params.correct_position_m &&
-                 rl.angle_error_rad <= params.correct_angle_rad;
+    rl.closure = classify_closure(rl.position_error_m, rl.angle_error_rad, params);
+    rl.correct = rl.closure == Closure::kCorrect;
     rl.after_base_set = after;
     ++r.relocalisations_total;
     if (rl.correct) ++r.correct_total;
+    if (rl.closure == Closure::kNeighbourMiss) ++r.neighbour_misses;
+    if (rl.closure == Closure::kFalse) {
+      ++r.false_closures;
+      r.false_closure_worst_m = std::max(r.false_closure_worst_m.value_or(0.0), rl.position_error_m);
+    }
     if (after) {
       ++r.experience_events_after_base;
       ++r.relocalisations_after_base;
@@ -296,6 +337,15 @@ ExmResult exm(const std::vector<ExperienceEvent>& events_in, const ExperienceMap
   if (r.relocalisations_after_base > 0) {
     r.arcr_after_base =
         static_cast<double>(r.correct_after_base) / static_cast<double>(r.relocalisations_after_base);
+  }
+  if (r.false_closures + r.neighbour_misses > 0) {
+    r.neighbour_miss_share =
+        static_cast<double>(r.neighbour_misses) / static_cast<double>(r.false_closures + r.neighbour_misses);
+  }
+  r.spacing_steps = steps_m.size();
+  if (!steps_m.empty()) {
+    r.spacing_median_m = median(steps_m);
+    r.spacing_median_heading_rad = median(steps_rad);
   }
   if (r.experiences_created > 0) {
     r.valid_fraction = static_cast<double>(r.valid_experiences) / static_cast<double>(r.experiences_created);

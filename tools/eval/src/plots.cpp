@@ -17,7 +17,8 @@ const Rgb kGrey{170, 170, 170};     // ground truth
 const Rgb kBlue{30, 110, 200};      // links, sparse experiences
 const Rgb kOrange{255, 140, 0};     // dense experiences
 const Rgb kGreen{40, 160, 40};      // correct re-localisation
-const Rgb kRed{220, 40, 40};        // incorrect re-localisation
+const Rgb kAmber{235, 150, 0};      // neighbour miss: wrong by the paper, within the false-closure tolerance
+const Rgb kRed{220, 40, 40};        // false closure
 const Rgb kMagenta{190, 0, 190};    // re-localisation, correctness unknown (no ground truth)
 const Rgb kBlack{0, 0, 0};
 const Rgb kWall{105, 105, 105};
@@ -156,11 +157,27 @@ std::vector<ExperienceEvent> relocalise_events(const EvalInput& input) {
 }
 
 // The ExM verdict on a re-localisation event, when ground truth gave one.
-std::optional<bool> verdict(const EvalResult& result, const ExperienceEvent& e) {
+std::optional<Closure> verdict(const EvalResult& result, const ExperienceEvent& e) {
   for (const Relocalisation& r : result.exm.relocalisations) {
-    if (r.utime == e.utime && r.to_id == e.to_id) return r.correct;
+    if (r.utime == e.utime && r.to_id == e.to_id) return r.closure;
   }
   return std::nullopt;
+}
+
+Rgb closure_colour(Closure c) { return c == Closure::kCorrect ? kGreen : c == Closure::kNeighbourMiss ? kAmber : kRed; }
+
+// The legend's three verdicts with their counts (indexed by Closure) and the tolerances that part them.
+void closure_legend(Figure& fig, LegendEntry::Kind kind, double size, const std::size_t (&n)[3], const EvalParams& p) {
+  char text[160];
+  std::snprintf(text, sizeof text, "correct: within %g m and %g deg (%zu)", p.correct_position_m,
+                rad_to_deg(p.correct_angle_rad), n[0]);
+  fig.legend({kind, kGreen, size, text});
+  std::snprintf(text, sizeof text, "neighbour miss: wrong, but within %g m and %g deg (%zu)", p.false_closure_position_m,
+                rad_to_deg(p.false_closure_angle_rad), n[1]);
+  fig.legend({kind, kAmber, size, text});
+  std::snprintf(text, sizeof text, "false closure: beyond %g m or %g deg (%zu)", p.false_closure_position_m,
+                rad_to_deg(p.false_closure_angle_rad), n[2]);
+  fig.legend({kind, kRed, size, text});
 }
 
 std::vector<std::string> write(const Figure& fig, const std::string& base) {
@@ -249,22 +266,23 @@ std::vector<std::string> plot_run(const std::string& dir, const PlotRun& run, co
       piece.push_back(p);
     }
     flush(duration);
-    int correct = 0, incorrect = 0, unknown = 0;
+    std::size_t judged[3] = {0, 0, 0};  // by Closure
+    int unknown = 0;
     for (const ExperienceEvent& e : relocs) {
       const std::optional<Pose2> before = pose_before(est, e.utime);
       if (!before) continue;
-      const std::optional<bool> ok = verdict(result, e);
-      const Rgb c = !ok ? kMagenta : *ok ? kGreen : kRed;
-      ++(!ok ? unknown : *ok ? correct : incorrect);
-      panel.marker(at(compose(pl.T_plot_map, *before)), 5, c, false, "relocalisation");
+      const std::optional<Closure> v = verdict(result, e);
+      if (v) {
+        ++judged[static_cast<int>(*v)];
+      } else {
+        ++unknown;
+      }
+      panel.marker(at(compose(pl.T_plot_map, *before)), 5, v ? closure_colour(*v) : kMagenta, false, "relocalisation");
     }
     world_legend(fig, scene);
     truth_legend(fig, input);
     fig.legend({LegendEntry::Kind::Line, time_colour(0.5), 2, "pose estimate (VITA_POSE), coloured by time"});
-    if (correct + incorrect > 0 || truth) {
-      fig.legend({LegendEntry::Kind::Ring, kGreen, 5, "correct re-localisation (" + std::to_string(correct) + ")"});
-      fig.legend({LegendEntry::Kind::Ring, kRed, 5, "incorrect re-localisation (" + std::to_string(incorrect) + ")"});
-    }
+    if (judged[0] + judged[1] + judged[2] > 0 || truth) closure_legend(fig, LegendEntry::Kind::Ring, 5, judged, scene.params);
     if (unknown > 0 || !truth) {
       fig.legend({LegendEntry::Kind::Ring, kMagenta, 5, "re-localisation (" + std::to_string(unknown) + ")"});
     }
@@ -280,27 +298,23 @@ std::vector<std::string> plot_run(const std::string& dir, const PlotRun& run, co
     world_legend(fig, scene);
     truth_legend(fig, input);
     if (truth) {
-      // Where the robot was and where the target was created, by ground truth. Incorrect ones last so
-      // they stay visible over correct ones.
-      std::size_t correct = 0, incorrect = 0;
-      for (bool pass_correct : {true, false}) {
+      // Where the robot was and where the target was created, by ground truth. Correct ones first,
+      // false closures last, so that the worse stay visible over the better.
+      std::size_t judged[3] = {0, 0, 0};  // by Closure
+      for (Closure pass : {Closure::kCorrect, Closure::kNeighbourMiss, Closure::kFalse}) {
         for (const Relocalisation& r : result.exm.relocalisations) {
-          if (r.correct != pass_correct) continue;
-          const Rgb c = r.correct ? kGreen : kRed;
-          panel.polyline({at(r.gt_now), at(r.gt_target_created)}, c, 2, r.correct ? "relocalisation correct" : "relocalisation incorrect");
+          if (r.closure != pass) continue;
+          const Rgb c = closure_colour(r.closure);
+          panel.polyline({at(r.gt_now), at(r.gt_target_created)}, c, 2,
+                         std::string("relocalisation ") + closure_name(r.closure));
           panel.marker(at(r.gt_now), 4, c, true, "relocalisation-from");
           panel.marker(at(r.gt_target_created), 4, c, false, "relocalisation-target");
-          ++(r.correct ? correct : incorrect);
+          ++judged[static_cast<int>(r.closure)];
         }
       }
-      char threshold[96];
-      std::snprintf(threshold, sizeof threshold, "correct: within %.3g m and %.3g deg", scene.params.correct_position_m,
-                    rad_to_deg(scene.params.correct_angle_rad));
-      fig.legend({LegendEntry::Kind::Line, kGreen, 2, "correct re-localisation (" + std::to_string(correct) + ")"});
-      fig.legend({LegendEntry::Kind::Line, kRed, 2, "incorrect re-localisation (" + std::to_string(incorrect) + ")"});
+      closure_legend(fig, LegendEntry::Kind::Line, 2, judged, scene.params);
       fig.legend({LegendEntry::Kind::Dot, kBlack, 4, "robot at the event (ground truth)"});
       fig.legend({LegendEntry::Kind::Ring, kBlack, 4, "where the target was created (ground truth)"});
-      fig.legend({LegendEntry::Kind::Note, kBlack, 0, threshold});
     } else {
       // Without truth: the jump each re-localisation made in the map, from the estimate before it to
       // the target experience. A long jump is a loop closure to read against the scene.

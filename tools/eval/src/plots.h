@@ -1,6 +1,7 @@
 // Plots of evaluated runs (the paper's Fig. 4 and 5, and more), each as PNG and SVG: the experience
 // map, the pose trail coloured by time with the re-localisations on it, the re-localisations
-// (correct / incorrect with ground truth, their jumps in the map without), and the runs side by side.
+// (correct / neighbour miss / false closure with ground truth, their jumps in the map without), and
+// the runs side by side.
 // A run without ground truth is drawn all the same; with a world (vita-sim's world file) the walls and
 // landmarks are drawn under it.
 #pragma once
@@ -26,7 +27,7 @@ struct PlotScene {
   // the map is drawn in the world frame by putting its first pose there. Default with a world: the
   // world's trajectory at t = 0 (where vita-sim starts the robot).
   std::optional<Pose2> start;
-  EvalParams params;  // the ExM thresholds, named in the legend
+  EvalParams params;  // the ExM thresholds and the false-closure tolerance, named in the legend
 };
 
 // Where a run's map frame lies in the plot and what the axes are: the contract's alignment with

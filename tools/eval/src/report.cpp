@@ -43,7 +43,7 @@ std::string pad(const std::string& s, std::size_t width) {
 }
 
 std::string row(const std::vector<std::string>& cells) {
-  static const std::size_t widths[] = {22, 9, 8, 8, 30, 30};
+  static const std::size_t widths[] = {22, 9, 8, 8, 8, 30, 30};
   std::string out;
   for (std::size_t i = 0; i < cells.size(); ++i) out += pad(cells[i], widths[i]) + (i + 1 < cells.size() ? " " : "");
   while (!out.empty() && out.back() == ' ') out.pop_back();
@@ -89,11 +89,22 @@ nlohmann::json exm_json(const ExmResult& x, bool judged) {
                       {"position_error_m", r.position_error_m},
                       {"angle_error_rad", r.angle_error_rad},
                       {"correct", r.correct},
+                      {"closure", closure_name(r.closure)},
                       {"after_base_set", r.after_base_set}});
   }
   return {{"arr", opt_json(x.arr)},
           {"arcr", opt_json(x.arcr)},
           {"arcr_after_base", opt_json(x.arcr_after_base)},
+          {"false_closures", judging(x.false_closures)},
+          {"false_closure_worst_m", opt_json(x.false_closure_worst_m)},
+          {"neighbour_misses", judging(x.neighbour_misses)},
+          {"neighbour_miss_share", opt_json(x.neighbour_miss_share)},
+          {"experience_spacing",
+           judging({{"steps", x.spacing_steps},
+                    {"median_m", opt_json(x.spacing_median_m)},
+                    {"median_heading_deg", x.spacing_median_heading_rad
+                                               ? nlohmann::json(rad_to_deg(*x.spacing_median_heading_rad))
+                                               : nlohmann::json(nullptr)}})},
           {"valid_fraction", opt_json(x.valid_fraction)},
           {"base_end_found", x.base_end_found},
           {"base_end_utime", x.base_end_found ? nlohmann::json(x.base_end_utime) : nlohmann::json(nullptr)},
@@ -122,22 +133,23 @@ nlohmann::json enm_json(const EnmResult& e) {
 
 }  // namespace
 
-std::string format_table(const std::vector<RunReport>& runs, const std::vector<PaperRow>& paper) {
+std::string format_table(const std::vector<RunReport>& runs, const EvalParams& params,
+                         const std::vector<PaperRow>& paper) {
   std::ostringstream out;
-  out << row({"method", "EnM", "ARR", "ARCR", "LEM pos (m)", "LEM ori (rad)"});
-  out << row({"", "", "", "", "RMSE (mean|e| ± std|e|)", "RMSE (mean|e| ± std|e|)"});
-  out << std::string(112, '-') << "\n";
+  out << row({"method", "EnM", "ARR", "ARCR", "false", "LEM pos (m)", "LEM ori (rad)"});
+  out << row({"", "", "", "", "closures", "RMSE (mean|e| ± std|e|)", "RMSE (mean|e| ± std|e|)"});
+  out << std::string(121, '-') << "\n";
   for (const RunReport& r : runs) {
     const EvalResult& e = r.result;
     if (!e.ground_truth) {
-      out << row({r.label, "n/a", opt(e.exm.arr), "n/a", kNoTruth, kNoTruth});
+      out << row({r.label, "n/a", opt(e.exm.arr), "n/a", "n/a", kNoTruth, kNoTruth});
       continue;
     }
-    out << row({r.label, opt(e.enm.enm), opt(e.exm.arr), opt(e.exm.arcr), lem_cell(e.lem, true),
-                lem_cell(e.lem, false)});
+    out << row({r.label, opt(e.enm.enm), opt(e.exm.arr), opt(e.exm.arcr), std::to_string(e.exm.false_closures),
+                lem_cell(e.lem, true), lem_cell(e.lem, false)});
   }
   for (const PaperRow& p : paper) {
-    out << row({p.method, fmt("%.4f", p.enm), fmt("%.4f", p.arr), fmt("%.4f", p.arcr),
+    out << row({p.method, fmt("%.4f", p.enm), fmt("%.4f", p.arr), fmt("%.4f", p.arcr), "n/a",
                 fmt("%.4f", p.lem_pos) + " ± " + fmt("%.4f", p.lem_pos_spread),
                 fmt("%.4f", p.lem_ori) + " ± " + fmt("%.4f", p.lem_ori_spread)});
   }
@@ -197,6 +209,18 @@ std::string format_table(const std::vector<RunReport>& runs, const std::vector<P
     out << "       all re-localisations incl. base set (ARCR's): " << x.relocalisations_total << ", correct "
         << x.correct_total << "; valid experiences " << x.valid_experiences << "/" << x.experiences_created
         << " = " << opt(x.valid_fraction) << "\n";
+    out << "       of the " << x.relocalisations_total - x.correct_total << " wrong (beyond "
+        << fmt("%g", params.correct_position_m) << " m or " << fmt("%g", rad_to_deg(params.correct_angle_rad))
+        << " deg): " << x.false_closures << " false closures (target beyond "
+        << fmt("%g", params.false_closure_position_m) << " m or " << fmt("%g", rad_to_deg(params.false_closure_angle_rad))
+        << " deg; worst " << opt(x.false_closure_worst_m, "%.3f") << " m), " << x.neighbour_misses
+        << " neighbour misses (share " << opt(x.neighbour_miss_share, "%.3f") << ")\n";
+    out << "       experience spacing (ground truth, " << x.spacing_steps << " steps to a new experience): median "
+        << opt(x.spacing_median_m, "%.3f") << " m, "
+        << opt(x.spacing_median_heading_rad ? std::optional<double>(rad_to_deg(*x.spacing_median_heading_rad))
+                                            : std::nullopt,
+               "%.2f")
+        << " deg\n";
     if (x.events_outside_gt + x.relocalise_unknown_target + x.relocalise_to_current > 0) {
       out << "       not counted: " << x.events_outside_gt << " outside ground truth, "
           << x.relocalise_unknown_target << " to an unknown experience, " << x.relocalise_to_current
@@ -214,6 +238,8 @@ nlohmann::json to_json(const std::vector<RunReport>& runs, const EvalParams& par
   nlohmann::json j;
   j["params"] = {{"correct_position_m", params.correct_position_m},
                  {"correct_angle_rad", params.correct_angle_rad},
+                 {"false_closure_position_m", params.false_closure_position_m},
+                 {"false_closure_angle_rad", params.false_closure_angle_rad},
                  {"centre", {params.centre_x, params.centre_y}},
                  {"base_duration_s", opt_json(params.base_duration_s)}};
   j["runs"] = nlohmann::json::array();
@@ -264,7 +290,7 @@ nlohmann::json to_json(const std::vector<RunReport>& runs, const EvalParams& par
 
 std::string format_trace_csv(const std::vector<CycleTrace>& rows) {
   std::ostringstream out;
-  out << "cycle,t_s,event,from_id,to_id,gt_x,gt_y,gt_theta,target_error_m,target_error_deg,correct,after_base_set,"
+  out << "cycle,t_s,event,from_id,to_id,gt_x,gt_y,gt_theta,target_error_m,target_error_deg,correct,after_base_set,closure,"
          "template_id,template_new,error,visual_error,pfh_error,sda_error,visual_shift,visual_used,tactile_used,"
          "active_faults\n";
   const auto g = [](double v) { return fmt("%.6g", v); };
@@ -280,9 +306,9 @@ std::string format_trace_csv(const std::vector<CycleTrace>& rows) {
     if (r.relocalisation) {
       const Relocalisation& rl = *r.relocalisation;
       out << g(rl.position_error_m) << ',' << g(rad_to_deg(rl.angle_error_rad)) << ',' << (rl.correct ? 1 : 0) << ','
-          << (rl.after_base_set ? 1 : 0) << ',';
+          << (rl.after_base_set ? 1 : 0) << ',' << closure_name(rl.closure) << ',';
     } else {
-      out << ",,,,";
+      out << ",,,,,";
     }
     if (r.match) {
       const TemplateMatch& m = *r.match;

@@ -42,7 +42,9 @@ struct PaperRow {
 // "visual", "tactile" or "vita"; nothing for another name.
 std::optional<PaperRow> paper_row(const std::string& name);
 
-std::string format_table(const std::vector<RunReport>& runs, const std::vector<PaperRow>& paper);
+// `params` names the thresholds in each run's block.
+std::string format_table(const std::vector<RunReport>& runs, const EvalParams& params,
+                         const std::vector<PaperRow>& paper);
 
 nlohmann::json to_json(const std::vector<RunReport>& runs, const EvalParams& params,
                        const std::vector<PaperRow>& paper);

@@ -1,6 +1,6 @@
-// vita-eval: the paper's Table I metrics (LEM, ExM, EnM; ../shared/design/metrics.md) from one or
-// more slamd output logs. Prints the table, optionally writes JSON, plots (PNG and SVG, optionally
-// over a vita-sim world) and per-cycle traces. A log without GROUND_TRUTH (a real robot's run) is
+// vita-eval: the paper's Table I metrics (LEM, ExM, EnM; ../shared/design/metrics.md), and the false
+// closures beside ARCR, from one or more slamd output logs. Prints the table, optionally writes JSON,
+// plots (PNG and SVG, optionally over a vita-sim world) and per-cycle traces. A log without GROUND_TRUTH (a real robot's run) is
 // drawn and counted; what needs truth is reported as unavailable.
 #include "log_input.h"
 #include "plots.h"
@@ -8,6 +8,7 @@
 
 #include "whiskeye/common/cli.h"
 #include "whiskeye/eval/metrics.h"
+#include "whiskeye/eval/options.h"
 #include "whiskeye/sim/world.h"
 
 #include <CLI/CLI.hpp>
@@ -62,8 +63,11 @@ int run(int argc, char** argv) {
   std::string start_text;
   std::vector<std::string> paper_names;
   std::string centre = "0,0";
-  double position_threshold_m = 0.08;
-  double angle_threshold_deg = 4.6;
+  double position_threshold_m = kPaperCorrectPosition_m;
+  double angle_threshold_deg = kPaperCorrectAngle_deg;
+  char default_tolerance[32];
+  std::snprintf(default_tolerance, sizeof default_tolerance, "%g,%g", kFalseClosurePosition_m, kFalseClosureAngle_deg);
+  std::string false_closure_tolerance = default_tolerance;
   double base_duration_s = -1.0;
   app.add_option("--input", inputs, "slamd output log (repeat for a multi-row table)")->required();
   app.add_option("--json", json_path, "write all results as JSON to this file");
@@ -91,10 +95,18 @@ int run(int argc, char** argv) {
   app.add_option("--angle-threshold-deg", angle_threshold_deg, "ExM: and within this heading (deg)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  app.add_option("--false-closure-tolerance", false_closure_tolerance,
+                 "M,DEG: a re-localisation is a false closure when its target was created further than M metres "
+                 "or DEG degrees from the robot now (a paper-wrong one within both is a neighbour miss)")
+      ->capture_default_str();
   return program.run(argc, argv, [&] {
     EvalParams params;
     params.correct_position_m = position_threshold_m;
     params.correct_angle_rad = deg_to_rad(angle_threshold_deg);
+    if (const std::string error = parse_false_closure_tolerance(false_closure_tolerance, params); !error.empty()) {
+      std::cerr << "vita-eval: " << error << "\n";
+      return 2;
+    }
     if (!parse_centre(centre, params.centre_x, params.centre_y)) {
       std::cerr << "vita-eval: --centre must be X,Y in metres, got '" << centre << "'\n";
       return 2;
@@ -163,7 +175,7 @@ int run(int argc, char** argv) {
     std::vector<PaperRow> paper;
     for (const std::string& name : paper_names) paper.push_back(*paper_row(name));
 
-    std::cout << format_table(reports, paper);
+    std::cout << format_table(reports, params, paper);
 
     if (!json_path.empty()) write_text(json_path, to_json(reports, params, paper).dump(2) + "\n");
     if (!plots_dir.empty()) {

@@ -67,9 +67,21 @@ class GroundTruth {
   std::vector<PoseSample> samples_;
 };
 
+// The paper's correct re-localisation (metrics.md): the robot now within this of where the target
+// experience was created. The one definition; vita-eval's defaults and docs take it from here.
+inline constexpr double kPaperCorrectPosition_m = 0.08;
+inline constexpr double kPaperCorrectAngle_deg = 4.6;
+// A false closure (metrics.md): the target created further than this from the robot now (either
+// bound). Wider than the paper's, so that the neighbour a whisk cycle away (experiences are 7-15 cm
+// apart) is a neighbour miss, not an aliasing failure.
+inline constexpr double kFalseClosurePosition_m = 0.25;
+inline constexpr double kFalseClosureAngle_deg = 15.0;
+
 struct EvalParams {
-  double correct_position_m = 0.08;              // ExM: re-localisation position threshold
-  double correct_angle_rad = deg_to_rad(4.6);    // ExM: re-localisation heading threshold
+  double correct_position_m = kPaperCorrectPosition_m;              // ExM: correct within this (m) ...
+  double correct_angle_rad = deg_to_rad(kPaperCorrectAngle_deg);    // ... and this heading difference
+  double false_closure_position_m = kFalseClosurePosition_m;        // false closure beyond this (m) ...
+  double false_closure_angle_rad = deg_to_rad(kFalseClosureAngle_deg);  // ... or this heading difference
   double centre_x = 0.0;                         // arena centre for the first revolution (m)
   double centre_y = 0.0;
   std::optional<double> base_duration_s;         // if set, base set = first S seconds of GT instead
@@ -111,6 +123,18 @@ LemResult compute_lem(const std::vector<PoseSample>& estimate, const GroundTruth
 
 // ---- ExM ----
 
+// A judged re-localisation: correct by the paper's thresholds; else a neighbour miss (within the
+// false-closure tolerance) or a false closure (beyond it).
+enum class Closure { kCorrect, kNeighbourMiss, kFalse };
+
+// "correct", "neighbour" or "false" (the trace's and the JSON's spelling).
+const char* closure_name(Closure c);
+
+// The verdict on a re-localisation that leaves the robot `position_error_m` and `angle_error_rad`
+// (|wrapped|) from where its target was created. Bounds are inclusive: at exactly the paper's
+// threshold it is correct, at exactly the false-closure tolerance a neighbour miss.
+Closure classify_closure(double position_error_m, double angle_error_rad, const EvalParams& params);
+
 struct Relocalisation {
   int64_t utime = 0;
   int32_t from_id = -1;
@@ -119,7 +143,8 @@ struct Relocalisation {
   Pose2 gt_target_created;  // ground truth at the target experience's creation
   double position_error_m = 0.0;
   double angle_error_rad = 0.0;  // |wrapped heading difference|
-  bool correct = false;
+  bool correct = false;          // closure == Closure::kCorrect
+  Closure closure = Closure::kFalse;
   bool after_base_set = false;
 };
 
@@ -138,6 +163,17 @@ struct ExmResult {
   // the first lap counts). Undefined, not 1, when there is none.
   std::optional<double> arcr;
   std::optional<double> arcr_after_base;  // the same over ARR's re-localisations only (not the metric)
+  // Paper-wrong re-localisations (all of them, as ARCR's) split by the false-closure tolerance.
+  std::size_t false_closures = 0;
+  std::size_t neighbour_misses = 0;
+  std::optional<double> false_closure_worst_m;  // the largest position error of a false closure; none without one
+  std::optional<double> neighbour_miss_share;   // neighbour misses / paper-wrong; undefined without a wrong one
+  // How far apart the run makes experiences: for every NEW_EXPERIENCE after the first, the step from
+  // the experience current before it to the new one, by ground truth at their creation times. Half a
+  // step beyond the paper's thresholds makes neighbour misses unavoidable.
+  std::size_t spacing_steps = 0;
+  std::optional<double> spacing_median_m;
+  std::optional<double> spacing_median_heading_rad;  // median |wrapped heading difference|
   std::size_t experiences_created = 0;  // NEW_EXPERIENCE events (with ground truth)
   std::size_t valid_experiences = 0;
   std::optional<double> valid_fraction;
