@@ -196,7 +196,7 @@ void ParamNode::check_no_unknown_keys() const {
   check_node(state_->root, "", state_->leaves, state_->sections, state_->source);
   for (const auto& [path, given] : state_->overrides) {
     if (!state_->leaves.count(path)) {
-      throw std::logic_error(given.second + " overrides '" + path + "', which no loader read");
+      throw ParamError(given.second + ": '" + path + "' is not a parameter");
     }
   }
 }

@@ -280,6 +280,25 @@ TEST_F(SlamdBinary, BadInvocationsFailWithAOneLineReason) {
   Subprocess p4({kSlamd, "--config", kConfig, "--print-config"});
   EXPECT_EQ(p4.wait(30), 0);
   EXPECT_THAT(p4.output(), HasSubstr("slam.match.threshold_vita: "));
+  // --set: a key no parameter has, one without a value, and a value out of range.
+  Subprocess p5({kSlamd, "--config", kConfig, "--set", "slam.match.tactile_vet=1", "--print-config"});
+  EXPECT_EQ(p5.wait(30), 2);
+  EXPECT_THAT(p5.output(), HasSubstr("--set: 'slam.match.tactile_vet' is not a parameter"));
+  Subprocess p6({kSlamd, "--config", kConfig, "--set", "slam.match.tactile_veto", "--print-config"});
+  EXPECT_EQ(p6.wait(30), 2);
+  EXPECT_THAT(p6.output(), HasSubstr("expected KEY=VALUE"));
+  Subprocess p7({kSlamd, "--config", kConfig, "--set", "slam.match.tactile_veto=-1", "--print-config"});
+  EXPECT_EQ(p7.wait(30), 2);
+  EXPECT_THAT(p7.output(), HasSubstr("slam.match.tactile_veto"));
+}
+
+// --set overrides a parameter of the file, as --print-config shows and a run uses.
+TEST_F(SlamdBinary, SetOverridesAParameterOfTheFile) {
+  Subprocess p({kSlamd, "--config", kConfig, "--set", "slam.experience_map.drift_per_m=1000", "--set",
+                "slam.match.tactile_veto=0", "--print-config"});
+  ASSERT_EQ(p.wait(30), 0) << p.output();
+  EXPECT_THAT(p.output(), HasSubstr("slam.experience_map.drift_per_m: 1000  (--set)"));
+  EXPECT_THAT(p.output(), HasSubstr("slam.match.tactile_veto: 0  (--set)"));
 }
 
 // config/slam.yaml documents the defaults: slamd without --config must run with the same values,

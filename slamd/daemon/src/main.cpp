@@ -20,11 +20,18 @@ using slamd::Options;
 
 namespace {
 
-// The parameters in use: the files, then the command line's overrides (--mode), so that
-// --print-config shows what a run would use.
+// The parameters in use: the files, then the command line's overrides (--set, then --mode), so
+// that --print-config shows what a run would use.
 Loaded load_config(const Options& o) {
   Loaded l;
   ParamNode root = o.config.empty() ? ParamNode::empty() : ParamNode::from_file(o.config);
+  for (const std::string& kv : o.sets) {
+    const size_t eq = kv.find('=');
+    if (eq == 0 || eq == std::string::npos || eq + 1 == kv.size()) {
+      throw ParamError("--set '" + kv + "': expected KEY=VALUE, e.g. slam.experience_map.drift_per_m=1000");
+    }
+    root.set_override(kv.substr(0, eq), kv.substr(eq + 1), "--set");
+  }
   if (!o.mode.empty()) root.set_override("slam.mode", o.mode, "--mode");
   slam::load(root.section("slam"), l.slam);
   slamd::load(root.section("slamd"), l.node);
@@ -45,6 +52,8 @@ int main(int argc, char** argv) {
   program.add_config(o.config, "SLAM parameters (YAML: slam:, slamd: sections)");
   app.add_option("--robot", o.robot, "robot geometry (YAML: robot: section)")->check(CLI::ExistingFile);
   app.add_option("--mode", o.mode, "visual | tactile | vita (overrides slam.mode)");
+  app.add_option("--set", o.sets, "KEY=VALUE: override one parameter of the config, e.g. "
+                 "slam.experience_map.drift_per_m=1000 (repeatable; checked like the file's)");
   program.add_lcm_url(o.lcm_url);
   app.add_option("--state-dir", o.state_dir, "checkpoint directory (live default: $STATE_DIRECTORY or /var/lib/slamd)");
   app.add_option("--checkpoint-every", o.checkpoint_every, "checkpoint every N cycles (0: only on exit)")->check(CLI::NonNegativeNumber);

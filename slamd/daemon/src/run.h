@@ -23,6 +23,7 @@ struct Options {
   std::string config;
   std::string robot;
   std::string mode;
+  std::vector<std::string> sets;  // --set KEY=VALUE
   std::string lcm_url;
   std::string state_dir;
   int checkpoint_every = 1;

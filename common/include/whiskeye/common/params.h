@@ -64,8 +64,8 @@ class ParamNode {
   template <typename T>
   void require(const std::string& key, T& value) const;
 
-  // Throws ParamError naming the first key in the document that no get/section/list asked for (and
-  // std::logic_error for an override that no loader read: a program's mistake).
+  // Throws ParamError naming the first key in the document that no get/section/list asked for, or
+  // the first override that no loader read (a misspelt `--set` key).
   void check_no_unknown_keys() const;
   // One line "path: value" per parameter asked for, "  (default)" where the file did not set it,
   // "  (--option)" where a command-line option did.
