@@ -118,6 +118,30 @@ TEST(ExperienceMap, ActionRuleCreatesLinksAndRelocalises) {
   EXPECT_EQ(m.size(), 4);
 }
 
+// A cycle without one of its mode's senses (VitaSlam's degraded cycle) may re-localise onto a known
+// experience but never creates one.
+TEST(ExperienceMap, ADegradedCycleReLocalisesButNeverCreates) {
+  const PoseCells cells{PoseCellParams{}};
+  ExperienceMap m(pose_cell_rule());
+  m.on_cycle(0, 0, 0, true, 10, 10, 0, cells, 1000);
+  m.integrate(1.0, 0.0, 0.0, 1.0);
+  m.on_cycle(1, 1, 1, true, 15, 10, 0, cells, 2000);
+  // A template without experiences, and one whose experience is beyond the pose cells' reach.
+  m.integrate(1.0, 0.0, 0.0, 1.0);
+  EXPECT_EQ(m.on_cycle(2, 2, 2, true, 20, 10, 0, cells, 3000, 0, true).type, EventType::SameExperience);
+  EXPECT_EQ(m.on_cycle(0, 0, 0, true, 20, 10, 0, cells, 3100, 0, true).type, EventType::SameExperience);
+  EXPECT_EQ(m.size(), 2);
+  EXPECT_EQ(m.links().size(), 1u);
+  EXPECT_EQ(m.current_id(), 1);
+  EXPECT_NEAR(m.current_pose().x, 2.0, 1e-12);  // the odometry goes on
+  // A known place within reach: re-localised as by a full cycle.
+  const Event e = m.on_cycle(0, 0, 0, true, 10.4, 10, 0, cells, 3200, 0, true);
+  EXPECT_EQ(e.type, EventType::Relocalise);
+  EXPECT_EQ(e.to_id, 0);
+  // Without the flag the same unseen template makes an experience.
+  EXPECT_EQ(m.on_cycle(2, 2, 2, true, 20, 10, 0, cells, 3300).type, EventType::NewExperience);
+}
+
 TEST(ExperienceMap, ViewTurnedBeyondMaxViewShiftIsANewExperienceOfTheSameTemplate) {
   const PoseCells cells{PoseCellParams{}};
   ExperienceMapParams p;

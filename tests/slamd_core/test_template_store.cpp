@@ -158,6 +158,130 @@ TEST(TemplateMatch, TemplatesLackingAPartInUseAreNotCandidates) {
   EXPECT_EQ(s.match({&v, &t}, {false, true}, MatchParams{}).id, 0);
 }
 
+// The fusion (Terms::fused): vision decides (threshold_visual) unless touch differs by more than
+// tactile_veto; where both cycles touched something, touch may also add evidence (ε ≤ threshold_vita).
+TEST(TemplateMatch, FusedVisionDecidesUnlessTouchClearlyDisagreesAndTouchAddsEvidence) {
+  TemplateStore s(64, 40);
+  const VisualTemplate v = random_template(50);
+  const TactileTemplate t = random_tactile(51);
+  s.add({&v, &t}, 0, 0, 0);
+  VisualTemplate v2 = v;  // the same view, a little different
+  for (size_t k = 0; k < v2.pixels.size(); k += 7) v2.pixels[k] = static_cast<uint8_t>(v2.pixels[k] ^ 0x10);
+  MatchParams unit;
+  unit.sigma_visual = 1.0;
+  const double raw_v = s.match({&v2, &t}, {true, false}, unit).visual;
+  ASSERT_GT(raw_v, 0.0);
+  TactileTemplate t2 = t;  // the same feel at another phase of the whisk: one SDA entry off by 3
+  t2.sda[5] += 3.0f;
+  const Terms fused{true, true, true}, sum{true, true};
+  MatchParams p;  // τ_V 0.1, τ_vita 0.3
+  p.tactile_veto = 0.5;
+  // V/σ_V = 0.08 (vision alone would match), touch 0.3 off: the sum (0.38) refuses, the fusion
+  // takes vision's word, on threshold_vita's scale (0.08 × 0.3/0.1).
+  p.sigma_visual = raw_v / 0.08;
+  p.sigma_sda = 3.0 / 0.3;
+  EXPECT_GT(s.match({&v2, &t2}, sum, p).error, p.threshold_vita);
+  const BestMatch a = s.match({&v2, &t2}, fused, p);
+  EXPECT_EQ(a.id, 0);
+  EXPECT_NEAR(a.error, 0.24, 1e-9);
+  EXPECT_NEAR(a.sda, 0.3, 1e-6);
+  // Touch 0.8 off (beyond the veto): it objects, and the sum decides (0.88).
+  p.sigma_sda = 3.0 / 0.8;
+  EXPECT_NEAR(s.match({&v2, &t2}, fused, p).error, 0.88, 1e-6);
+  // V/σ_V = 0.15 (vision alone would not match) with touch 0.1 off: the evidence of both (0.25).
+  p.sigma_visual = raw_v / 0.15;
+  p.sigma_sda = 3.0 / 0.1;
+  const BestMatch c = s.match({&v2, &t2}, fused, p);
+  EXPECT_NEAR(c.error, 0.25, 1e-6);
+  EXPECT_LE(c.error, p.threshold_vita);
+}
+
+// Where vision recognises a place touch does not object to, vision's choice is the match, even if
+// another template's view and touch together sum lower; the evidence of both counts only where vision
+// recognises nothing, and never for a view beyond threshold_visual_touched.
+TEST(TemplateMatch, FusedVisionChoosesFirstAndTouchVouchesOnlyForANearMiss) {
+  TemplateStore s(64, 40);
+  const VisualTemplate v = random_template(70);
+  const TactileTemplate t = random_tactile(71);
+  VisualTemplate v2 = v;  // a view a little different
+  for (size_t k = 0; k < v2.pixels.size(); k += 5) v2.pixels[k] = static_cast<uint8_t>(v2.pixels[k] ^ 0x20);
+  TactileTemplate t2 = t;  // the same feel at another phase: one SDA entry off by 3
+  t2.sda[3] += 3.0f;
+  s.add({&v2, &t}, 0, 0, 0);  // 0: the view a little off, the touch exactly
+  s.add({&v, &t2}, 0, 0, 0);  // 1: the view exactly, the touch a little off
+  MatchParams unit;
+  unit.sigma_visual = 1.0;
+  TemplateStore view_only(64, 40);
+  view_only.add({&v2, &t}, 0, 0, 0);
+  const double raw_v = view_only.match({&v, &t}, {true, false}, unit).visual;  // template 0's view against v
+  ASSERT_GT(raw_v, 0.0);
+  const Terms fused{true, true, true};
+  MatchParams p;
+  p.tactile_veto = 0.5;
+  p.sigma_visual = raw_v / 0.05;  // template 0: V 0.05, touch 0 → the sum 0.05
+  p.sigma_sda = 3.0 / 0.2;        // template 1: V 0, touch 0.2 → the sum 0.2, vision 0
+  const BestMatch m = s.match({&v, &t}, fused, p);
+  EXPECT_EQ(m.id, 1);  // vision's choice, not the lower sum
+  EXPECT_EQ(m.error, 0.0);
+  // Template 1 alone vetoed (touch 0.6 off): vision recognises template 0, V 0.05 → 0.15.
+  p.sigma_sda = 3.0 / 0.6;
+  EXPECT_EQ(s.match({&v, &t}, fused, p).id, 0);
+  EXPECT_NEAR(s.match({&v, &t}, fused, p).error, 0.15, 1e-9);
+  // Template 0's view 0.15 off: beyond vision; touch identical vouches for it (0.15 ≤ 0.2) ...
+  p.sigma_visual = raw_v / 0.15;
+  const BestMatch near_miss = s.match({&v, &t}, fused, p);
+  EXPECT_EQ(near_miss.id, 0);
+  EXPECT_NEAR(near_miss.error, 0.15, 1e-9);
+  EXPECT_LE(near_miss.error, p.threshold_vita);
+  // ... but not for a view 0.25 off, though the sum (0.25) is within threshold_vita.
+  p.sigma_visual = raw_v / 0.25;
+  EXPECT_GT(s.match({&v, &t}, fused, p).error, p.threshold_vita);
+  p.threshold_visual_touched = 0.3;
+  EXPECT_NEAR(s.match({&v, &t}, fused, p).error, 0.25, 1e-9);
+}
+
+TEST(TemplateMatch, FusedAnEmptyTouchIsNotTakenForAContactNorAContactForAnEmptyTouch) {
+  TemplateStore s(64, 40);
+  const VisualTemplate v = random_template(60);
+  const TactileTemplate touched = random_tactile(61);
+  const TactileTemplate empty{};
+  s.add({&v, &touched}, 0, 0, 0);
+  const Terms fused{true, true, true};
+  // An empty PFH is 1/σ_PFH (0.67) from any contact's: beyond the veto, and no evidence either.
+  EXPECT_EQ(s.match({&v, &empty}, fused, MatchParams{}).id, -1);
+  s.add({&v, &empty}, 0, 0, 0);
+  const BestMatch m = s.match({&v, &empty}, fused, MatchParams{});
+  EXPECT_EQ(m.id, 1);
+  EXPECT_EQ(m.error, 0.0);
+  EXPECT_EQ(s.match({&v, &touched}, fused, MatchParams{}).id, 0);
+  // A veto wide enough lets vision decide between them.
+  MatchParams wide;
+  wide.tactile_veto = 10.0;
+  TemplateStore only_touched(64, 40);
+  only_touched.add({&v, &touched}, 0, 0, 0);
+  EXPECT_EQ(only_touched.match({&v, &empty}, fused, wide).id, 0);
+}
+
+TEST(TemplateMatch, AWhiskerWithoutDataCountsNeitherAsAgreementNorAsDisagreement) {
+  TemplateStore s(64, 40);
+  TactileTemplate stored{};
+  stored.sda[0] = 4.0f;  // whisker 0 touched when the template was made
+  stored.num_contacts = 1;
+  s.add({nullptr, &stored}, 0, 0, 0);
+  TactileTemplate q{};  // whisker 0's board is offline now: no data, read as no contact
+  q.num_contacts = 1;
+  q.sda[1] = 2.3f;      // and whisker 1 differs by 2.3
+  MatchParams p;
+  p.sigma_sda = 1.0;
+  // With every whisker sensed both differences count.
+  EXPECT_NEAR(s.match({nullptr, &q}, {false, true}, p).sda, 6.3, 1e-5);
+  // Without whisker 0 only whisker 1's counts, scaled to the whole array (24/23).
+  q.sensed = kAllWhiskersSensed & ~1u;
+  EXPECT_NEAR(s.match({nullptr, &q}, {false, true}, p).sda, 2.3 * 24.0 / 23.0, 1e-5);
+  q.sensed = 0;  // nothing sensed: no SDA evidence at all
+  EXPECT_EQ(s.match({nullptr, &q}, {false, true}, p).sda, 0.0);
+}
+
 TEST(TemplateMatch, ErrorTermsAreDividedByTheirSigmas) {
   TemplateStore s(64, 40);
   const VisualTemplate v = random_template(40), v2 = random_template(41);

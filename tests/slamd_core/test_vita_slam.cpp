@@ -88,13 +88,15 @@ TEST(VitaSlam, AMissingSenseDegradesToTheOtherAndNeverStops) {
   SlamParams p;
   VitaSlam slam(p, w.geometry);
   slam.process_cycle(input(w.place(0), 1));
-  // No camera frame: tactile terms only, and the touch alone recognises the place.
+  // No camera frame: touch alone, aliased by design, decides nothing in ViTa; the cycle goes on.
   CycleInput no_image = input(w.place(0), 2);
   no_image.image = nullptr;
   const CycleResult r1 = slam.process_cycle(no_image);
+  EXPECT_TRUE(r1.degraded);
   EXPECT_FALSE(r1.match.visual_used);
-  EXPECT_TRUE(r1.match.tactile_used);
-  EXPECT_EQ(r1.match.template_id, 0);
+  EXPECT_FALSE(r1.match.tactile_used);
+  EXPECT_EQ(r1.match.template_id, -1);
+  EXPECT_EQ(r1.event.type, EventType::SameExperience);
   // No touch data (every sample invalid, whiskerd's boards silent): vision alone recognises the place.
   WhiskCycleInput silent = w.place(0).whisk;
   for (WhiskSample& s : silent.samples) s.valid = false;
@@ -125,15 +127,16 @@ TEST(VitaSlam, AViTaCycleThatTouchedNothingIsNotTakenForAPlaceWhereSomethingWasT
   open.whisk = &nothing;
   VitaSlam slam(SlamParams{}, w.geometry);
   ASSERT_EQ(slam.process_cycle(touched).match.template_id, 0);
-  // Vision decides a contact-free cycle, but only among contact-free templates: the touched place
-  // is not here, so this view makes a template of its own.
+  // Vision decides a contact-free cycle, but touch vetoes the touched place (an empty touch is
+  // 1/σ_PFH from any contact, beyond tactile_veto): it is not here, so this view makes a template
+  // of its own.
   const CycleResult a = slam.process_cycle(open);
   EXPECT_TRUE(a.match.visual_used);
-  EXPECT_FALSE(a.match.tactile_used);
+  EXPECT_TRUE(a.match.tactile_used);
   EXPECT_TRUE(a.match.is_new);
   EXPECT_EQ(a.match.template_id, 1);
   EXPECT_FALSE(a.dense);
-  // The same view with nothing touched again is recognised, by vision alone (ε = its visual term).
+  // The same view with nothing touched again is recognised, by vision (touch does not object).
   open.utime += 1000000;
   const CycleResult b = slam.process_cycle(open);
   EXPECT_FALSE(b.match.is_new);
@@ -194,6 +197,48 @@ TEST(VitaSlam, PathIntegrationGoesOnAfterTheClockWasSteppedBack) {
   EXPECT_NEAR(r2.pose.x, r.pose.x, 1e-9);
 }
 
+// A missing sense never counts as a match: a ViTa cycle without touch data (every whisker's board
+// silent) may recognise a known place by vision, one without a frame (a camera blackout) nothing by
+// touch alone (aliased by design); neither stores a template, injects energy or creates an
+// experience.
+TEST(VitaSlam, ADegradedViTaCycleRecognisesKnownPlacesButLearnsNothing) {
+  World w;
+  VitaSlam slam(SlamParams{}, w.geometry);
+  slam.process_cycle(input(w.place(0), 1));
+  const PoseCells before = slam.pose_cells();
+  WhiskCycleInput silent = w.place(1).whisk;
+  for (WhiskSample& s : silent.samples) s.valid = false;
+  int64_t cycle = 2;
+  for (const bool camera : {false, true}) {
+    SCOPED_TRACE(camera ? "no touch" : "no camera");
+    // A novel place: nothing stored, nothing created.
+    CycleInput novel = input(w.place(1), cycle);
+    ++cycle;
+    if (camera) novel.whisk = &silent; else novel.image = nullptr;
+    const CycleResult a = slam.process_cycle(novel);
+    EXPECT_TRUE(a.degraded);
+    EXPECT_EQ(a.match.template_id, -1);
+    EXPECT_EQ(a.event.type, EventType::SameExperience);
+    EXPECT_EQ(slam.templates().size(), 1);
+    EXPECT_EQ(slam.map().size(), 1);
+    // The known place: recognised by vision, not by touch alone; no energy goes into the pose cells.
+    CycleInput known = input(w.place(0), cycle);
+    ++cycle;
+    if (camera) known.whisk = &silent; else known.image = nullptr;
+    const CycleResult b = slam.process_cycle(known);
+    EXPECT_TRUE(b.degraded);
+    EXPECT_EQ(b.match.template_id, camera ? 0 : -1);
+    EXPECT_FALSE(b.match.tactile_used);
+    EXPECT_EQ(slam.templates().size(), 1);
+  }
+  EXPECT_EQ(slam.pose_cells().activity(), before.activity());
+  // Both senses back: a full cycle, which learns.
+  const CycleResult c = slam.process_cycle(input(w.place(1), cycle));
+  EXPECT_FALSE(c.degraded);
+  EXPECT_TRUE(c.match.is_new);
+  EXPECT_EQ(slam.map().size(), 2);
+}
+
 TEST(VitaSlam, WithoutAFrameAndWithoutContactViTaMatchesNothing) {
   World w;
   VitaSlam slam(SlamParams{}, w.geometry);
@@ -232,8 +277,9 @@ TEST(VitaSlam, ABadFrameIsCountedAndTheCycleGoesOn) {
   const CycleResult r = slam.process_cycle(in);
   EXPECT_NE(r.image_warning.find("MJPEG"), std::string::npos) << r.image_warning;
   EXPECT_EQ(slam.stats().bad_images, 1);
-  EXPECT_TRUE(r.match.tactile_used);
-  EXPECT_EQ(r.match.template_id, 0);
+  EXPECT_FALSE(r.match.tactile_used);     // touch alone decides nothing in ViTa
+  EXPECT_TRUE(r.degraded);
+  EXPECT_EQ(r.match.template_id, -1);
 }
 
 TEST(VitaSlam, RevisitingPlacesAroundALoopRelocalises) {

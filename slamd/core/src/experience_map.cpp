@@ -178,7 +178,7 @@ void ExperienceMap::relax(int loops) {
 
 Event ExperienceMap::on_cycle(int template_id, int visual_template_id, int tactile_template_id, bool dense,
                               double pc_x, double pc_y, double pc_theta, const PoseCells& cells, int64_t utime,
-                              int view_shift) {
+                              int view_shift, bool degraded) {
   Event ev;
   ev.type = EventType::SameExperience;
   ev.from_id = ev.to_id = current_;
@@ -207,7 +207,7 @@ Event ExperienceMap::on_cycle(int template_id, int visual_template_id, int tacti
   const std::vector<int>* candidates =
       static_cast<size_t>(template_id) < by_template_.size() ? &by_template_[static_cast<size_t>(template_id)] : nullptr;
   if (candidates == nullptr || candidates->empty()) {
-    if (frozen_) return ev;
+    if (frozen_ || degraded) return ev;
     create();
   } else {
     int nearest = -1;
@@ -240,7 +240,7 @@ Event ExperienceMap::on_cycle(int template_id, int visual_template_id, int tacti
     const double limit = by_map ? budget : params_.delta_pc_threshold;
     // No candidate left by the view-shift rule (never when frozen, which ignores it), or none near.
     if (nearest < 0 || (dmin > limit && !frozen_)) {
-      create();
+      if (!degraded) create();
     } else if (nearest != current_) {
       const int from = current_;
       if (from >= 0 && !frozen_) {

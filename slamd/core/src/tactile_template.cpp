@@ -147,7 +147,7 @@ std::vector<ContactEstimate> estimate_contacts(const WhiskCycleInput& cycle, con
 std::array<double, kPfhBins> compute_pfh(const std::vector<Vec3>& pts, const Vec3& viewpoint, int neighbours) {
   std::array<double, kPfhBins> h{};
   const size_t n = pts.size();
-  if (n < 3) return h;
+  if (n < static_cast<size_t>(kMinPfhPoints)) return h;
   std::vector<Eigen::Vector3d> p(n), nrm(n);
   for (size_t i = 0; i < n; ++i) p[i] = {pts[i].x, pts[i].y, pts[i].z};
   const size_t k = std::clamp<size_t>(static_cast<size_t>(neighbours), 3, n);
@@ -210,7 +210,7 @@ std::array<double, kPfhBins> compute_pfh(const std::vector<Vec3>& pts, const Vec
 
 std::array<double, kPfhBins> compute_point_histogram(const std::vector<Vec3>& pts, const TactileParams& p) {
   std::array<double, kPfhBins> h{};
-  if (pts.size() < 3) return h;
+  if (pts.size() < static_cast<size_t>(kMinPfhPoints)) return h;
   for (const Vec3& q : pts) {
     const int b = (bin_of(q.x, p.histogram_min[0], p.histogram_max[0]) * kPfhBinsPerDim +
                    bin_of(q.y, p.histogram_min[1], p.histogram_max[1])) *
@@ -250,6 +250,15 @@ TactileTemplate make_tactile_template(const WhiskCycleInput& cycle, const RobotG
     t.pfh[static_cast<size_t>(i)] = static_cast<uint16_t>(std::lround(std::clamp(h[static_cast<size_t>(i)], 0.0, 1.0) * 65535.0));
   }
   t.sda = compute_sda(cycle, p);
+  t.sensed = 0;
+  for (const WhiskSample& s : cycle.samples) {
+    if (!s.valid) continue;
+    for (size_t w = 0; w < static_cast<size_t>(kNumWhiskers); ++w) {
+      if (std::isfinite(s.theta[w]) && std::isfinite(s.deflection_x[w]) && std::isfinite(s.deflection_y[w])) {
+        t.sensed |= 1u << w;
+      }
+    }
+  }
   return t;
 }
 

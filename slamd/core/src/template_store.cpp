@@ -24,6 +24,8 @@ void load(const ParamNode& n, MatchParams& p) {
   n.get("threshold_visual", p.threshold_visual, 0.0, 1e9);
   n.get("threshold_tactile", p.threshold_tactile, 0.0, 1e9);
   n.get("threshold_vita", p.threshold_vita, 0.0, 1e9);
+  n.get("tactile_veto", p.tactile_veto, 0.0, 1e9);
+  n.get("threshold_visual_touched", p.threshold_visual_touched, 0.0, 1e9);
   n.get("prefilter_mean_diff", p.prefilter_mean_diff, 0.0, 1.0);
 }
 
@@ -204,6 +206,42 @@ float l1_f32(const float* __restrict a, const float* __restrict b, size_t n) {
   return s;
 }
 
+// The rules a stored template can match by (match()).
+enum class Rule { kSum, kVision, kEvidence };
+
+// The SDA distance of a query over the whiskers it sensed, scaled to the whole array: a whisker
+// without data (dead, its board offline) counts neither as agreement nor as disagreement.
+double sda_distance(const TactileTemplate& q, const float* stored) {
+  if (q.sensed == kAllWhiskersSensed) return l1_f32(q.sda.data(), stored, kSdaSize);
+  float s = 0.0f;
+  int n = 0;
+  for (size_t w = 0; w < static_cast<size_t>(kSdaSize); ++w) {
+    if ((q.sensed >> w & 1u) == 0) continue;
+    s += std::abs(q.sda[w] - stored[w]);
+    ++n;
+  }
+  return n == 0 ? 0.0 : static_cast<double>(s) * kSdaSize / n;
+}
+
+// The error of one stored template under a rule of the fusion (MatchParams::tactile_veto), +∞ where
+// the rule does not apply; the vision rule's V/σ_V is scaled onto threshold_vita's scale. Each is
+// non-decreasing in `visual`, so a lower bound of the visual term gives a lower bound of the error.
+double rule_error(Rule rule, double visual, double tactile, double pfh, double sda, bool both_shapes,
+                  const MatchParams& p) {
+  constexpr double kNever = std::numeric_limits<double>::infinity();
+  switch (rule) {
+    case Rule::kSum:
+      return visual + pfh + sda;
+    case Rule::kVision:
+      if (tactile > p.tactile_veto || p.threshold_visual <= 0.0) return kNever;
+      return visual * (p.threshold_vita / p.threshold_visual);
+    case Rule::kEvidence:
+      if (!both_shapes || visual > p.threshold_visual_touched) return kNever;
+      return visual + tactile;
+  }
+  return kNever;
+}
+
 }  // namespace
 
 TemplateStore::TemplateStore(int visual_width, int visual_height)
@@ -290,51 +328,71 @@ BestMatch TemplateStore::match(const Query& q, const Terms& terms, const MatchPa
     cur_shifted.emplace(cur.data(), width_, height_, shifts.data(), n_shifts);
     if (bound) blocks_shifted.emplace(cur_blocks.data(), width_, blocks_per_column(height_), shifts.data(), n_shifts);
   }
-  BoundProbe probe;
   const double inv_v = 1.0 / p.sigma_visual;
   const double inv_pfh = 1.0 / (65535.0 * p.sigma_pfh);
   const double inv_sda = 1.0 / p.sigma_sda;
-  const int n = size();
-  for (int i = 0; i < n; ++i) {
-    const auto iu = static_cast<size_t>(i);
-    if (terms.visual && (has_visual_[iu] == 0 ||
-                         std::abs(static_cast<double>(visual_mean_[iu]) - q.visual->mean) > p.prefilter_mean_diff)) {
-      continue;
-    }
-    if (terms.tactile && has_tactile_[iu] == 0) continue;
-    if (terms.contact_free_only && num_contacts_[iu] > 0) continue;
-    double ev = 0.0, ep = 0.0, es = 0.0;
-    int shift = 0;
-    if (terms.tactile) {
-      ep = l1_u16(q.tactile->pfh.data(), pfh_.row(iu), kPfhBins) * inv_pfh;
-      es = l1_f32(q.tactile->sda.data(), sda_.row(iu), kSdaSize) * inv_sda;
-    }
-    if (terms.visual) {
-      // ε ≥ (0 + ep) + es whatever the visual term: the tactile terms alone may rule it out.
-      if (bound && best.id >= 0 && 0.0 + ep + es >= best.error) continue;
-      const bool use_bound = bound && probe.use();
-      if (bound && !use_bound) probe.skip();
-      if (use_bound) {
-        // ε with the visual term's lower bound, by the same operations as e below: ≤ e. (The
-        // library is built with -ffp-contract=off so both sums round alike.)
-        const double lower = shift_bounds(cur_blocks.data(), blocks_.row(iu), width_, height_, p.shift_max,
-                                          p.shift_step, blocks_shifted ? &*blocks_shifted : nullptr, bounds) *
-                             inv_v;
-        const bool pruned = best.id >= 0 && lower + ep + es >= best.error;  // e ≥ best.error: cannot replace it
-        probe.record(pruned);
-        if (pruned) continue;
+  // Touch adds evidence only where both cycles felt a shape (a PFH): one or two whiskers' slopes
+  // say too little to let a weak view count.
+  const bool query_shape = terms.tactile && q.tactile->has_shape();
+  // One pass over the store: the argmin of the rule's error. Each rule's error is non-decreasing in
+  // the visual term, so the visual term's lower bound bounds it (the same floating-point operations:
+  // the library is built with -ffp-contract=off).
+  const auto scan = [&](Rule rule) {
+    BestMatch best;
+    BoundProbe probe;
+    const auto combine = [&](double ev, double ep, double es, bool both_shapes) {
+      return rule_error(rule, ev, ep + es, ep, es, both_shapes, p);
+    };
+    const int n = size();
+    for (int i = 0; i < n; ++i) {
+      const auto iu = static_cast<size_t>(i);
+      if (terms.visual && (has_visual_[iu] == 0 ||
+                           std::abs(static_cast<double>(visual_mean_[iu]) - q.visual->mean) > p.prefilter_mean_diff)) {
+        continue;
       }
-      // A fresh minimum per stored template (the original code carried it across templates).
-      ev = visual_distance_impl(cur.data(), visual_.row(iu), use_bound ? bounds.data() : nullptr, width_, height_,
-                                p.shift_max, p.shift_step, cur_shifted ? &*cur_shifted : nullptr, &shift) *
-           inv_v;
+      if (terms.tactile && has_tactile_[iu] == 0) continue;
+      double ev = 0.0, ep = 0.0, es = 0.0;
+      int shift = 0;
+      const bool both_shapes = query_shape && num_contacts_[iu] >= kMinPfhPoints;
+      if (terms.tactile) {
+        ep = l1_u16(q.tactile->pfh.data(), pfh_.row(iu), kPfhBins) * inv_pfh;
+        es = sda_distance(*q.tactile, sda_.row(iu)) * inv_sda;
+        if (!std::isfinite(combine(0.0, ep, es, both_shapes))) continue;  // the rule does not apply
+      }
+      if (terms.visual) {
+        // The error whatever the visual term (≥ 0): the tactile terms alone may rule it out.
+        if (bound && best.id >= 0 && combine(0.0, ep, es, both_shapes) >= best.error) continue;
+        const bool use_bound = bound && probe.use();
+        if (bound && !use_bound) probe.skip();
+        if (use_bound) {
+          const double lower = shift_bounds(cur_blocks.data(), blocks_.row(iu), width_, height_, p.shift_max,
+                                            p.shift_step, blocks_shifted ? &*blocks_shifted : nullptr, bounds) *
+                               inv_v;
+          const bool pruned = best.id >= 0 && combine(lower, ep, es, both_shapes) >= best.error;  // cannot replace it
+          probe.record(pruned);
+          if (pruned) continue;
+        }
+        // A fresh minimum per stored template (the original code carried it across templates).
+        ev = visual_distance_impl(cur.data(), visual_.row(iu), use_bound ? bounds.data() : nullptr, width_, height_,
+                                  p.shift_max, p.shift_step, cur_shifted ? &*cur_shifted : nullptr, &shift) *
+             inv_v;
+      }
+      const double e = combine(ev, ep, es, both_shapes);
+      if (!std::isfinite(e)) continue;
+      if (best.id < 0 || e < best.error) best = {i, e, ev, ep, es, shift};
     }
-    const double e = ev + ep + es;
-    if (best.id < 0 || e < best.error) {
-      best = {i, e, ev, ep, es, shift};
-    }
-  }
-  return best;
+    return best;
+  };
+  if (!(terms.fused && terms.visual && terms.tactile)) return scan(Rule::kSum);
+  // tactile_veto 0: the paper's sum, but for a cycle that touched nothing, which vision decides
+  // among the templates that touched nothing either.
+  if (p.tactile_veto <= 0.0) return scan(q.tactile->has_contact() ? Rule::kSum : Rule::kVision);
+  // The fusion: vision's choice among the templates touch does not object to; only where vision
+  // recognises nothing, the evidence of both senses.
+  const BestMatch seen = scan(Rule::kVision);
+  if (seen.id >= 0 && seen.error <= p.threshold_vita) return seen;
+  const BestMatch both = scan(Rule::kEvidence);
+  return both.id >= 0 && (seen.id < 0 || both.error < seen.error) ? both : seen;
 }
 
 void TemplateStore::restore_decay(double restore, double floor) {

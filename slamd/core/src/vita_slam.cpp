@@ -128,17 +128,19 @@ VitaSlam::CycleTemplates VitaSlam::make_templates(const CycleInput& in, CycleRes
     }
   }
   t.terms = Terms{t.visual.has_value(), t.tactile.has_value()};
-  // No contact this cycle, in ViTa mode: the empty touch adds no term (it would be 0 against every
-  // contact-free template), so vision decides, with the visual threshold, but only among templates
-  // that touched nothing either: where something was touched is not here. (A contact cycle is never
-  // taken for a contact-free template the same way: its PFH differs from an empty one by 1/σ_PFH.)
-  // Without a usable frame nothing decides. Touch alone (tactile mode) compares empty touches, and
-  // is fooled by them, as the paper's. A cycle without touch data (no valid sample) has no tt: vision
-  // alone, against every template.
-  if (params_.mode == Mode::Vita && t.terms.tactile && !t.tactile->has_contact()) {
-    t.terms.tactile = false;
-    t.terms.contact_free_only = true;
-  }
+  // ViTa with both senses: the fusion's rules (MatchParams::tactile_veto). A cycle that touched
+  // nothing is decided by vision, with the visual threshold, among the templates touch does not
+  // object to: those that touched nothing either, or barely (an empty touch is 1/σ_PFH from any
+  // contact of three whiskers or more). Touch alone (tactile mode) compares empty touches, and is
+  // fooled by them, as the paper's.
+  t.terms.fused = params_.mode == Mode::Vita && t.terms.visual && t.terms.tactile;
+  // ViTa without one of its senses (no usable frame, or no valid whisker sample): degraded, and a
+  // missing sense never counts as a match. Vision alone may recognise a known template (with the
+  // gate it closes no false loop), touch alone never: it is aliased by design (two boxes feel
+  // alike), and a run of touches matching the twin box would move the estimate there. Either way
+  // the cycle stores no template, injects no energy and creates no experience (update_map).
+  out.degraded = params_.mode == Mode::Vita && t.terms.visual != t.terms.tactile;
+  if (out.degraded) t.terms.tactile = false;
   out.dense = t.tactile.has_value() && t.tactile->has_contact();
   return t;
 }
@@ -167,6 +169,7 @@ VitaSlam::PoseCellBest VitaSlam::match_or_create(const CycleTemplates& t, CycleR
     if (b.id >= 0 && b.error <= tau) {
       m.template_id = b.id;
       m.is_new = false;
+      if (out.degraded) return pc;
       store_.bump_decay(b.id, params_.pose_cells.vt_active_decay);
       if (b.id < store_.size() - params_.pose_cells.inject_exclude_newest) {
         const double energy = params_.pose_cells.inject_energy *
@@ -175,7 +178,7 @@ VitaSlam::PoseCellBest VitaSlam::match_or_create(const CycleTemplates& t, CycleR
         for (int i = 0; i < params_.pose_cells.settle_steps; ++i) cells_.settle();
         cells_.best(pc.x, pc.y, pc.theta);
       }
-    } else if (!localise_only_) {
+    } else if (!localise_only_ && !out.degraded) {
       m.template_id = store_.add(q, pc.x, pc.y, pc.theta);
       m.is_new = true;
     }
@@ -189,7 +192,7 @@ void VitaSlam::update_map(int64_t utime, PoseCellBest& pc, CycleResult& out) {
   const int tid = m.template_id;
   out.event = map_.on_cycle(tid, tid >= 0 && store_.has_visual(tid) ? tid : -1,
                             tid >= 0 && store_.has_tactile(tid) ? tid : -1, out.dense, pc.x, pc.y, pc.theta, cells_,
-                            utime, m.visual_used && !m.is_new ? m.visual_shift : 0);
+                            utime, m.visual_used && !m.is_new ? m.visual_shift : 0, out.degraded);
   // A re-localisation the map accepted beyond the packet's reach (the pose cells drifted with the
   // odometry): the packet follows the map, so that what is recognised next is looked for there.
   if (out.event.type == EventType::Relocalise && out.event.to_id >= 0) {

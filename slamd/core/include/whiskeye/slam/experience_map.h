@@ -44,11 +44,10 @@ struct ExperienceMapParams {
   // cells' wrap-around puts nearby — is not closed onto. drift_per_m ≥ 100 turns the gate off:
   // then the pose cells alone decide, as in RatSLAM (the nearest in pose-cell space within
   // delta_pc_threshold).
-  // Shipped off (drift_per_m 1000): with it on, the default arena's fusion closes a few loops onto
-  // the neighbouring experience (ARCR 0.985-0.99 instead of 1.0) and vision stops being fooled;
-  // docs/results.md, "The world suite", has both sets of figures.
-  double drift_base = 0.25;     // m
-  double drift_per_m = 1000.0;  // m per m travelled; 0.15 turns the gate on
+  // Shipped on (0.15): without it a look-alike place metres away is closed onto whenever the pose
+  // cells allow (docs/results.md has the suite's figures with and without it).
+  double drift_base = 0.25;   // m
+  double drift_per_m = 0.15;  // m per m travelled; ≥ 100 turns the gate off (the paper's scheme)
   // Within the budget, the pose cells choose (nearest in pose-cell space within
   // delta_pc_threshold) while the robot has re-localised within this distance travelled; after a
   // longer stretch without any, the nearest in the map (the packet may have drifted away).
@@ -95,8 +94,11 @@ class ExperienceMap {
 
   // The action rule for one cycle; template_id < 0 means no template this cycle (nothing to do).
   // view_shift: the visual match's column shift (0 for a new template or without vision).
+  // degraded: the cycle lacked a sense its mode uses (VitaSlam); it may re-localise onto an existing
+  // experience of the template by the usual rule, but never creates an experience or a link to one.
   Event on_cycle(int template_id, int visual_template_id, int tactile_template_id, bool dense, double pc_x,
-                 double pc_y, double pc_theta, const PoseCells& cells, int64_t utime, int view_shift = 0);
+                 double pc_y, double pc_theta, const PoseCells& cells, int64_t utime, int view_shift = 0,
+                 bool degraded = false);
 
   // Building blocks (public for tests and the benchmark).
   int add_experience(const Pose2& pose, const Experience& meta);

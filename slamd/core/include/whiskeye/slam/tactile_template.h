@@ -28,6 +28,9 @@ namespace whiskeye::slam {
 constexpr int kPfhBinsPerDim = 5;
 constexpr int kPfhBins = kPfhBinsPerDim * kPfhBinsPerDim * kPfhBinsPerDim;  // 125
 constexpr int kSdaSize = kNumWhiskers;
+constexpr uint32_t kAllWhiskersSensed = (1u << kNumWhiskers) - 1u;
+// A PFH needs this many contact points (normals from neighbours, pairs of points); fewer: all zero.
+constexpr int kMinPfhPoints = 3;
 
 enum class PfhKind { Rusu, Histogram };
 
@@ -60,7 +63,12 @@ struct TactileTemplate {
   std::array<uint16_t, kPfhBins> pfh{};  // fraction of point pairs per bin, quantised ·65535
   std::array<float, kSdaSize> sda{};     // deflection per second
   int num_contacts = 0;                  // whiskers in contact this cycle
+  // Bit w: whisker w had a valid, finite sample this cycle. Matching compares the SDA over these only
+  // (a dead whisker, or one whose board is offline, is neither agreement nor disagreement). Not stored.
+  uint32_t sensed = kAllWhiskersSensed;
   bool has_contact() const { return num_contacts > 0; }
+  // Enough contacts for a PFH: touch felt a shape, not only a whisker or two.
+  bool has_shape() const { return num_contacts >= kMinPfhPoints; }
 };
 
 // Contact points of one whisk cycle. Invalid samples are skipped.

@@ -41,6 +41,21 @@ struct MatchParams {
   double threshold_visual = 0.1;
   double threshold_tactile = 0.2;
   double threshold_vita = 0.3;
+  // The fusion (Terms::fused, a ViTa cycle with both senses): touch adds evidence where it has some
+  // and vetoes only where it clearly disagrees. The match is
+  //   vision's choice: the least V/σ_V ≤ threshold_visual among the templates whose tactile terms
+  //   (PFH/σ_PFH + SDA/σ_SDA) are ≤ tactile_veto — touch does not object; reported on threshold_vita's
+  //   scale (V/σ_V · threshold_vita/threshold_visual);
+  //   and only where there is none, both senses' evidence: the least ε = V/σ_V + PFH/σ_PFH + SDA/σ_SDA
+  //   ≤ threshold_vita among the templates that, like this cycle, felt a shape (a PFH) and whose
+  //   V/σ_V ≤ threshold_visual_touched: a clear touch lets a view a little beyond vision's own
+  //   threshold count, never any view.
+  // A place touched at another phase of the whisk differs by 0.2-0.35 in the tactile terms; a box
+  // from a post, or a contact from none (an empty PFH is 1/σ_PFH from any other), by more.
+  // 0: the paper's sum ε ≤ threshold_vita for a cycle that touched something; one that touched
+  // nothing is decided by vision among the templates that touched nothing either.
+  double tactile_veto = 0.5;
+  double threshold_visual_touched = 0.2;
   // Skip templates whose mean intensity differs by more than this (≥ 1: never skip). Visual terms
   // only; with global normalisation all means are equal, so it is off by default.
   double prefilter_mean_diff = 1.0;
@@ -54,9 +69,9 @@ void load(const ParamNode& node, MatchParams& p);
 struct Terms {
   bool visual = false;
   bool tactile = false;
-  // Compare only with templates whose cycle touched nothing (a ViTa cycle that measured no contact:
-  // a place where something was touched is not this place).
-  bool contact_free_only = false;
+  // ViTa's fusion of both senses (MatchParams::tactile_veto): the visual and tactile terms are both
+  // computed and combined by the rules there; BestMatch::error is then on threshold_vita's scale.
+  bool fused = false;
 };
 
 // The current cycle's template (parts absent are nullptr).

@@ -117,6 +117,9 @@ struct CycleResult {
   double pc_theta = 0.0;
   int num_templates = 0;
   bool dense = false;       // this cycle's tactile template has contact data
+  // ViTa without one of its senses this cycle: matched on the other, but no template, energy or
+  // experience came of it (VitaSlam, step 2).
+  bool degraded = false;
   std::string image_warning;  // non-empty: the frame was refused (the cycle went on without vision), and why
   std::string whisk_warning;  // non-empty: the whisk cycle had no valid sample (went on without touch)
 };

@@ -3,9 +3,11 @@
 //   1. path integration: every odometry sample moves the experience map's offset, and the pose
 //      cells take one step per path_integration_period with the samples' mean (body-frame vx, vy, ω);
 //   2. templates: visual (if the mode uses vision and a frame came) and tactile (if the mode uses
-//      touch and a whisk cycle came); the terms compared are the mode's terms that are present —
-//      a missing sense degrades, never stops; a ViTa whisk cycle without contact adds no tactile
-//      terms and is compared, by vision, only with templates that touched nothing either;
+//      touch and a whisk cycle came). ViTa with both fuses them (MatchParams::tactile_veto: touch
+//      adds evidence where both cycles touched something, and otherwise only vetoes what vision
+//      accepts). ViTa with one sense missing is degraded: the other may recognise a known template,
+//      but no template, pose-cell energy or experience comes of it (a missing sense never counts
+//      as a match); the single-sense modes need their one sense;
 //   3. match against every stored template: ε ≤ τ → match (inject energy at the template's pose
 //      cells, with the decay rule) else a new template (stored with the current pose-cell estimate);
 //   4. the experience map's action rule (same / new / re-localise) and relaxation.
