@@ -8,8 +8,10 @@
 #include "sad.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
+#include <initializer_list>
 #include <limits>
 #include <optional>
 
@@ -334,15 +336,19 @@ BestMatch TemplateStore::match(const Query& q, const Terms& terms, const MatchPa
   // Touch adds evidence only where both cycles felt a shape (a PFH): one or two whiskers' slopes
   // say too little to let a weak view count.
   const bool query_shape = terms.tactile && q.tactile->has_shape();
-  // One pass over the store: the argmin of the rule's error. Each rule's error is non-decreasing in
-  // the visual term, so the visual term's lower bound bounds it (the same floating-point operations:
-  // the library is built with -ffp-contract=off).
-  const auto scan = [&](Rule rule) {
-    BestMatch best;
+  // One pass over the store for one or two rules: each rule's argmin (the first on ties), exactly
+  // what a pass of its own would find, the visual term computed once for a template any rule still
+  // needs. Each rule's error is non-decreasing in the visual term, so the visual term's lower bound
+  // bounds it (the same floating-point operations: the library is built with -ffp-contract=off).
+  struct Scan {
+    std::array<Rule, 2> rules{};
+    std::array<BestMatch, 2> best{};
+    size_t count = 0;
+  };
+  const auto scan = [&](std::initializer_list<Rule> rules) {
+    Scan out;
+    for (const Rule r : rules) out.rules[out.count++] = r;
     BoundProbe probe;
-    const auto combine = [&](double ev, double ep, double es, bool both_shapes) {
-      return rule_error(rule, ev, ep + es, ep, es, both_shapes, p);
-    };
     const int n = size();
     for (int i = 0; i < n; ++i) {
       const auto iu = static_cast<size_t>(i);
@@ -357,42 +363,62 @@ BestMatch TemplateStore::match(const Query& q, const Terms& terms, const MatchPa
       if (terms.tactile) {
         ep = l1_u16(q.tactile->pfh.data(), pfh_.row(iu), kPfhBins) * inv_pfh;
         es = sda_distance(*q.tactile, sda_.row(iu)) * inv_sda;
-        if (!std::isfinite(combine(0.0, ep, es, both_shapes))) continue;  // the rule does not apply
       }
+      const auto error = [&](size_t j, double visual) {
+        return rule_error(out.rules[j], visual, ep + es, ep, es, both_shapes, p);
+      };
+      // A rule still needs this template unless it cannot apply, or cannot beat its best so far
+      // whatever the visual term (≥ 0): the tactile terms alone may rule it out.
+      std::array<bool, 2> live{};
+      bool any = false;
+      for (size_t j = 0; j < out.count; ++j) {
+        const double e0 = error(j, 0.0);
+        live[j] = std::isfinite(e0) && !(bound && out.best[j].id >= 0 && e0 >= out.best[j].error);
+        any = any || live[j];
+      }
+      if (!any) continue;
       if (terms.visual) {
-        // The error whatever the visual term (≥ 0): the tactile terms alone may rule it out.
-        if (bound && best.id >= 0 && combine(0.0, ep, es, both_shapes) >= best.error) continue;
         const bool use_bound = bound && probe.use();
         if (bound && !use_bound) probe.skip();
         if (use_bound) {
           const double lower = shift_bounds(cur_blocks.data(), blocks_.row(iu), width_, height_, p.shift_max,
                                             p.shift_step, blocks_shifted ? &*blocks_shifted : nullptr, bounds) *
                                inv_v;
-          const bool pruned = best.id >= 0 && combine(lower, ep, es, both_shapes) >= best.error;  // cannot replace it
-          probe.record(pruned);
-          if (pruned) continue;
+          // With the bound: no rule can apply (the evidence rule's view limit) or beat its best.
+          bool needed = false;
+          for (size_t j = 0; j < out.count; ++j) {
+            if (!live[j]) continue;
+            const double lower_error = error(j, lower);
+            live[j] = std::isfinite(lower_error) && !(out.best[j].id >= 0 && lower_error >= out.best[j].error);
+            needed = needed || live[j];
+          }
+          probe.record(!needed);
+          if (!needed) continue;
         }
         // A fresh minimum per stored template (the original code carried it across templates).
         ev = visual_distance_impl(cur.data(), visual_.row(iu), use_bound ? bounds.data() : nullptr, width_, height_,
                                   p.shift_max, p.shift_step, cur_shifted ? &*cur_shifted : nullptr, &shift) *
              inv_v;
       }
-      const double e = combine(ev, ep, es, both_shapes);
-      if (!std::isfinite(e)) continue;
-      if (best.id < 0 || e < best.error) best = {i, e, ev, ep, es, shift};
+      for (size_t j = 0; j < out.count; ++j) {
+        if (!live[j]) continue;
+        const double e = error(j, ev);
+        if (std::isfinite(e) && (out.best[j].id < 0 || e < out.best[j].error)) out.best[j] = {i, e, ev, ep, es, shift};
+      }
     }
-    return best;
+    return out;
   };
-  if (!(terms.fused && terms.visual && terms.tactile)) return scan(Rule::kSum);
+  if (!(terms.fused && terms.visual && terms.tactile)) return scan({Rule::kSum}).best[0];
   // tactile_veto 0: the paper's sum, but for a cycle that touched nothing, which vision decides
   // among the templates that touched nothing either.
-  if (p.tactile_veto <= 0.0) return scan(q.tactile->has_contact() ? Rule::kSum : Rule::kVision);
+  if (p.tactile_veto <= 0.0) return scan({q.tactile->has_contact() ? Rule::kSum : Rule::kVision}).best[0];
   // The fusion: vision's choice among the templates touch does not object to; only where vision
   // recognises nothing, the evidence of both senses.
-  const BestMatch seen = scan(Rule::kVision);
+  const Scan both_rules = scan({Rule::kVision, Rule::kEvidence});
+  const BestMatch& seen = both_rules.best[0];
+  const BestMatch& felt = both_rules.best[1];
   if (seen.id >= 0 && seen.error <= p.threshold_vita) return seen;
-  const BestMatch both = scan(Rule::kEvidence);
-  return both.id >= 0 && (seen.id < 0 || both.error < seen.error) ? both : seen;
+  return felt.id >= 0 && (seen.id < 0 || felt.error < seen.error) ? felt : seen;
 }
 
 void TemplateStore::restore_decay(double restore, double floor) {
