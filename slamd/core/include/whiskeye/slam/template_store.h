@@ -4,7 +4,8 @@
 // where V_i is the minimum over column shifts ±shift_max of the mean absolute difference over the
 // overlap (intensities in [0, 1]) — computed afresh for every stored template i — and PFH_i, SDA_i
 // are L1 distances. Only the terms in use this cycle count (mode ∩ senses present); a stored
-// template that lacks a part in use is not a candidate. The result is the argmin over templates.
+// template that lacks a part in use is not a candidate. The result is the argmin over templates;
+// with Terms::fused (ViTa, both senses) the fusion's rules of MatchParams::tactile_veto instead.
 //
 // Each template's parts are contiguous (one byte per visual pixel, 16 bits per PFH bin, one float per
 // SDA entry), the templates in chunks of 256 that never move:
@@ -103,14 +104,16 @@ class TemplateStore {
   // Appends; returns the new id. Parts absent are stored as zeros and flagged missing.
   int add(const Query& q, double pc_x, double pc_y, double pc_theta);
 
-  // The argmin of ε over the candidates (the first one on ties). With p.lower_bound_prefilter, a
-  // template's visual term is first bounded from below on a coarse copy (each column's rows in
-  // blocks of 4, floored block means): per block of k = 4 pixels Σ|a − b| ≥ k·|ā − b̄| − (k − 1), so
+  // The argmin of ε over the candidates (the first one on ties); with terms.fused, the fusion's
+  // rules (MatchParams::tactile_veto), each rule's argmin found in the same pass. With
+  // p.lower_bound_prefilter, a template's visual term is first bounded from below on a coarse copy
+  // (each column's rows in blocks of 4, floored block means): per block of k = 4 pixels
+  // Σ|a − b| ≥ k·|ā − b̄| − (k − 1), so
   //   k·SAD(coarse overlap of shift s) − (k − 1)·(blocks in it) ≤ SAD_s,
-  // a quarter of the work. A template whose ε computed with that bound (same floating-point
-  // operations, all monotone) is already ≥ the best ε so far cannot win and is skipped; within a
-  // compared template, a shift whose bound cannot beat its best shift so far is skipped. Neither
-  // changes the result.
+  // a quarter of the work. A template whose error computed with that bound (same floating-point
+  // operations, all monotone) is already ≥ the best so far, for every rule, cannot win and is
+  // skipped; within a compared template, a shift whose bound cannot beat its best shift so far is
+  // skipped. Neither changes the result.
   BestMatch match(const Query& q, const Terms& terms, const MatchParams& p) const;
 
   bool has_visual(int id) const { return has_visual_[static_cast<size_t>(id)] != 0; }
