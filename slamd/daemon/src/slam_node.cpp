@@ -296,7 +296,7 @@ void SlamNode::warn(const std::string& key, const std::string& line) {
 void SlamNode::sequence(Input input, int64_t seq) {
   const int64_t missing = gaps_[input].add(seq);
   if (missing == 0) return;
-  counters_.input_gaps += missing;
+  counters_.input_gaps = add_count_saturating(counters_.input_gaps, missing);  // a corrupt seq may claim 2^63
   static constexpr const char* kWhat[] = {"CAMERA: frames", "ODOMETRY: samples", "WHISK_CYCLE: cycles"};
   warn(std::string("gap-") + kWhat[input],
        std::string(kWhat[input]) + " missing by the sequence numbers: " + std::to_string(missing) + " before " +

@@ -6,22 +6,32 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <limits>
 #include <optional>
 
 namespace whiskeye {
 
+// total + n for counts (both ≥ 0), at most the largest int64: a count of lost messages saturates.
+inline int64_t add_count_saturating(int64_t total, int64_t n) {
+  return total > std::numeric_limits<int64_t>::max() - n ? std::numeric_limits<int64_t>::max() : total + n;
+}
+
 class SequenceGaps {
  public:
-  // Takes the next message's number; returns how many were missing just before it (0: none).
+  static constexpr int64_t kMax = std::numeric_limits<int64_t>::max();
+
+  // Takes the next message's number; returns how many were missing just before it (0: none). The
+  // count between two numbers can exceed int64 (−2^63 then 2^63 − 1): it and the totals saturate
+  // at the largest int64 instead of overflowing.
   int64_t add(int64_t seq) {
     int64_t missing = 0;
     if (last_) {
       if (seq <= *last_) {
         ++restarts_;
-      } else if (seq > *last_ + 1) {
-        // Computed without overflow: both are int64 and seq > last + 1.
-        missing = static_cast<int64_t>(static_cast<uint64_t>(seq) - static_cast<uint64_t>(*last_) - 1);
-        lost_ += missing;
+      } else if (seq - 1 > *last_) {  // seq > last + 1, without computing last + 1
+        const uint64_t between = static_cast<uint64_t>(seq) - static_cast<uint64_t>(*last_) - 1;
+        missing = between > static_cast<uint64_t>(kMax) ? kMax : static_cast<int64_t>(between);
+        lost_ = add_count_saturating(lost_, missing);
         ++places_;
         longest_ = std::max(longest_, missing);
       }
