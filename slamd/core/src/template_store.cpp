@@ -228,9 +228,9 @@ double sda_distance(const TactileTemplate& q, const float* stored) {
 // The error of one stored template under a rule of the fusion (MatchParams::tactile_veto), +∞ where
 // the rule does not apply; the vision rule's V/σ_V is scaled onto threshold_vita's scale. Each is
 // non-decreasing in `visual`, so a lower bound of the visual term gives a lower bound of the error.
-double rule_error(Rule rule, double visual, double tactile, double pfh, double sda, bool both_shapes,
-                  const MatchParams& p) {
+double rule_error(Rule rule, double visual, double pfh, double sda, bool both_shapes, const MatchParams& p) {
   constexpr double kNever = std::numeric_limits<double>::infinity();
+  const double tactile = pfh + sda;
   switch (rule) {
     case Rule::kSum:
       return visual + pfh + sda;
@@ -365,7 +365,7 @@ BestMatch TemplateStore::match(const Query& q, const Terms& terms, const MatchPa
         es = sda_distance(*q.tactile, sda_.row(iu)) * inv_sda;
       }
       const auto error = [&](size_t j, double visual) {
-        return rule_error(out.rules[j], visual, ep + es, ep, es, both_shapes, p);
+        return rule_error(out.rules[j], visual, ep, es, both_shapes, p);
       };
       // A rule still needs this template unless it cannot apply, or cannot beat its best so far
       // whatever the visual term (≥ 0): the tactile terms alone may rule it out.
