@@ -606,5 +606,14 @@ TEST_F(ScriptedExm, TheTraceListsTheSimulatedFaultsActiveAtEachCycle) {
   EXPECT_EQ(trace[4].active_faults, (std::vector<std::string>{"camera_blackout", "dead_whisker 3"}));
 }
 
+TEST(ExperienceIndex, AnswersAsFindForEveryIdTheFirstOfRepeatedIdsAndNothingForAnUnknownOne) {
+  ExperienceMap map;
+  for (int32_t id : {4, 7, -1, 7, 0}) map.experiences.push_back({id, {static_cast<double>(map.experiences.size()), 0, 0}, 0, false});
+  const ExperienceIndex index(map);
+  for (int32_t id : {4, 7, -1, 0, 5, 100}) EXPECT_EQ(index.find(id), map.find(id)) << "id " << id;
+  EXPECT_EQ(index.find(7), &map.experiences[1]);
+  EXPECT_EQ(index.find(5), nullptr);
+}
+
 }  // namespace
 }  // namespace whiskeye::eval

@@ -18,6 +18,16 @@ const MapExperience* ExperienceMap::find(int32_t id) const {
   return nullptr;
 }
 
+ExperienceIndex::ExperienceIndex(const ExperienceMap& map) {
+  by_id_.reserve(map.experiences.size());
+  for (const MapExperience& e : map.experiences) by_id_.emplace(e.id, &e);
+}
+
+const MapExperience* ExperienceIndex::find(int32_t id) const {
+  const auto it = by_id_.find(id);
+  return it == by_id_.end() ? nullptr : it->second;
+}
+
 GroundTruth::GroundTruth(std::vector<PoseSample> samples) : samples_(std::move(samples)) {
   std::stable_sort(samples_.begin(), samples_.end(),
                    [](const PoseSample& a, const PoseSample& b) { return a.utime < b.utime; });
@@ -366,9 +376,10 @@ EnmResult compute_enm(const ExperienceMap& map, const GroundTruth& gt) {
   EnmResult r;
   double sum_t = 0.0;
   double sum_r = 0.0;
+  const ExperienceIndex by_id(map);
   for (const MapLink& l : map.links) {
-    const MapExperience* i = map.find(l.from_id);
-    const MapExperience* j = map.find(l.to_id);
+    const MapExperience* i = by_id.find(l.from_id);
+    const MapExperience* j = by_id.find(l.to_id);
     if (i == nullptr || j == nullptr) {
       ++r.links_excluded;
       continue;

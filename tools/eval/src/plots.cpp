@@ -89,9 +89,10 @@ void draw_ground_truth(FigurePanel& panel, const EvalInput& input) {
 }
 
 void draw_experience_map(FigurePanel& panel, const EvalInput& input, const Pose2& T) {
+  const ExperienceIndex by_id(input.map);
   for (const MapLink& l : input.map.links) {
-    const MapExperience* i = input.map.find(l.from_id);
-    const MapExperience* j = input.map.find(l.to_id);
+    const MapExperience* i = by_id.find(l.from_id);
+    const MapExperience* j = by_id.find(l.to_id);
     if (i == nullptr || j == nullptr) continue;
     panel.polyline({at(compose(T, i->pose)), at(compose(T, j->pose))}, kBlue, 1, "link");
   }

@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 namespace whiskeye::eval {
@@ -47,7 +48,18 @@ struct MapLink {
 struct ExperienceMap {
   std::vector<MapExperience> experiences;
   std::vector<MapLink> links;
+  const MapExperience* find(int32_t id) const;  // linear: a loop looks up through an ExperienceIndex
+};
+
+// The map's experiences by id in constant time, answering as ExperienceMap::find (the first of equal
+// ids); valid while the map is unchanged.
+class ExperienceIndex {
+ public:
+  explicit ExperienceIndex(const ExperienceMap& map);
   const MapExperience* find(int32_t id) const;
+
+ private:
+  std::unordered_map<int32_t, const MapExperience*> by_id_;
 };
 
 // Ground truth, interpolated between samples: positions linearly, headings along the shorter arc.
