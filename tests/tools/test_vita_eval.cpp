@@ -552,6 +552,29 @@ TEST_F(VitaEvalBinary, ARunWithoutGroundTruthIsDrawnAndItsTruthMetricsAreUnavail
   EXPECT_TRUE(run2["exm"]["arcr"].is_null());
 }
 
+TEST_F(VitaEvalBinary, APlotTooFarFromTheOriginForItsSizeIsRefusedWithOneLineAndOneAtAMillionMetresIsDrawn) {
+  Script script;
+  script.ground_truth = false;  // drawn from --start: the run placed where the option says
+  write_log(file("real.lcmlog"), script);
+  // A 2 m run 1e17 m out: the grid's step (0.5 m) is below the rounding of the values (16 m).
+  const std::string bounded = "timeout 60 " + std::string(VITA_EVAL_BINARY);
+  const std::string cmd = bounded + " --input " + file("real.lcmlog") + " --plots " + file("far") +
+                          " --start 1e17,-1e17,0 > " + file("far.txt") + " 2>&1";
+  const int status = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 1) << "124 is the timeout: the grid loop never ended\n" << read_text(file("far.txt"));
+  const std::string out = read_text(file("far.txt"));
+  EXPECT_EQ(count(out, "cannot plot"), 1) << out;
+  EXPECT_NE(out.find("vita-eval: cannot plot 'vita: experience map"), std::string::npos) << out;
+  EXPECT_NE(out.find("lie 1e+17 m from the origin"), std::string::npos) << out;
+
+  ASSERT_EQ(run_vita_eval("--input " + file("real.lcmlog") + " --plots " + file("near") + " --start 1e6,-1e6,0",
+                          file("near.txt")),
+            0)
+      << read_text(file("near.txt"));
+  EXPECT_TRUE(std::filesystem::exists(file("near/vita_experience_map.svg")));
+}
+
 TEST_F(VitaEvalBinary, RunsOfTheSameModeGetTheirOwnPlotsAndOneFigureSideBySide) {
   write_log(file("a.lcmlog"), Script{});
   write_log(file("b.lcmlog"), Script{vita_pose_t::MODE_VITA, false});

@@ -302,10 +302,40 @@ struct Axes {
 
 Axes axes_for(double x0, double x1, double y0, double y1) {
   Axes a;
-  a.cx = 0.5 * (x0 + x1);
-  a.cy = 0.5 * (y0 + y1);
+  a.cx = 0.5 * x0 + 0.5 * x1;  // halves first: the sum of two huge values overflows
+  a.cy = 0.5 * y0 + 0.5 * y1;
   a.span = std::max({x1 - x0, y1 - y0, 0.5}) * 1.08;
   return a;
+}
+
+// How far from the origin, in spans, a window may lie: beyond, a pixel (span / 660) is finer than the
+// doubles there resolve (a relative 2.2e-16), and grid steps vanish in the rounding of the values.
+constexpr double kMaxReachInSpans = 1e9;
+
+// Throws, naming the figure and panel, when a window cannot be drawn: not finite, or so far from
+// the origin for its size that its coordinates no longer resolve it.
+void check_drawable(const Axes& a, const std::string& figure, const std::string& panel) {
+  const double reach = std::max(std::abs(a.cx), std::abs(a.cy)) + a.span / 2.0;
+  char what[160];
+  if (!std::isfinite(reach)) {
+    std::snprintf(what, sizeof what, "the data's extent is not finite");
+  } else if (reach > a.span * kMaxReachInSpans) {
+    std::snprintf(what, sizeof what, "its data lie %.3g m from the origin, more than %.0e times the window's %.3g m: "
+                  "too far out to draw at that scale", reach, kMaxReachInSpans, a.span);
+  } else {
+    return;
+  }
+  throw std::runtime_error("cannot plot '" + figure + "', panel '" + panel + "': " + what);
+}
+
+// The multiples of `step` within [lo, hi] (and a hair beyond hi), counted with an integer: the loop
+// ends whatever the rounding of the values. At most 64; a drawable window has about 6.
+std::vector<double> grid_values(double lo, double hi, double step) {
+  const double first = std::ceil(lo / step);
+  const double last = std::floor(hi / step + 1e-9);
+  std::vector<double> v;
+  for (int k = 0; k < 64 && first + k <= last; ++k) v.push_back((first + k) * step);
+  return v;
 }
 
 // The figure's width, height and legend height for `panels` panels.
@@ -336,6 +366,7 @@ void paint(const std::string& title, const std::vector<FigurePanel>& panels, con
   if (share_axes) {
     for (Axes& a : axes) a = axes_for(ux0, ux1, uy0, uy1);
   }
+  for (std::size_t i = 0; i < panels.size(); ++i) check_drawable(axes[i], title, panels[i].title());
 
   for (std::size_t i = 0; i < panels.size(); ++i) {
     const FigurePanel& panel = panels[i];
@@ -354,13 +385,13 @@ void paint(const std::string& title, const std::vector<FigurePanel>& panels, con
     const double step = nice_step(a.span);
     const double xlo = a.cx - a.span / 2.0, xhi = a.cx + a.span / 2.0;
     const double ylo = a.cy - a.span / 2.0, yhi = a.cy + a.span / 2.0;
-    for (double v = std::ceil(xlo / step) * step; v <= xhi + 1e-9; v += step) {
+    for (const double v : grid_values(xlo, xhi, step)) {
       const double x = px({v, 0}).x;
       out.polyline({{x, top}, {x, top + kData}}, kGridColour, 1, {"grid", ""});
       out.polyline({{x, top + kData}, {x, top + kData + 6}}, kAxisColour, 1, none);
       out.text({x, top + kData + 22}, tick_label(v, step), kInk, 13, Anchor::Middle, {"tick-label", ""});
     }
-    for (double v = std::ceil(ylo / step) * step; v <= yhi + 1e-9; v += step) {
+    for (const double v : grid_values(ylo, yhi, step)) {
       const double y = px({0, v}).y;
       out.polyline({{left, y}, {left + kData, y}}, kGridColour, 1, {"grid", ""});
       out.polyline({{left - 6, y}, {left, y}}, kAxisColour, 1, none);

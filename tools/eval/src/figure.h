@@ -95,7 +95,8 @@ class Figure {
   // Every panel gets the same axes (the union of their extents): maps side by side compare at one scale.
   void share_axes(bool share) { share_axes_ = share; }
 
-  // Each throws std::runtime_error naming the file if it cannot write it.
+  // Each throws std::runtime_error naming the file if it cannot write it, or the figure if it cannot
+  // be drawn: data not finite, or lying more than 1e9 times its extent from the origin.
   void write_png(const std::string& path) const;
   void write_svg(const std::string& path) const;
 
