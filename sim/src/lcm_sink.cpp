@@ -46,6 +46,9 @@ sim_fault_t to_lcm(const FaultEvent& e) {
   m.active = e.active;
   m.index = e.index;
   m.value = e.value;
+  m.x = e.pose.x;
+  m.y = e.pose.y;
+  m.theta = e.pose.theta;
   return m;
 }
 

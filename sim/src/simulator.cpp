@@ -1,6 +1,7 @@
 // The closed-loop simulation (see simulator.h).
 #include "whiskeye/sim/simulator.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -40,6 +41,7 @@ const char* to_string(FaultKind kind) {
     case FaultKind::CameraBlackout: return "camera_blackout";
     case FaultKind::CameraFreeze: return "camera_freeze";
     case FaultKind::OdometrySlip: return "odometry_slip";
+    case FaultKind::Kidnap: return "kidnap";
   }
   return "unknown";
 }
@@ -86,6 +88,15 @@ Simulator::Simulator(const World& world, const RobotGeometry& robot, const rcp::
   for (const FaultInterval& i : f.camera_blackout) faults_.push_back(interval_record(FaultKind::CameraBlackout, i, -1, 0.0));
   for (const FaultInterval& i : f.camera_freeze) faults_.push_back(interval_record(FaultKind::CameraFreeze, i, -1, 0.0));
   for (const OdometrySlip& o : f.odometry_slip) faults_.push_back(interval_record(FaultKind::OdometrySlip, o, -1, o.scale));
+  // A kidnap is an instant: it begins and never ends (the robot stays where it was put down).
+  for (const Kidnap& k : f.kidnap) {
+    FaultRecord r;
+    r.kind = FaultKind::Kidnap;
+    r.value = k.to_angle;
+    r.start_us = to_us(k.at);
+    r.end_us = std::numeric_limits<int64_t>::max();
+    faults_.push_back(r);
+  }
 }
 
 Simulator::~Simulator() {
@@ -95,7 +106,7 @@ Simulator::~Simulator() {
 std::vector<uint8_t> Simulator::render_frame(int64_t elapsed_us) {
   const double t = static_cast<double>(elapsed_us) * 1e-6;
   std::vector<uint8_t> image;
-  renderer_.render(world_.trajectory.pose_at(t), t, camera_rng_, image);
+  renderer_.render(world_.base_pose_at(t), t, camera_rng_, image);
   return image;
 }
 
@@ -135,10 +146,16 @@ void Simulator::update_faults(int64_t elapsed_us, int64_t utime) {
       const bool now = elapsed_us >= r.start_us && elapsed_us < r.end_us;
       if (ending && was && !now) {
         r.ended_utime = utime;
-        fault_events_.push_back({utime, r.kind, false, r.index, r.value});
+        fault_events_.push_back({utime, r.kind, false, r.index, r.value, {}});
       } else if (!ending && now && !was) {
         r.began_utime = utime;
-        fault_events_.push_back({utime, r.kind, true, r.index, r.value});
+        FaultEvent e{utime, r.kind, true, r.index, r.value, {}};
+        if (r.kind == FaultKind::Kidnap) {
+          r.pose = world_.base_pose_at(static_cast<double>(elapsed_us) * 1e-6);
+          e.value = 0.0;
+          e.pose = r.pose;
+        }
+        fault_events_.push_back(e);
       }
     }
   }
@@ -156,6 +173,7 @@ void Simulator::update_faults(int64_t elapsed_us, int64_t utime) {
       case FaultKind::CameraBlackout: camera_blackout_ = true; break;
       case FaultKind::CameraFreeze: camera_freeze_ = true; break;
       case FaultKind::OdometrySlip: odometry_slip_ *= r.value; break;
+      case FaultKind::Kidnap: break;  // in base_pose_at
     }
   }
 }
@@ -208,11 +226,14 @@ bool Simulator::step(SimSink& sink) {
   const int64_t elapsed_us = step_ * params_.period_us;
   const int64_t utime = params_.start_utime + elapsed_us;
   const double t = static_cast<double>(elapsed_us) * 1e-6;
-  const Pose2 T_world_base = world_.trajectory.pose_at(t);
+  const Pose2 T_world_base = world_.base_pose_at(t);
   const Pose2 T_world_head = compose(T_world_base, robot_.T_base_head);
 
-  if (step_ % params_.contact_update_divider == 0) update_obstacles(T_world_head);
   update_faults(elapsed_us, utime);
+  // The whiskers meet what is around the robot where it was put down, from that period on.
+  const bool kidnapped = std::any_of(fault_events_.begin(), fault_events_.end(),
+                                     [](const FaultEvent& e) { return e.kind == FaultKind::Kidnap; });
+  if (step_ % params_.contact_update_divider == 0 || kidnapped) update_obstacles(T_world_head);
   const rcp::WhiskerSample sample = sense(plant_.step(utime, command_));
   rcp::ControlOutput out = controller_.step(sample);
   command_ = out.theta_command;

@@ -228,7 +228,16 @@ std::string fault_summary(const FaultRecord& f, int64_t start_utime) {
     std::snprintf(line, sizeof line, " x%g", f.value);
     what += line;
   }
+  if (f.kind == FaultKind::Kidnap) {
+    std::snprintf(line, sizeof line, " to polar angle %.1f deg", rad_to_deg(f.value));
+    what += line;
+  }
   if (f.began_utime < 0) return what + ": not reached (the run ended first)";
+  if (f.kind == FaultKind::Kidnap) {
+    std::snprintf(line, sizeof line, ": at %.3f s, put down at x %.3f m, y %.3f m, heading %.1f deg", at(f.began_utime),
+                  f.pose.x, f.pose.y, rad_to_deg(f.pose.theta));
+    return what + line;
+  }
   if (f.ended_utime >= 0) {
     std::snprintf(line, sizeof line, ": %.3f s to %.3f s, ", at(f.began_utime), at(f.ended_utime));
   } else if (f.kind == FaultKind::DeadWhisker) {
@@ -244,9 +253,13 @@ std::string fault_summary(const FaultRecord& f, int64_t start_utime) {
     case FaultKind::CameraBlackout: return what + n + " camera frames withheld";
     case FaultKind::CameraFreeze: return what + n + " camera frames repeated";
     case FaultKind::OdometrySlip: return what + n + " odometry samples scaled";
+    case FaultKind::Kidnap: break;
   }
   return what;
 }
+
+// The latest first sample: a run of kMaxLaps slow laps after it still fits an int64 of microseconds.
+constexpr int64_t kMaxStartUtime = 4'000'000'000'000'000'000;
 
 // The end of the help of each option whose config has a default (common/config_path.h).
 const std::string kDefaultConfigDirs =
@@ -273,6 +286,7 @@ int main(int argc, char** argv) {
   double duration = 0.0;
   int64_t laps = 0;  // wide, so that an absurd count reaches the range check below
   int64_t start_utime = SimParams{}.start_utime;
+  double start_phase = 0.0;
   bool quiet = false;
   std::string candump_path;
   std::string whiskerd_config;
@@ -300,6 +314,10 @@ int main(int argc, char** argv) {
   app.add_flag("--faults", gen.faults,
                "Generated world: add the standard sensor faults (4 dead whiskers, a board offline 30 s, a 10 s camera "
                "blackout, a 20 % odometry slip for 10 s)");
+  app.add_option("--kidnaps", gen.kidnaps,
+                 "Generated world: draw N kidnaps (0.." + std::to_string(kMaxKidnaps) +
+                     ") after the first lap, a lap apart where the run allows, each 90-270 deg along the path from "
+                     "where the robot is");
   app.add_option("--slam-config", slam_config,
                  "slamd config whose visual template and match threshold the check uses (default: slam.yaml" +
                      kDefaultConfigDirs);
@@ -323,7 +341,13 @@ int main(int argc, char** argv) {
   app.add_option("--duration", duration, "Simulated seconds (overrides --laps; at most " + std::to_string(kMaxLaps) +
                                              " laps' time)");
   app.add_option("--laps", laps, "Revolutions, 1.." + std::to_string(kMaxLaps) + " (default: the world's trajectory.laps)");
-  app.add_option("--start-utime", start_utime, "utime of the first sample")->capture_default_str();
+  app.add_option("--start-utime", start_utime,
+                 "utime of the first sample, 0.." + std::to_string(kMaxStartUtime) +
+                     " (a second session on a saved map: after the first session's last)")
+      ->capture_default_str();
+  app.add_option("--start-phase", start_phase,
+                 "Polar angle (rad, -2pi..2pi) of the path the run starts at; overrides the world's "
+                 "trajectory.start_angle_deg (a second session from another place)");
   app.add_option("--plot-world", plot_path, "Write a top-down PNG of the world (alone: no simulation)");
   app.add_option("--plot-views", views_path, "Write noise-free camera views at --view-angles as one PNG (alone: no simulation)");
   app.add_option("--view-angles", view_angles, "Polar angles (deg) of the trajectory for --plot-views")
@@ -362,6 +386,17 @@ int main(int argc, char** argv) {
       return 2;
     }
     if (laps > 0) world.trajectory.laps = static_cast<int>(laps);
+    if (app.count("--start-phase") > 0) {
+      if (!(std::abs(start_phase) <= kTwoPi)) {
+        std::cerr << "vita-sim: --start-phase " << start_phase << " is out of range [-2pi, 2pi] rad\n";
+        return 2;
+      }
+      world.trajectory.start_angle = start_phase;
+    }
+    if (!(start_utime >= 0 && start_utime <= kMaxStartUtime)) {
+      std::cerr << "vita-sim: --start-utime " << start_utime << " is out of range [0, " << kMaxStartUtime << "]\n";
+      return 2;
+    }
     if (!plot_path.empty()) {
       plot_world(world, robot, plot_path);
       std::cerr << "vita-sim: wrote " << plot_path << "\n";

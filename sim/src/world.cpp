@@ -211,6 +211,20 @@ Faults load_faults(const ParamNode& node) {
     f.odometry_slip.push_back(s);
   }
   refuse_overlaps(slips, f.odometry_slip, "odometry_slip", any);
+  const std::vector<ParamNode> kidnaps = node.list("kidnap");
+  for (std::size_t i = 0; i < kidnaps.size(); ++i) {
+    const ParamNode& n = kidnaps[i];
+    Kidnap k;
+    n.require("at", k.at);
+    n.require("to_angle", k.to_angle);
+    if (!(k.at > 0.0 && k.at <= kMaxFaultSeconds)) bad(n, "at", "must be in (0, 1e6] s (a start elsewhere is trajectory.start_angle_deg)");
+    if (!(std::abs(k.to_angle) <= kTwoPi)) bad(n, "to_angle", "must be in [-2 pi, 2 pi] rad");
+    // In time order: which kidnap a pose follows must not depend on the file's order.
+    if (i > 0 && !(std::llround(k.at * 1e6) > std::llround(f.kidnap.back().at * 1e6))) {
+      bad(n, "at", "must be after kidnap[" + std::to_string(i - 1) + "].at (kidnaps in time order)");
+    }
+    f.kidnap.push_back(k);
+  }
   return f;
 }
 
@@ -259,6 +273,18 @@ void Trajectory::body_velocity(double& vx, double& vy, double& omega) const {
 }
 
 double Trajectory::lap_time() const { return kTwoPi * radius / speed; }
+
+Pose2 World::base_pose_at(double t) const {
+  const int64_t t_us = std::llround(t * 1e6);
+  const Kidnap* last = nullptr;
+  for (const Kidnap& k : faults.kidnap) {
+    if (std::llround(k.at * 1e6) <= t_us) last = &k;
+  }
+  if (last == nullptr) return trajectory.pose_at(t);
+  Trajectory moved = trajectory;
+  moved.start_angle = last->to_angle;
+  return moved.pose_at(t - last->at);
+}
 
 int World::pattern_index(const std::string& n) const {
   for (std::size_t i = 0; i < patterns.size(); ++i) {

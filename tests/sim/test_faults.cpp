@@ -40,6 +40,8 @@ struct Recorder : SimSink {
   std::vector<Frame> frames;
   std::vector<Odometry> odom;
   std::vector<FaultEvent> faults;
+  std::vector<std::pair<int64_t, Pose2>> truth;
+  std::vector<ContactTruth::Point> contacts;  // true contact onsets
   std::vector<int64_t> times;  // every output, in the order delivered
   void whisker_sample(const rcp::WhiskerSample& s, const WhiskerHealth& h) override {
     samples.push_back(s);
@@ -51,12 +53,18 @@ struct Recorder : SimSink {
     cycles.push_back(c);
     times.push_back(c.utime_end);
   }
-  void contact_truth(const ContactTruth& t) override { times.push_back(t.utime); }
+  void contact_truth(const ContactTruth& t) override {
+    contacts.insert(contacts.end(), t.points.begin(), t.points.end());
+    times.push_back(t.utime);
+  }
   void odometry(int64_t u, int64_t, const OdometrySample& o) override {
     odom.push_back({u, o});
     times.push_back(u);
   }
-  void ground_truth(int64_t u, const Pose2&) override { times.push_back(u); }
+  void ground_truth(int64_t u, const Pose2& p) override {
+    truth.emplace_back(u, p);
+    times.push_back(u);
+  }
   void camera(int64_t u, int64_t seq, const std::vector<uint8_t>& g, int, int) override {
     frames.push_back({u, seq, g});
     times.push_back(u);
@@ -204,6 +212,58 @@ TEST(WorldFaults, RefusesNonFiniteNumbersAnywhereNamingTheKey) {
       EXPECT_NE(std::string(e.what()).find("not a finite number"), std::string::npos) << e.what();
     }
   }
+}
+
+TEST(WorldFaults, LoadsKidnapsInTimeOrder) {
+  const World w = world_from_yaml("  faults:\n    kidnap: [{at: 70.5, to_angle: 1.5}, {at: 140, to_angle: -3.0}]\n");
+  ASSERT_EQ(w.faults.kidnap.size(), 2u);
+  EXPECT_DOUBLE_EQ(w.faults.kidnap[0].at, 70.5);
+  EXPECT_DOUBLE_EQ(w.faults.kidnap[0].to_angle, 1.5);
+  EXPECT_DOUBLE_EQ(w.faults.kidnap[1].at, 140.0);
+  EXPECT_DOUBLE_EQ(w.faults.kidnap[1].to_angle, -3.0);
+  EXPECT_TRUE(world_from_yaml("  faults: {}\n").faults.kidnap.empty());
+}
+
+TEST(WorldFaults, RejectsBadKidnapsNamingTheKey) {
+  const std::pair<const char*, const char*> cases[] = {
+      {"    kidnap: [{to_angle: 1}]\n", "world.faults.kidnap[0].at"},
+      {"    kidnap: [{at: 10}]\n", "world.faults.kidnap[0].to_angle"},
+      {"    kidnap: [{at: 0, to_angle: 1}]\n", "world.faults.kidnap[0].at"},
+      {"    kidnap: [{at: -5, to_angle: 1}]\n", "world.faults.kidnap[0].at"},
+      {"    kidnap: [{at: 2e6, to_angle: 1}]\n", "world.faults.kidnap[0].at"},
+      {"    kidnap: [{at: 10, to_angle: 6.3}]\n", "world.faults.kidnap[0].to_angle"},
+      {"    kidnap: [{at: 10, to_angle: -7}]\n", "world.faults.kidnap[0].to_angle"},
+      {"    kidnap: [{at: .nan, to_angle: 1}]\n", "world.faults.kidnap[0].at"},
+      {"    kidnap: [{at: 10, to_angle: .inf}]\n", "world.faults.kidnap[0].to_angle"},
+      {"    kidnap: [{at: 20, to_angle: 1}, {at: 10, to_angle: 2}]\n", "world.faults.kidnap[1].at"},
+      {"    kidnap: [{at: 20, to_angle: 1}, {at: 20.0000001, to_angle: 2}]\n", "world.faults.kidnap[1].at"},
+      {"    kidnap: [{at: 20, to_angle: 1, to: [0, 0]}]\n", "world.faults.kidnap[0].to"},
+      {"    kidnap: {at: 20, to_angle: 1}\n", "world.faults.kidnap"},
+  };
+  for (const auto& [yaml, key] : cases) {
+    const std::string e = error_of(yaml);
+    EXPECT_NE(e.find(key), std::string::npos) << yaml << " -> " << e;
+    EXPECT_EQ(e.find('\n'), std::string::npos) << "one line: " << e;
+  }
+  EXPECT_NE(error_of("    kidnap: [{at: 20, to_angle: 1}, {at: 10, to_angle: 2}]\n").find("time order"), std::string::npos);
+}
+
+TEST(WorldKidnap, TheBasePoseFollowsThePathFromWhereTheRobotWasPutDown) {
+  World w = world_from_yaml("  trajectory: {radius: 1.0, speed: 0.1, start_angle_deg: 0, direction: cw}\n"
+                            "  faults: {kidnap: [{at: 10, to_angle: 3.0}, {at: 20, to_angle: -1.0}]}\n");
+  const auto on_circle = [](double angle) { return Pose2{std::cos(angle), std::sin(angle), wrap_angle(angle)}; };
+  const auto expect_pose = [](const Pose2& a, const Pose2& b, const char* what) {
+    EXPECT_NEAR(a.x, b.x, 1e-12) << what;
+    EXPECT_NEAR(a.y, b.y, 1e-12) << what;
+    EXPECT_NEAR(angle_diff(a.theta, b.theta), 0.0, 1e-12) << what;
+  };
+  expect_pose(w.base_pose_at(9.998), w.trajectory.pose_at(9.998), "before the first kidnap: the trajectory");
+  expect_pose(w.base_pose_at(10.0), on_circle(3.0), "at it: the angle put down at");
+  expect_pose(w.base_pose_at(15.0), on_circle(3.0 - 0.5), "then on along the path, clockwise");
+  expect_pose(w.base_pose_at(20.0), on_circle(-1.0), "the second kidnap");
+  expect_pose(w.base_pose_at(25.0), on_circle(-1.5), "after it");
+  w.trajectory.outwards = false;
+  EXPECT_NEAR(angle_diff(w.base_pose_at(15.0).theta, 2.5 + kPi), 0.0, 1e-12) << "facing inwards as it would there";
 }
 
 // ---- what the faults do ----
@@ -435,6 +495,99 @@ TEST(SimulatorFaults, AWorldWithFaultsGivesTheSameOutputsForTheSameSeed) {
   EXPECT_EQ(a.times, b.times);
   ASSERT_EQ(a.samples.size(), b.samples.size());
   for (std::size_t i = 0; i < a.samples.size(); ++i) ASSERT_EQ(a.samples[i].deflection_x, b.samples[i].deflection_x);
+}
+
+// ---- a kidnap ----
+
+// True contact onsets on a tactile landmark (not a wall) in [from_s, to_s).
+int onsets_on_objects(const Recorder& rec, double from_s, double to_s = 1e9) {
+  int n = 0;
+  for (const ContactTruth::Point& p : rec.contacts) n += p.solid >= 0 && seconds(p.utime) >= from_s && seconds(p.utime) < to_s;
+  return n;
+}
+
+TEST(SimulatorKidnap, GroundTruthJumpsToTheNewPlaceWhileOdometryGoesOnAsIfNothingHappened) {
+  World w = arena();
+  w.odometry.start_at_truth = true;
+  const Recorder clean = run(w, 3.0);
+  const double to = deg_to_rad(264.0);
+  w.faults.kidnap = {{1.0, to}};
+  std::vector<FaultRecord> records;
+  const Recorder rec = run(w, 3.0, &records);
+  ASSERT_EQ(rec.truth.size(), 150u);
+  const double rate = w.trajectory.speed / w.trajectory.radius;  // rad/s, counter-clockwise
+  for (const auto& [utime, pose] : rec.truth) {
+    const double t = seconds(utime);
+    const double angle = t < 1.0 - 1e-9 ? deg_to_rad(84.0) + rate * t : to + rate * (t - 1.0);
+    ASSERT_NEAR(pose.x, std::cos(angle), 1e-9) << t;
+    ASSERT_NEAR(pose.y, std::sin(angle), 1e-9) << t;
+    ASSERT_NEAR(angle_diff(pose.theta, angle), 0.0, 1e-9) << "facing outwards as it would there, " << t;
+  }
+  const Pose2& before = rec.truth[49].second;  // 0.98 s
+  const Pose2& after = rec.truth[50].second;   // 1.00 s
+  EXPECT_GT(std::hypot(after.x - before.x, after.y - before.y), 1.9) << "put down across the circle";
+  ASSERT_EQ(rec.odom.size(), clean.odom.size());
+  for (std::size_t i = 0; i < rec.odom.size(); ++i) {
+    ASSERT_EQ(rec.odom[i].odom.pose.x, clean.odom[i].odom.pose.x) << "odometry does not see the kidnap, " << i;
+    ASSERT_EQ(rec.odom[i].odom.pose.y, clean.odom[i].odom.pose.y) << i;
+    ASSERT_EQ(rec.odom[i].odom.pose.theta, clean.odom[i].odom.pose.theta) << i;
+    ASSERT_EQ(rec.odom[i].odom.vy, clean.odom[i].odom.vy) << i;
+  }
+  // Recorded once, as it happens, with the pose the robot was put down at.
+  ASSERT_EQ(rec.faults.size(), 1u);
+  const FaultEvent& e = rec.faults[0];
+  EXPECT_EQ(e.kind, FaultKind::Kidnap);
+  EXPECT_TRUE(e.active);
+  EXPECT_EQ(e.utime, kStart + 1'000'000);
+  EXPECT_EQ(e.pose.x, after.x);
+  EXPECT_EQ(e.pose.y, after.y);
+  EXPECT_EQ(e.pose.theta, after.theta);
+  const sim_fault_t m = to_lcm(e);
+  EXPECT_EQ(m.kind, sim_fault_t::KIND_KIDNAP);
+  EXPECT_TRUE(m.active);
+  EXPECT_EQ(m.index, -1);
+  EXPECT_EQ(m.value, 0.0);
+  EXPECT_EQ(m.x, after.x);
+  EXPECT_EQ(m.y, after.y);
+  EXPECT_EQ(m.theta, after.theta);
+  for (std::size_t i = 1; i < rec.times.size(); ++i) ASSERT_LE(rec.times[i - 1], rec.times[i]) << i;
+  ASSERT_EQ(records.size(), 1u);
+  EXPECT_EQ(records[0].kind, FaultKind::Kidnap);
+  EXPECT_EQ(records[0].began_utime, kStart + 1'000'000);
+  EXPECT_EQ(records[0].ended_utime, -1) << "an instant: no end";
+}
+
+TEST(SimulatorKidnap, TheCameraAndTheWhiskersFollowTheRobotWhereItWasPutDown) {
+  // From a place with nothing to touch to just before the north box: the whiskers touch it only
+  // because of the kidnap, and the camera sees what a run started there sees.
+  World w = arena();
+  w.trajectory.start_angle = deg_to_rad(200.0);
+  const Recorder clean = run(w, 3.5);
+  const double to = deg_to_rad(84.0);
+  w.faults.kidnap = {{0.5, to}};
+  const Recorder rec = run(w, 3.5);
+  EXPECT_EQ(onsets_on_objects(clean, 0.0), 0) << "nothing to touch at 200-220 deg";
+  EXPECT_EQ(onsets_on_objects(rec, 0.0, 0.5), 0) << "nor before the kidnap";
+  EXPECT_GT(onsets_on_objects(rec, 0.5), 5) << "the box at the place put down at";
+  World there = arena();
+  there.trajectory.start_angle = to - 0.5 * w.trajectory.speed / w.trajectory.radius;  // there at 0.5 s
+  const Recorder started_there = run(there, 3.5);
+  ASSERT_EQ(rec.frames.size(), started_there.frames.size());
+  ASSERT_EQ(rec.frames.size(), clean.frames.size());
+  const auto mean_diff = [](const Frame& a, const Frame& b) {
+    double d = 0.0;
+    for (std::size_t i = 0; i < a.grey.size(); ++i) d += std::abs(int{a.grey[i]} - int{b.grey[i]});
+    return d / static_cast<double>(a.grey.size());
+  };
+  for (std::size_t i = 0; i < rec.frames.size(); ++i) {
+    const bool after = seconds(rec.frames[i].utime) >= 0.5;
+    if (after) {
+      EXPECT_LT(mean_diff(rec.frames[i], started_there.frames[i]), 0.5) << seconds(rec.frames[i].utime);
+      EXPECT_GT(mean_diff(rec.frames[i], clean.frames[i]), 5.0) << seconds(rec.frames[i].utime);
+    } else {
+      EXPECT_TRUE(rec.frames[i].grey == clean.frames[i].grey) << seconds(rec.frames[i].utime);
+    }
+  }
 }
 
 // ---- the boards' CAN traffic ----

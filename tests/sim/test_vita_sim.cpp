@@ -172,6 +172,85 @@ TEST(VitaSim, LapsAndDurationBeyondTheWorldFilesBoundsExitWith2NamingTheOption) 
   fs::remove(ok);
 }
 
+// The first GROUND_TRUTH sample of a log, and every SIM_FAULT with the ground truth at its time.
+struct TruthAndFaults {
+  int64_t first_utime = -1;
+  pose2d_t first;
+  std::vector<std::pair<sim_fault_t, pose2d_t>> faults;
+};
+
+TruthAndFaults read_truth_and_faults(const std::string& path) {
+  TruthAndFaults r;
+  LogReader log(path);
+  LogEvent e;
+  std::vector<sim_fault_t> pending;
+  while (log.next(e)) {
+    if (e.channel == "SIM_FAULT") {
+      sim_fault_t m;
+      EXPECT_TRUE(decode_message(std::span<const uint8_t>(e.data), m));
+      pending.push_back(m);
+    } else if (e.channel == "GROUND_TRUTH") {
+      pose2d_t m;
+      EXPECT_TRUE(decode_message(std::span<const uint8_t>(e.data), m));
+      if (r.first_utime < 0) {
+        r.first_utime = m.utime;
+        r.first = m;
+      }
+      for (const sim_fault_t& f : pending) {
+        if (f.utime == m.utime) r.faults.emplace_back(f, m);
+      }
+      pending.clear();
+    }
+  }
+  return r;
+}
+
+TEST(VitaSim, ASecondSessionStartsAtTheGivenPhaseOfThePathAndOnTheGivenClock) {
+  const std::string out = temp_path("session2.lcmlog");
+  std::string err;
+  ASSERT_EQ(vita_sim_stderr(arena() + " --duration 1 --start-phase 1.2 --start-utime 1700000900000000 -o " + out, err), 0)
+      << err;
+  const TruthAndFaults r = read_truth_and_faults(out);
+  EXPECT_EQ(r.first_utime, 1'700'000'900'000'000);
+  EXPECT_NEAR(r.first.x, std::cos(1.2), 1e-9) << "the arena's path: radius 1 m around the origin";
+  EXPECT_NEAR(r.first.y, std::sin(1.2), 1e-9);
+  EXPECT_NEAR(r.first.theta, 1.2, 1e-9) << "facing outwards";
+  fs::remove(out);
+  for (const char* args : {"--start-phase 6.3", "--start-phase -7", "--start-phase nan", "--start-phase inf",
+                           "--start-utime -1", "--start-utime 5000000000000000000"}) {
+    EXPECT_EQ(vita_sim_stderr(arena() + " " + args + " --duration 1 -o /nonexistent/dir/x.lcmlog", err), 2) << args;
+    const std::string option = std::string(args).substr(0, std::string(args).find(' '));
+    EXPECT_EQ(err.rfind("vita-sim: " + option + " ", 0), 0u) << args << ": " << err;
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+  }
+}
+
+TEST(VitaSim, AKidnapIsLoggedOnSimFaultWithThePoseTheRobotWasPutDownAtAndSummarised) {
+  const std::string world = temp_path("kidnap_world.yaml");
+  std::ofstream(world) << std::ifstream(test::source_path("config/worlds/aliased_arena.yaml")).rdbuf()
+                       << "  faults:\n    kidnap: [{at: 0.5, to_angle: 3.0}, {at: 5.0, to_angle: 1.0}]\n";
+  const std::string out = temp_path("kidnap.lcmlog");
+  std::string err;
+  ASSERT_EQ(vita_sim_stderr("--world " + world + " --duration 1 -o " + out, err), 0) << err;
+  EXPECT_NE(err.find("fault kidnap to polar angle 171.9 deg: at 0.500 s, put down at x -0.990 m, y 0.141 m, heading "
+                     "171.9 deg"),
+            std::string::npos)
+      << err;
+  EXPECT_NE(err.find("fault kidnap to polar angle 57.3 deg: not reached (the run ended first)"), std::string::npos) << err;
+  const TruthAndFaults r = read_truth_and_faults(out);
+  ASSERT_EQ(r.faults.size(), 1u);
+  const auto& [f, truth] = r.faults[0];
+  EXPECT_EQ(f.kind, sim_fault_t::KIND_KIDNAP);
+  EXPECT_TRUE(f.active);
+  EXPECT_EQ(f.utime, SimParams{}.start_utime + 500'000);
+  EXPECT_EQ(f.x, truth.x) << "the ground truth of the same instant";
+  EXPECT_EQ(f.y, truth.y);
+  EXPECT_EQ(f.theta, truth.theta);
+  EXPECT_NEAR(f.x, std::cos(3.0), 1e-12);
+  fs::remove(world);
+  fs::remove(out);
+}
+
 // The arena with every kind of fault (a 3 s run).
 std::string faulty_world() {
   const std::string path = temp_path("faulty_world.yaml");

@@ -59,8 +59,15 @@ struct WhiskerHealth {
   rcp::PerWhisker<bool> fault{};  // the sensor failed: no deflection, reading invalid
 };
 
-// The injected sensor faults (World::faults). Values match sim_fault_t.KIND_*.
-enum class FaultKind : int8_t { DeadWhisker = 1, BoardOffline = 2, CameraBlackout = 3, CameraFreeze = 4, OdometrySlip = 5 };
+// The injected faults (World::faults). Values match sim_fault_t.KIND_*.
+enum class FaultKind : int8_t {
+  DeadWhisker = 1,
+  BoardOffline = 2,
+  CameraBlackout = 3,
+  CameraFreeze = 4,
+  OdometrySlip = 5,
+  Kidnap = 6
+};
 
 // The world file's key of a fault kind ("dead_whiskers", "board_offline", ...).
 const char* to_string(FaultKind kind);
@@ -72,13 +79,15 @@ struct FaultEvent {
   bool active = true;
   int index = -1;      // whisker (DeadWhisker) or board (BoardOffline), else -1
   double value = 0.0;  // OdometrySlip: the scale, else 0
+  Pose2 pose;          // Kidnap: the true base pose the robot was put down at (its only event, active)
 };
 
 // One configured fault over the run, for a summary.
 struct FaultRecord {
   FaultKind kind = FaultKind::DeadWhisker;
   int index = -1;
-  double value = 0.0;
+  double value = 0.0;    // OdometrySlip: the scale; Kidnap: the polar angle put down at (rad)
+  Pose2 pose;            // Kidnap: the true base pose put down at, once it happened
   int64_t start_us = 0;  // since the start; active in [start_us, end_us)
   int64_t end_us = 0;    // INT64_MAX: the whole run
   int64_t began_utime = -1;  // -1: not (yet) begun / ended
@@ -127,7 +136,7 @@ class Simulator {
   int64_t cycles_with_contact() const { return cycles_with_contact_; }
   const std::vector<int64_t>& onsets_per_solid() const { return onsets_per_solid_; }
   // Every configured fault (dead whiskers, board_offline, camera_blackout, camera_freeze,
-  // odometry_slip, each in the world file's order) and what it did so far.
+  // odometry_slip, kidnap, each in the world file's order) and what it did so far.
   const std::vector<FaultRecord>& faults() const { return faults_; }
 
   const rcp::Controller& controller() const { return controller_; }

@@ -148,7 +148,8 @@ struct Trajectory {
   bool counter_clockwise = true;
   int laps = 4;                 // default number of revolutions
 
-  // True base pose at time t (s since the start).
+  // True base pose at time t (s since the start), on the undisturbed path (World::base_pose_at
+  // adds the kidnaps).
   Pose2 pose_at(double t) const;
   // True body-frame velocity (vx, vy, omega), constant along the circle.
   void body_velocity(double& vx, double& vy, double& omega) const;
@@ -188,12 +189,21 @@ struct OdometrySlip : FaultInterval {
   double scale = 1.0;  // multiplies the measured linear body velocities (vx, vy), not omega
 };
 
+// The robot lifted and put down on its own path at polar angle `to_angle`, facing as it would there;
+// it goes on along its circle from there. Odometry does not see it: the body velocity is the same
+// everywhere on the circle. An instant: it happens at the first control period at or after `at`.
+struct Kidnap {
+  double at = 0.0;        // s since the start, > 0
+  double to_angle = 0.0;  // rad, polar angle around the trajectory's centre
+};
+
 struct Faults {
   std::vector<int> dead_whiskers;  // whisker indices, dead for the whole run
   std::vector<BoardOffline> board_offline;
   std::vector<FaultInterval> camera_blackout;  // no CAMERA frames
   std::vector<FaultInterval> camera_freeze;    // the last frame before the interval, repeated
   std::vector<OdometrySlip> odometry_slip;
+  std::vector<Kidnap> kidnap;                  // in time order, at distinct times
 };
 
 // The most revolutions a run may have, from the world file or vita-sim's --laps; vita-sim's
@@ -215,6 +225,9 @@ struct World {
   Faults faults;
 
   int pattern_index(const std::string& name) const;  // -1 if absent
+  // True base pose at time t (s since the start): the trajectory, moved by the last kidnap at or
+  // before t (compared in whole microseconds, as the simulator's control periods are).
+  Pose2 base_pose_at(double t) const;
 };
 
 // Loads `world:` from a parsed document; strict (unknown keys, unknown pattern names, degenerate

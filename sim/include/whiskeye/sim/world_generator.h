@@ -41,10 +41,14 @@ struct Range {
   double max = 0.0;
 };
 
+// The most kidnaps --kidnaps draws into one world.
+inline constexpr int kMaxKidnaps = 20;
+
 struct GeneratorOptions {
   uint64_t world_seed = 1;
   std::string family = "aliased";  // aliased | stress
   bool faults = false;             // add the standard sensor-fault set (see docs/simulator.md)
+  int kidnaps = 0;                 // kidnaps drawn after the first lap (docs/simulator.md), 0..kMaxKidnaps
   Range side{5.0, 8.0};            // m, square arena side
   Range wall_landmarks{4, 8};
   Range tactile_landmarks{3, 6};
