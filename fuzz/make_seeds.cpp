@@ -168,6 +168,14 @@ int main(int argc, char** argv) {
     add_log_event(log, n++, cycle.utime_end, "WHISK_CYCLE", encode_message(cycle));
     add_log_event(log, n++, frame.utime, "CAMERA", encode_message(jpeg));
     write_file(out_dir / "lcm_log" / "seed-0", log);
+    // The same with 8 kB of repeated sync words after the first event: garbage every 4 bytes of which
+    // is a candidate to resynchronise on (skipping it must stay linear).
+    std::vector<uint8_t> garbage;
+    add_log_event(garbage, 0, small_events.front().utime, small_events.front().channel, small_events.front().data);
+    const std::size_t first = garbage.size();
+    for (int i = 0; i < 2048; ++i) garbage.insert(garbage.end(), {0xED, 0xA1, 0xDA, 0x01});
+    garbage.insert(garbage.end(), log.begin() + static_cast<std::ptrdiff_t>(first), log.end());
+    write_file(out_dir / "lcm_log" / "seed-sync-garbage", garbage);
   }
 
   // checkpoint: the state after the shortened cycle in each mode, unsealed (selector odd: bits 1-2

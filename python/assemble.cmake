@@ -45,8 +45,10 @@ foreach(n ${names})
 endforeach()
 file(WRITE "${PKG}/channels.py" "\"\"\"The stack's LCM channel names and the type each carries (docs/lcm-channels.md).
 
-Generated at build time from common/include/whiskeye/common/channels.h, the one home of the names:
-do not edit; change channels.h.
+Generated at build time from common/include/whiskeye/common/channels.h, the one home of the names
+(python/assemble.cmake): do not edit; change channels.h. python/whiskeye/channels.py is this file
+checked in, so that the source tree's package imports too; test python.LogReaderChannelsAndTypes
+fails until it is copied again from build/python/whiskeye/channels.py.
 \"\"\"
 
 ${py_names}

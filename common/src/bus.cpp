@@ -201,6 +201,8 @@ class LogReader::Source {
   virtual void share(std::shared_ptr<const void>& owner) const = 0;
   // How many bytes one view of a search for the next sync word covers (at least 4).
   virtual std::size_t search_window() const = 0;
+  // How many bytes from `at` a view gives without reading (0: none of them are held).
+  virtual std::size_t held(std::size_t at) const = 0;
 
  protected:
   std::size_t size_ = 0;
@@ -230,6 +232,7 @@ class WholeSource final : public LogReader::Source {
     if (owner != whole_) owner = whole_;
   }
   std::size_t search_window() const override { return size_; }
+  std::size_t held(std::size_t at) const override { return size_ - std::min(at, size_); }
 
  private:
   std::shared_ptr<const Whole> whole_;
@@ -283,6 +286,10 @@ class StreamSource final : public LogReader::Source {
     if (owner != current_) owner = current_;
   }
   std::size_t search_window() const override { return std::max<std::size_t>(chunk_bytes_, 8); }
+  std::size_t held(std::size_t at) const override {
+    if (!current_ || at < current_->start || at >= current_->start + current_->filled) return 0;
+    return current_->start + current_->filled - at;
+  }
 
  private:
   struct Chunk {
@@ -374,7 +381,9 @@ std::size_t header_bytes(std::size_t size, std::size_t at) { return std::min(kLo
 }  // namespace
 
 LogReader::LogReader(const std::string& path, Access access, std::size_t chunk_bytes) : path_(path) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  // O_NONBLOCK: opening a FIFO with no writer returns at once (and is refused below) instead of
+  // waiting for one; a regular file's reads ignore the flag.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
   if (fd < 0) throw std::runtime_error(path + ": cannot open the LCM log for reading: " + std::strerror(errno));
   struct stat st {};
   if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
@@ -382,6 +391,10 @@ LogReader::LogReader(const std::string& path, Access access, std::size_t chunk_b
     throw std::runtime_error(path + ": cannot open the LCM log for reading: not a regular file");
   }
   const auto size = static_cast<std::size_t>(st.st_size);
+  if (uint8_t byte = 0; size == 0 && ::pread(fd, &byte, 1, 0) > 0) {  // a /proc or /sys file: sized as it is read
+    ::close(fd);
+    throw std::runtime_error(path + ": cannot open the LCM log for reading: not a regular file (it reports 0 bytes but holds data)");
+  }
   if (access == Access::kStreamed) {
     ::posix_fadvise(fd, 0, 0, POSIX_FADV_SEQUENTIAL);
     source_ = std::make_unique<StreamSource>(fd, size, chunk_bytes, path);  // owns fd
@@ -432,10 +445,13 @@ bool LogReader::next(EventView& event) {
     std::size_t at = pos_ + 1;
     for (;;) {
       // The next sync word, looked for a window at a time (a match across two windows is found in
-      // the second, which starts 3 bytes before the first one's end).
+      // the second, which starts 3 bytes before the first one's end). A search starts in the bytes
+      // already read while they hold a header: garbage of sync words, each a failed candidate, is
+      // then skipped in one read of every byte, not a window read again per candidate.
       std::size_t found = size;
       for (std::size_t from = at; from + sizeof sync <= size;) {
-        const std::size_t len = std::min(size - from, src.search_window());
+        const std::size_t held = src.held(from);
+        const std::size_t len = held >= kLogHeaderSize ? held : std::min(size - from, src.search_window());
         const uint8_t* w = src.view(from, len);
         if (const auto* hit = static_cast<const uint8_t*>(::memmem(w, len, sync, sizeof sync))) {
           found = from + static_cast<std::size_t>(hit - w);

@@ -25,6 +25,7 @@ does not).
 import importlib
 import mmap
 import os
+import stat
 import struct
 import warnings
 
@@ -61,8 +62,29 @@ def type_for_channel(channel):
     name = channels.TYPES.get(channel)
     if name is None:
         return None
-    module = importlib.import_module(__package__ + "." + name)
+    try:
+        module = importlib.import_module(__package__ + "." + name)
+    except ModuleNotFoundError:
+        raise ImportError("%s.%s: the LCM types are generated at build time: import whiskeye from the build "
+                          "(PYTHONPATH=build/python) or the installed package" % (__package__, name)) from None
     return getattr(module, name)
+
+
+def _open_log(path):
+    """A descriptor of the regular file at `path` and its size. Refuses, as common/src/bus.cpp does, what is
+    no log file: a FIFO (opened without waiting for a writer), a device, a directory, a /proc file."""
+    fd = os.open(path, os.O_RDONLY | os.O_CLOEXEC | os.O_NONBLOCK)  # a FIFO with no writer: no wait
+    try:
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode):
+            raise LogError("%s: cannot open the LCM log for reading: not a regular file" % path)
+        if st.st_size == 0 and os.pread(fd, 1, 0):
+            raise LogError("%s: cannot open the LCM log for reading: not a regular file "
+                           "(it reports 0 bytes but holds data)" % path)
+    except BaseException:
+        os.close(fd)
+        raise
+    return fd, st.st_size
 
 
 class Event:
@@ -127,8 +149,7 @@ class Reader:
         self.strict = strict
         self.damage = LogDamage(self.path)
         self.events = 0
-        with open(self.path, "rb"):  # fail now, naming the file, if it cannot be opened
-            pass
+        os.close(_open_log(self.path)[0])  # fail now, naming the file, if it is none to read
 
     def _check(self, buf, size, at):
         """(total size, None) for a plausible event at `at`; else (0, (reason, truncated))."""
@@ -148,12 +169,14 @@ class Reader:
         return total, None
 
     def __iter__(self):
-        with open(self.path, "rb") as f:
-            size = os.fstat(f.fileno()).st_size
+        fd, size = _open_log(self.path)
+        try:
             if size == 0:
                 return
-            with mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as buf:
+            with mmap.mmap(fd, 0, access=mmap.ACCESS_READ) as buf:
                 yield from self._events(buf, size)
+        finally:
+            os.close(fd)
         if self.damage:
             warnings.warn(LogDamageWarning(str(self.damage)), stacklevel=2)
 
@@ -193,6 +216,7 @@ class Reader:
 def read(path, strict=False):
     """The events of the LCM log at `path`, in file order: `for event in whiskeye.log.read(path)`.
 
-    Opening fails at once (OSError) if the file cannot be read. A damaged log is read as far as it can
-    be (see the module docstring); strict=True raises LogError at the first damage instead."""
+    Opening fails at once if the file cannot be read (OSError) or is no log file (LogError: a FIFO, a
+    device, a directory, a /proc file; never waiting for a FIFO's writer). A damaged log is read as far
+    as it can be (see the module docstring); strict=True raises LogError at the first damage instead."""
     return Reader(path, strict=strict)

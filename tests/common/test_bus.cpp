@@ -15,6 +15,12 @@
 #include <netinet/in.h>
 #include <sys/socket.h>
 #include <unistd.h>
+#include <fcntl.h>
+#include <sys/stat.h>
+
+#include <chrono>
+#include <cstring>
+#include <future>
 #include <iterator>
 #include <map>
 #include <tuple>
@@ -493,6 +499,78 @@ TEST(LogFiles, AStreamedLogThatGetsShorterWhileReadIsAnErrorNamingIt) {
     FAIL() << "no error";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find(path + ": the LCM log got shorter while being read"), std::string::npos) << e.what();
+  }
+}
+
+// Read syscalls of this process so far (/proc/self/io's syscr; pread counts).
+long read_syscalls() {
+  std::ifstream io("/proc/self/io");
+  for (std::string key; io >> key;) {
+    long v = 0;
+    io >> v;
+    if (key == "syscr:") return v;
+  }
+  return -1;
+}
+
+TEST(LogFiles, GarbageOfRepeatedSyncWordsIsSkippedReadingEachByteOnce) {
+  const std::string path = whiskeye::testing::scratch_file("bus_sync_garbage", ".lcmlog");
+  std::vector<char> bytes = three_event_log(path);
+  // 1 MiB of sync words after the first event (69 bytes: 28 of header, "A", 40 of pose2d_t): every
+  // one a candidate that fails (its channel length is the next sync word, negative). A header's
+  // worth of zero bytes ends it, so that no candidate reads the next event's header as its lengths.
+  constexpr std::size_t kGarbage = (1 << 20) + 28;
+  constexpr std::size_t kFirstEvent = 28 + 1 + 8 + 4 * 8;
+  std::vector<char> garbage(kGarbage, 0);
+  for (std::size_t i = 0; i + 28 < kGarbage; i += 4) std::memcpy(&garbage[i], "\xED\xA1\xDA\x01", 4);
+  bytes.insert(bytes.begin() + kFirstEvent, garbage.begin(), garbage.end());
+  write_bytes(path, bytes);
+  constexpr std::size_t kChunk = 64 * 1024;
+  const long before = read_syscalls();
+  ASSERT_GE(before, 0) << "no /proc/self/io";
+  LogReader in(path, LogReader::Access::kStreamed, kChunk);
+  LogReader::EventView ev;
+  int events = 0;
+  while (in.next(ev)) ++events;
+  const long reads = read_syscalls() - before;
+  EXPECT_EQ(events, 3);
+  EXPECT_EQ(in.damage().skipped_bytes, kGarbage);
+  EXPECT_EQ(in.damage().damaged_places, 1) << in.damage().summary();
+  // Each byte read once: a pread per chunk (and a few for the chunk's remainder), not one per sync word
+  // (262,144 before).
+  EXPECT_LE(reads, static_cast<long>(2 * (bytes.size() / kChunk) + 16)) << "pread calls for " << bytes.size() << " bytes";
+}
+
+TEST(LogFiles, AFifoIsRefusedAsNotARegularFileWithoutWaitingForAWriter) {
+  const std::string path = whiskeye::testing::scratch_file("bus_fifo", ".lcmlog");
+  ASSERT_EQ(::mkfifo(path.c_str(), 0600), 0) << std::strerror(errno);
+  for (const LogReader::Access access : {LogReader::Access::kMapped, LogReader::Access::kStreamed}) {
+    auto opening = std::async(std::launch::async, [&] {
+      try {
+        LogReader r(path, access);
+        return std::string("opened");
+      } catch (const std::runtime_error& e) {
+        return std::string(e.what());
+      }
+    });
+    if (opening.wait_for(std::chrono::seconds(20)) == std::future_status::timeout) {
+      ADD_FAILURE() << "the reader waits for a writer to open the FIFO";
+      const int w = ::open(path.c_str(), O_WRONLY);  // lets the blocked open() return, so the test ends
+      ::close(w);
+    }
+    EXPECT_EQ(opening.get(), path + ": cannot open the LCM log for reading: not a regular file");
+  }
+}
+
+TEST(LogFiles, AProcFileThatReportsNoBytesButHoldsSomeIsRefused) {
+  for (const LogReader::Access access : {LogReader::Access::kMapped, LogReader::Access::kStreamed}) {
+    try {
+      LogReader r("/proc/self/status", access);
+      ADD_FAILURE() << "read /proc/self/status as an empty log";
+    } catch (const std::runtime_error& e) {
+      EXPECT_STREQ(e.what(), "/proc/self/status: cannot open the LCM log for reading: not a regular file (it reports 0 "
+                             "bytes but holds data)");
+    }
   }
 }
 

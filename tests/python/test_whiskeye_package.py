@@ -118,6 +118,42 @@ class Unit(unittest.TestCase):
         self.assertEqual(reader.damage.places, 1)
         self.assertIn("corrupt LCM log: no event sync word at byte %d" % at, str(reader.damage))
 
+    def test_what_is_no_log_file_is_refused_as_the_cxx_reader_refuses_it_without_waiting(self):
+        fifo = self.path("fifo.lcmlog")
+        os.mkfifo(fifo)
+        for path, says in [(fifo, "not a regular file"), ("/dev/zero", "not a regular file"),
+                           (self.tmp.name, "not a regular file"),
+                           ("/proc/self/status", "not a regular file (it reports 0 bytes but holds data)")]:
+            # In a child: a reader that waits for the FIFO's writer is a failure, not a hung test.
+            code = ("import sys; sys.path.insert(0, %r); import whiskeye.log\n"
+                    "try:\n    print(sum(1 for _ in whiskeye.log.read(%r)))\n"
+                    "except whiskeye.log.LogError as e:\n    print(e)" % (os.path.join(ARGS.build, "python"), path))
+            try:
+                r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=20)
+            except subprocess.TimeoutExpired:
+                self.fail("%s: the reader waits (for a writer)" % path)
+            self.assertEqual(r.stdout.strip(), "%s: cannot open the LCM log for reading: %s" % (path, says), r.stderr)
+
+    def test_the_source_trees_package_reads_a_log_and_says_where_the_types_are(self):
+        write_log(self.path("whole.lcmlog"), self.sample_events())
+        code = ("import sys; sys.path.insert(0, %r); import whiskeye.log\n"
+                "events = list(whiskeye.log.read(%r)); print(len(events), events[0].channel)\n"
+                "try:\n    events[0].decode()\nexcept ImportError as e:\n    print(e)"
+                % (os.path.abspath(os.path.join(ARGS.source, "python")), self.path("whole.lcmlog")))
+        r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=self.tmp.name)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        lines = r.stdout.splitlines()
+        self.assertEqual(lines[0], "10 VITA_POSE")
+        self.assertIn("whiskeye.vita_pose_t: the LCM types are generated at build time", lines[1])
+
+    def test_the_checked_in_channels_module_is_the_one_the_build_generates(self):
+        with open(os.path.join(ARGS.source, "python/whiskeye/channels.py")) as f:
+            checked_in = f.read()
+        with open(os.path.join(ARGS.build, "python/whiskeye/channels.py")) as f:
+            generated = f.read()
+        self.assertEqual(checked_in, generated, "python/whiskeye/channels.py is out of date with channels.h: "
+                         "copy build/python/whiskeye/channels.py over it")
+
     def test_decoding_says_what_is_wrong(self):
         pose = whiskeye.vita_pose_t().encode()
         write_log(self.path("odd.lcmlog"), [(1, "NOT_OURS", pose), (2, "VITA_MAP", pose), (3, "VITA_POSE", pose[:-3])])

@@ -11,6 +11,8 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+
 namespace whiskeye::logcheck {
 namespace {
 
@@ -89,6 +91,29 @@ TEST(LogCheck, AChannelWithoutSequenceNumbersGetsItsRateAndPausesOnly) {
   EXPECT_EQ(s.time_gaps, 1);
   EXPECT_EQ(s.max_interval_us, 1'000'000);
   EXPECT_NEAR(s.rate_hz(), 39.0 / 4.8, 1e-9);
+}
+
+TEST(LogCheck, TimesAcrossTheWholeInt64RangeGiveASmallPositiveRateAndASaturatedPause) {
+  LogCheck check;
+  pose2d_t pose{};
+  const auto data = bytes(pose);
+  constexpr int64_t kMin = std::numeric_limits<int64_t>::min();
+  constexpr int64_t kMax = std::numeric_limits<int64_t>::max();
+  check.add("VITA_POSE", kMin, data);
+  check.add("VITA_POSE", kMax, data);
+  check.add("VITA_POSE", kMin, data);  // and back: an interval below int64
+  const ChannelStats s = check.channels().at(0);
+  EXPECT_EQ(s.max_interval_us, kMax);
+  EXPECT_GT(s.rate_hz(), 0.0);
+  EXPECT_NEAR(s.rate_hz(), 2.0 * 1e6 / 18446744073709551615.0, 1e-20);  // two intervals over 2^64 − 1 µs
+}
+
+TEST(LogCheck, AClockThatJumpsBackRatesTheEventsOverTheTimesTheyCover) {
+  LogCheck check;
+  pose2d_t pose{};
+  const auto data = bytes(pose);
+  for (int64_t t : {5'000'000, 6'000'000, 1'000'000, 2'000'000, 3'000'000}) check.add("VITA_POSE", t, data);
+  EXPECT_NEAR(check.channels().at(0).rate_hz(), 4.0 / 5.0, 1e-12);  // 5 events over 1..6 s
 }
 
 TEST(LogCheck, ChannelsComeOutByName) {

@@ -6,6 +6,10 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
+
+#include <sys/stat.h>
+
 namespace whiskeye {
 namespace {
 
@@ -67,6 +71,30 @@ TEST_F(LogcheckBinary, ABadCommandLineOrAMissingFileIsOneLine) {
   EXPECT_EQ(missing.wait(10), 1) << missing.output();
   EXPECT_EQ(missing.output().rfind("whiskeye-logcheck: ", 0), 0u) << missing.output();
   EXPECT_NE(missing.output().find("/nonexistent/run.lcmlog"), std::string::npos) << missing.output();
+}
+
+TEST_F(LogcheckBinary, AnEmptyLogOrOneWithoutASingleEventIsSaidSoAndFails) {
+  const std::string empty = testing::scratch_file("logcheck_empty", ".lcmlog");
+  std::ofstream(empty).close();
+  Subprocess e({LOGCHECK_EXE, empty});
+  EXPECT_EQ(e.wait(10), 1) << e.output();
+  EXPECT_NE(e.output().find(empty + ": the log is empty (0 bytes): nothing was recorded"), std::string::npos) << e.output();
+  EXPECT_EQ(e.output().find("nothing lost"), std::string::npos) << e.output();
+
+  const std::string garbage = testing::scratch_file("logcheck_garbage", ".lcmlog");
+  std::ofstream(garbage) << std::string(1000, 'x');
+  Subprocess g({LOGCHECK_EXE, garbage});
+  EXPECT_EQ(g.wait(10), 1) << g.output();
+  EXPECT_NE(g.output().find(garbage + ": no event could be read from its 1000 bytes"), std::string::npos) << g.output();
+}
+
+TEST_F(LogcheckBinary, AFifoWithoutAWriterIsRefusedAtOnce) {
+  const std::string fifo = testing::scratch_file("logcheck_fifo", ".lcmlog");
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  Subprocess check({LOGCHECK_EXE, fifo});
+  EXPECT_EQ(check.wait(20), 1) << "waited for a writer: " << check.output();
+  EXPECT_NE(check.output().find(fifo + ": cannot open the LCM log for reading: not a regular file"), std::string::npos)
+      << check.output();
 }
 
 }  // namespace

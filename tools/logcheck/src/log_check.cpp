@@ -6,6 +6,7 @@
 #include <whiskeye/whisker_sample_t.hpp>
 
 #include <algorithm>
+#include <limits>
 
 namespace whiskeye::logcheck {
 namespace {
@@ -14,6 +15,15 @@ int64_t big_endian_i64(std::span<const uint8_t> bytes) {
   uint64_t v = 0;
   for (int i = 0; i < 8; ++i) v = (v << 8) | bytes[static_cast<std::size_t>(i)];
   return static_cast<int64_t>(v);
+}
+
+// b − a, or int64's end in its direction where that does not fit (times on both sides of the range).
+int64_t minus_saturating(int64_t b, int64_t a) {
+  int64_t d = 0;
+  if (__builtin_sub_overflow(b, a, &d)) {
+    return b > a ? std::numeric_limits<int64_t>::max() : std::numeric_limits<int64_t>::min();
+  }
+  return d;
 }
 
 }  // namespace
@@ -32,8 +42,10 @@ std::optional<int64_t> sequence_number(std::span<const uint8_t> encoded) {
 }
 
 double ChannelStats::rate_hz() const {
-  if (count < 2 || last_utime <= first_utime) return 0.0;
-  return static_cast<double>(count - 1) * 1e6 / static_cast<double>(last_utime - first_utime);
+  if (count < 2 || max_utime <= min_utime) return 0.0;
+  // The span in unsigned arithmetic: it can exceed int64 (−2^63 to 2^63 − 1), never uint64.
+  const uint64_t span_us = static_cast<uint64_t>(max_utime) - static_cast<uint64_t>(min_utime);
+  return static_cast<double>(count - 1) * 1e6 / static_cast<double>(span_us);
 }
 
 double ChannelStats::lost_fraction() const {
@@ -46,14 +58,16 @@ void LogCheck::add(std::string_view channel, int64_t utime, std::span<const uint
   ChannelStats& s = c.stats;
   if (inserted) {
     s.channel = std::string(channel);
-    s.first_utime = utime;
+    s.first_utime = s.min_utime = s.max_utime = utime;
     s.sequenced = true;
   } else {
-    const int64_t interval = utime - s.last_utime;
+    const int64_t interval = minus_saturating(utime, s.last_utime);
     c.intervals_us.push_back(interval);
     s.max_interval_us = std::max(s.max_interval_us, interval);
   }
   s.last_utime = utime;
+  s.min_utime = std::min(s.min_utime, utime);
+  s.max_utime = std::max(s.max_utime, utime);
   ++s.count;
   const std::optional<int64_t> seq = sequence_number(encoded);
   if (!seq) {

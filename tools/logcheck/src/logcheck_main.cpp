@@ -1,6 +1,7 @@
 // whiskeye-logcheck: what an LCM log lost. Per channel: events, rate, the longest pause, and — where
 // the messages carry sequence numbers — how many never reached the log. Exit 1 when a channel lost
-// more than --max-loss of its messages or the file is damaged; 2 on a bad command line.
+// more than --max-loss of its messages, the file is damaged, or it holds no event (an empty log is
+// not "nothing lost"); 2 on a bad command line.
 #include "whiskeye/common/bus.h"
 #include "whiskeye/common/cli.h"
 #include "whiskeye/logcheck/log_check.h"
@@ -8,12 +9,13 @@
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
+#include <filesystem>
 #include <string>
 
 namespace {
 
 // Reads `file` and prints the table: 0, or 1 when a channel lost more than `max_loss` or the file is
-// damaged or unreadable.
+// damaged, unreadable or without a single event.
 int check_log(const std::string& file, double max_loss, double gap_factor) {
   using namespace whiskeye;
   logcheck::LogCheck check(gap_factor);
@@ -25,6 +27,17 @@ int check_log(const std::string& file, double max_loss, double gap_factor) {
     damage = reader.damage().summary();
   } catch (const std::exception& e) {
     std::fprintf(stderr, "whiskeye-logcheck: %s\n", e.what());
+    return 1;
+  }
+  if (check.channels().empty()) {  // nothing recorded is no "nothing lost"
+    std::error_code ec;
+    const auto bytes = static_cast<unsigned long long>(std::filesystem::file_size(file, ec));
+    if (!damage.empty()) std::fprintf(stderr, "whiskeye-logcheck: %s\n", damage.c_str());
+    if (!ec && bytes == 0) {
+      std::fprintf(stderr, "whiskeye-logcheck: %s: the log is empty (0 bytes): nothing was recorded\n", file.c_str());
+    } else {
+      std::fprintf(stderr, "whiskeye-logcheck: %s: no event could be read from its %llu bytes\n", file.c_str(), bytes);
+    }
     return 1;
   }
   std::printf("%-20s %9s %9s %10s %6s %9s %7s %8s %8s\n", "channel", "events", "rate Hz", "max gap s", "pauses",

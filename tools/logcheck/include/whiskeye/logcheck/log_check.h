@@ -25,14 +25,16 @@ struct ChannelStats {
   int64_t count = 0;
   int64_t first_utime = 0;
   int64_t last_utime = 0;
-  int64_t max_interval_us = 0;  // longest time between two consecutive events
+  int64_t min_utime = 0;        // the earliest and latest event times (a clock may jump back)
+  int64_t max_utime = 0;
+  int64_t max_interval_us = 0;  // longest time between two consecutive events (saturates at int64's end)
   int64_t time_gaps = 0;        // intervals longer than gap_factor × the channel's median interval
   bool sequenced = false;       // every message carried a sequence number
   int64_t lost = 0;             // messages missing by the sequence numbers
   int64_t loss_places = 0;      // places where messages were missing
   int64_t longest_loss = 0;     // the most missing in a row
   int64_t restarts = 0;         // a sequence number not above the one before (a sender restarted)
-  double rate_hz() const;
+  double rate_hz() const;  // events per second over [min_utime, max_utime]; 0 with fewer than 2 or no span
   double lost_fraction() const;  // lost / (count + lost)
 };
 
