@@ -100,6 +100,42 @@ TEST_F(SlamdStartup, GrowingAMapIsRefusedWhereItWouldRotateOutAnotherOne) {
   EXPECT_TRUE(logged("localising without growing it"));
 }
 
+// A loaded map: the robot may be anywhere in it, so slamd starts LOCALISING. A resumed one: only if
+// the odometry comes back long after the checkpoint's (the robot may have been moved meanwhile).
+TEST_F(SlamdStartup, ALoadedMapLocalisesFirstAndAResumedOneAfterALongGap) {
+  params_.mode = slam::Mode::Visual;
+  slam::VitaSlam mapped(params_, robot_);
+  std::vector<uint8_t> pixels(640 * 480);
+  for (size_t i = 0; i < pixels.size(); ++i) pixels[i] = static_cast<uint8_t>((i * 7919) % 251);
+  const slam::ImageView image{1000000, 640, 480, 640, slam::kPixGrey, pixels};
+  const auto cycle_at = [&](int64_t utime) {
+    slam::CycleInput in;
+    in.utime = utime;
+    in.cycle = utime / 1000000;
+    in.image = &image;
+    in.odometry = {{utime, 0.1, 0.0, 0.0}};
+    return in;
+  };
+  mapped.process_cycle(cycle_at(1000000));
+  ASSERT_EQ(mapped.map().size(), 1);
+  const std::string map_file = testing::scratch_file("startup_localise", ".vslam");
+  write_checkpoint_file(map_file, 1, mapped.serialise());
+  StartupOptions o;
+  o.map_file = map_file;
+  o.localise = true;
+  auto loaded = start(o, nullptr);
+  ASSERT_NE(loaded, nullptr);
+  EXPECT_TRUE(loaded->localiser().localising());
+
+  CheckpointStore store(testing::scratch_dir("startup_resume_gap"), 3);
+  store.write(1, mapped.serialise());
+  auto quick = start({}, &store);
+  EXPECT_FALSE(quick->process_cycle(cycle_at(2000000)).localising);  // odometry 1 s on: tracking
+  auto later = start({}, &store);
+  const slam::CycleResult r = later->process_cycle(cycle_at(100000000));  // 99 s on
+  EXPECT_TRUE(r.localising || later->localiser().localisations() == 1);
+}
+
 TEST_F(SlamdStartup, NoStoreWithLocaliseOrWithoutADirectory) {
   std::optional<CheckpointStore> store;
   open_store(store, testing::scratch_dir("startup_store"), 3, /*localise=*/true);

@@ -330,16 +330,20 @@ TEST(ExperienceMap, ThePoseCellsChooseWhileTheRobotRecognisesPlacesAndTheMapAfte
   EXPECT_EQ(e.to_id, 0);
 }
 
-TEST(ExperienceMap, ReadsVersionOneCheckpointsWithoutViewShifts) {
+TEST(ExperienceMap, ReadsOlderCheckpointsWithoutViewShiftsTravelOrRetiredFlags) {
   const PoseCells cells{PoseCellParams{}};
   ExperienceMap m;
   m.on_cycle(0, 0, 0, true, 10, 10, 0, cells, 1);
-  std::vector<uint8_t> v3;
-  m.serialise(v3);
+  std::vector<uint8_t> v4;
+  m.serialise(v4);
+  // Version 3 is version 4 without the u8 retired flag after the view shift: 8 bytes of count, then
+  // 7 f64, i64, 3 i32, u8, i32 for the one experience.
+  std::vector<uint8_t> v3 = v4;
+  const size_t retired_at = 8 + 7 * 8 + 8 + 3 * 4 + 1 + 4;
+  v3.erase(v3.begin() + static_cast<std::ptrdiff_t>(retired_at));
   // Version 2 is version 3 without the travelled distance at the end (0 here: nothing travelled).
   const std::vector<uint8_t> v2(v3.begin(), v3.end() - 8);
-  // Version 1 is version 2 without the i32 view shift after the dense flag: 8 bytes of count, then
-  // 7 f64, i64, 3 i32, u8 for the one experience.
+  // Version 1 is version 2 without the i32 view shift after the dense flag.
   std::vector<uint8_t> v1 = v2;
   const size_t shift_at = 8 + 7 * 8 + 8 + 3 * 4 + 1;
   v1.erase(v1.begin() + static_cast<std::ptrdiff_t>(shift_at), v1.begin() + static_cast<std::ptrdiff_t>(shift_at + 4));
@@ -351,12 +355,46 @@ TEST(ExperienceMap, ReadsVersionOneCheckpointsWithoutViewShifts) {
   EXPECT_EQ(r.experiences()[0].view_shift, 0);
   std::vector<uint8_t> again;
   r.serialise(again);
-  EXPECT_EQ(again, v3);
+  EXPECT_EQ(again, v4);
+  ExperienceMap r3;
+  pos = 0;
+  r3.deserialise(v3, pos, 3, 1);
+  EXPECT_EQ(pos, v3.size());
+  EXPECT_FALSE(r3.experiences()[0].retired);
   ExperienceMap r2;
   pos = 0;
   r2.deserialise(v2, pos, 2, 1);
   EXPECT_EQ(pos, v2.size());
   EXPECT_DOUBLE_EQ(r2.travel_since_relocalisation(), 0.0);
+}
+
+TEST(ExperienceMap, ARetiredExperienceIsNeverACandidateAndStaysRetiredInACheckpoint) {
+  const PoseCells cells{PoseCellParams{}};
+  ExperienceMapParams p;
+  p.drift_per_m = 1.0;
+  ExperienceMap m(p);
+  m.on_cycle(0, 0, -1, false, 0, 0, 0, cells, 1000);  // experience 0, template 0
+  m.integrate(0.1, 0.0, 0.0, 1.0);
+  m.on_cycle(1, 1, -1, false, 0, 0, 0, cells, 2000);  // experience 1, template 1
+  ASSERT_EQ(m.experiences_of(1), std::vector<int>{1});
+  EXPECT_TRUE(m.mapped_near({0.1, 0.0, 0.0}, 0.05, 0.5, m.size()));
+  m.retire(1, 2);
+  EXPECT_TRUE(m.experiences()[1].retired);
+  EXPECT_TRUE(m.experiences_of(1).empty());
+  EXPECT_FALSE(m.mapped_near({0.1, 0.0, 0.0}, 0.05, 0.5, m.size()));
+  EXPECT_EQ(m.links().size(), 1u);  // kept in the graph
+  std::vector<uint8_t> blob;
+  m.serialise(blob);
+  ExperienceMap r(p);
+  size_t pos = 0;
+  r.deserialise(blob, pos, 4, 2);
+  EXPECT_TRUE(r.experiences()[1].retired);
+  EXPECT_TRUE(r.experiences_of(1).empty());
+  // Template 1 recognised again: its only experience is retired, so this is a new place of it.
+  m.integrate(0.05, 0.0, 0.0, 1.0);
+  const Event e = m.on_cycle(1, 1, -1, false, 0, 0, 0, cells, 3000);
+  EXPECT_EQ(e.type, EventType::NewExperience);
+  EXPECT_EQ(m.experiences_of(1), std::vector<int>{2});
 }
 
 TEST(ExperienceMap, SerialisationRoundTripsExactly) {
@@ -370,7 +408,7 @@ TEST(ExperienceMap, SerialisationRoundTripsExactly) {
   m.serialise(a);
   ExperienceMap r;
   size_t pos = 0;
-  r.deserialise(a, pos, 3, 2);
+  r.deserialise(a, pos, 4, 2);
   EXPECT_EQ(pos, a.size());
   r.serialise(b);
   EXPECT_EQ(a, b);

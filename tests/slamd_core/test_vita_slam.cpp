@@ -303,6 +303,110 @@ TEST(VitaSlam, RevisitingPlacesAroundALoopRelocalises) {
   EXPECT_LE(slam.map().size(), 14);
 }
 
+// The loop of RevisitingPlacesAroundALoopRelocalises, two laps mapped in each mode that can tell
+// the places apart, then the robot is carried half a loop on while odometry goes on as before (a
+// kidnap): the gate refuses what it now sees, slamd reports LOCALISING, and commits to the place it
+// really is at — never to another — and tracks from there.
+TEST(VitaSlam, AKidnapIsDetectedAndTheRobotLocalisesWhereItReallyIs) {
+  World w;
+  for (Mode mode : {Mode::Visual, Mode::Vita}) {
+    SCOPED_TRACE(to_string(mode));
+    SlamParams p;
+    p.mode = mode;
+    VitaSlam slam(p, w.geometry);
+    const double omega = kTwoPi / 12.0;
+    int c = 1;
+    for (; c <= 24; ++c) slam.process_cycle(input(w.place((c - 1) % 12), c, odometry(c, 0.0, omega * 1.0, omega)));
+    bool reported_localising = false;
+    int localised_at = -1;
+    for (int k = 0; k < 12; ++k, ++c) {
+      const int place = (c - 1 + 6) % 12;  // half a loop on from where odometry says
+      const CycleResult r = slam.process_cycle(input(w.place(place), c, odometry(c, 0.0, omega * 1.0, omega)));
+      reported_localising = reported_localising || r.localising;
+      if (r.localising) {
+        EXPECT_GT(r.hypotheses, 0);
+      }
+      if (r.event.type == EventType::Relocalise && reported_localising && localised_at < 0 && !r.localising) {
+        localised_at = k;
+      }
+      if (localised_at >= 0) {
+        // From the localisation on, every cycle is at an experience of the place it is at.
+        EXPECT_EQ(slam.map().experiences()[static_cast<size_t>(r.experience_id)].template_id, place) << "cycle " << c;
+      }
+    }
+    EXPECT_TRUE(reported_localising);
+    EXPECT_GE(localised_at, 0);
+    EXPECT_LE(localised_at, 8);
+    EXPECT_EQ(slam.localiser().kidnaps_detected(), 1);
+    EXPECT_EQ(slam.localiser().localisations(), 1);
+  }
+}
+
+// Two laps of the 12-place loop mapped in visual mode: the saved map of the restart tests.
+std::vector<uint8_t> two_laps_mapped(World& w, const SlamParams& p) {
+  VitaSlam first(p, w.geometry);
+  const double omega = kTwoPi / 12.0;
+  for (int c = 1; c <= 24; ++c) first.process_cycle(input(w.place((c - 1) % 12), c, odometry(c, 0.0, omega, omega)));
+  return first.serialise();
+}
+
+// A restart on a saved map (slamd --map): where the robot is is unknown until the places it sees
+// agree on one; until then no template, experience or pose-cell energy comes of the cycles.
+TEST(VitaSlam, OnASavedMapItLocalisesBeforeItLearnsAnything) {
+  World w;
+  SlamParams p;
+  p.mode = Mode::Visual;
+  const double omega = kTwoPi / 12.0;
+  VitaSlam slam = VitaSlam::deserialise(two_laps_mapped(w, p), p, w.geometry);
+  slam.start_localising(false);
+  const int templates = slam.templates().size(), experiences = slam.map().size();
+  int localised_at = -1;
+  for (int k = 0; k < 8; ++k) {
+    const int c = 100 + k;
+    const int place = (5 + k) % 12;
+    const CycleResult r = slam.process_cycle(input(w.place(place), c, odometry(c, 0.0, omega, omega)));
+    if (localised_at < 0 && !r.localising) localised_at = k;
+    if (r.localising) {
+      EXPECT_EQ(r.event.type, EventType::SameExperience);
+      EXPECT_EQ(slam.templates().size(), templates);
+      EXPECT_EQ(slam.map().size(), experiences);
+    } else {
+      EXPECT_EQ(slam.map().experiences()[static_cast<size_t>(r.experience_id)].template_id, place) << "cycle " << c;
+    }
+  }
+  EXPECT_GE(localised_at, 1);
+  EXPECT_LE(localised_at, 4);
+  // An empty map has nothing to localise in: it maps from the first cycle.
+  VitaSlam empty(p, w.geometry);
+  empty.start_localising(false);
+  EXPECT_FALSE(empty.localiser().localising());
+}
+
+// A resumed checkpoint goes on tracking after a quick restart and localises after a long one (the
+// robot may have been moved while slamd was down), judged by the odometry's gap.
+TEST(VitaSlam, AResumedMapLocalisesFirstOnlyWhenOdometryResumesLongAfterItsLast) {
+  World w;
+  SlamParams p;
+  p.mode = Mode::Visual;
+  const double omega = kTwoPi / 12.0;
+  const std::vector<uint8_t> blob = two_laps_mapped(w, p);
+  VitaSlam quick = VitaSlam::deserialise(blob, p, w.geometry);
+  quick.localise_if_moved_for(30.0);
+  const CycleResult a = quick.process_cycle(input(w.place(0), 25, odometry(25, 0.0, omega, omega)));  // 1 s on
+  EXPECT_FALSE(a.localising);
+  EXPECT_EQ(quick.localiser().localisations(), 0);
+  VitaSlam later = VitaSlam::deserialise(blob, p, w.geometry);
+  later.localise_if_moved_for(30.0);
+  const CycleResult b = later.process_cycle(input(w.place(0), 100, odometry(100, 0.0, omega, omega)));  // 76 s on
+  EXPECT_TRUE(b.localising || later.localiser().localisations() == 1);
+  // Armed once: later cycles are not restarts.
+  VitaSlam once = VitaSlam::deserialise(blob, p, w.geometry);
+  once.localise_if_moved_for(30.0);
+  once.process_cycle(input(w.place(0), 25, odometry(25, 0.0, omega, omega)));
+  const CycleResult c = once.process_cycle(input(w.place(1), 100, odometry(100, 0.0, omega, omega)));
+  EXPECT_FALSE(c.localising);
+}
+
 TEST(VitaSlam, ARestoredCheckpointProducesByteIdenticalResults) {
   World w;
   const SlamParams p;

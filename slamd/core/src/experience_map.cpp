@@ -59,7 +59,7 @@ int ExperienceMap::add_experience(const Pose2& pose, const Experience& meta) {
   s_.push_back(std::sin(pose.theta));
   inv_degree_.push_back(0.0);
   degree_.push_back(0);
-  if (e.template_id >= 0) {
+  if (e.template_id >= 0 && !e.retired) {
     if (static_cast<size_t>(e.template_id) >= by_template_.size()) by_template_.resize(static_cast<size_t>(e.template_id) + 1);
     by_template_[static_cast<size_t>(e.template_id)].push_back(e.id);
   }
@@ -87,6 +87,41 @@ void ExperienceMap::add_link(int from, int to, const Pose2& delta, int64_t utime
 void ExperienceMap::set_current(int id, const Pose2& offset) {
   current_ = id;
   offset_ = offset;
+}
+
+void ExperienceMap::jump_to(int id, const Pose2& offset) {
+  if (id < -1 || id >= size()) throw std::invalid_argument("ExperienceMap::jump_to: no experience " + std::to_string(id));
+  set_current(id, offset);
+  travel_ = 0.0;
+}
+
+bool ExperienceMap::mapped_near(const Pose2& pose, double radius, double heading, int below_id) const {
+  const double r2 = radius * radius;
+  const double c = std::cos(pose.theta), s = std::sin(pose.theta), min_cos = std::cos(heading);
+  const size_t n = std::min(x_.size(), static_cast<size_t>(std::max(below_id, 0)));
+  for (size_t i = 0; i < n; ++i) {
+    const double dx = x_[i] - pose.x, dy = y_[i] - pose.y;
+    if (dx * dx + dy * dy <= r2 && c_[i] * c + s_[i] * s >= min_cos && !meta_[i].retired) return true;
+  }
+  return false;
+}
+
+void ExperienceMap::retire(int from_id, int to_id) {
+  from_id = std::max(from_id, 0);
+  to_id = std::min(to_id, size());
+  for (int id = from_id; id < to_id; ++id) {
+    Experience& e = meta_[static_cast<size_t>(id)];
+    if (e.retired) continue;
+    e.retired = true;
+    if (e.template_id >= 0) std::erase(by_template_[static_cast<size_t>(e.template_id)], id);
+  }
+}
+
+const std::vector<int>& ExperienceMap::experiences_of(int template_id) const {
+  static const std::vector<int> kNone;
+  return template_id >= 0 && static_cast<size_t>(template_id) < by_template_.size()
+             ? by_template_[static_cast<size_t>(template_id)]
+             : kNone;
 }
 
 namespace {
@@ -219,18 +254,21 @@ Event ExperienceMap::on_cycle(int template_id, int visual_template_id, int tacti
     // choose among them, as in RatSLAM: the packet is where the views put it and resolves
     // neighbouring experiences better than the relaxed map. After a longer stretch without any,
     // the packet may have drifted away with the odometry: the nearest in the map is taken (and
-    // VitaSlam moves the packet there). Frozen (localisation only): the pose cells, whatever the
-    // distance or the view shift.
-    const bool gate = !frozen_ && params_.drift_per_m < 100.0;
+    // VitaSlam moves the packet there). Frozen (localisation only): the same, whatever the view shift.
+    const bool gate = params_.drift_per_m < 100.0;
     const bool by_map = gate && travel_ > params_.packet_trust_m;
     const Pose2 here = gate ? current_pose() : Pose2{};  // the map's distances only matter with the gate
     const double budget = drift_budget();
+    bool beyond_budget = false;
     for (int id : *candidates) {
       const Experience& e = meta_[static_cast<size_t>(id)];
       if (!frozen_ && std::abs(view_shift - e.view_shift) > max_shift) continue;
       const auto i = static_cast<size_t>(id);
       const double dm = gate ? std::hypot(x_[i] - here.x, y_[i] - here.y) : 0.0;
-      if (gate && dm > budget) continue;
+      if (gate && dm > budget) {
+        beyond_budget = true;
+        continue;
+      }
       const double d = by_map ? dm : cells.distance(e.pc_x, e.pc_y, e.pc_theta, pc_x, pc_y, pc_theta);
       if (nearest < 0 || d < dmin) {
         nearest = id;
@@ -240,7 +278,8 @@ Event ExperienceMap::on_cycle(int template_id, int visual_template_id, int tacti
     const double limit = by_map ? budget : params_.delta_pc_threshold;
     // No candidate left by the view-shift rule (never when frozen, which ignores it), or none near.
     if (nearest < 0 || (dmin > limit && !frozen_)) {
-      if (!degraded) create();
+      if (!degraded && !frozen_) create();
+      ev.gate_refused = nearest < 0 && beyond_budget;
     } else if (nearest != current_) {
       const int from = current_;
       if (from >= 0 && !frozen_) {
@@ -278,6 +317,7 @@ void ExperienceMap::serialise(std::vector<uint8_t>& out) const {
     bin::put<int32_t>(out, e.tactile_template_id);
     bin::put<uint8_t>(out, e.dense ? 1 : 0);
     bin::put<int32_t>(out, e.view_shift);
+    bin::put<uint8_t>(out, e.retired ? 1 : 0);
   }
   bin::put<uint64_t>(out, links_.size());
   for (size_t l = 0; l < links_.size(); ++l) {
@@ -317,6 +357,7 @@ void ExperienceMap::deserialise(const std::vector<uint8_t>& in, size_t& pos, uin
     e.tactile_template_id = bin::get<int32_t>(in, pos);
     e.dense = bin::get<uint8_t>(in, pos) != 0;
     if (format_version >= 2) e.view_shift = bin::get<int32_t>(in, pos);
+    if (format_version >= 4) e.retired = bin::get<uint8_t>(in, pos) != 0;
     for (const auto& [what, id] : {std::pair{"template", e.template_id}, std::pair{"visual template", e.visual_template_id},
                                    std::pair{"tactile template", e.tactile_template_id}}) {
       if (!template_ok(id)) {

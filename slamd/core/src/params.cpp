@@ -18,6 +18,7 @@ void load(const ParamNode& node, SlamParams& p) {
   load(node.section("match"), p.match);
   load(node.section("pose_cells"), p.pose_cells);
   load(node.section("experience_map"), p.experience_map);
+  load(node.section("localisation"), p.localisation);
 }
 
 }  // namespace whiskeye::slam

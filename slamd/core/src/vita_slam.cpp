@@ -14,7 +14,8 @@ namespace whiskeye::slam {
 namespace {
 
 constexpr char kMagic[8] = {'V', 'I', 'T', 'A', 'S', 'L', 'A', 'M'};
-constexpr uint32_t kVersion = 3;  // 2: experiences carry their view shift; 3: the map its travelled distance
+// 2: experiences carry their view shift; 3: the map its travelled distance; 4: the localiser's state
+constexpr uint32_t kVersion = 4;
 constexpr uint32_t kOldestReadable = 1;
 
 uint32_t fnv1a(const uint8_t* data, size_t n) {
@@ -33,7 +34,13 @@ VitaSlam::VitaSlam(const SlamParams& params, const RobotGeometry& geometry)
       geometry_(geometry),
       store_(params.visual.template_width, params.visual.template_height),
       cells_(params.pose_cells),
-      map_(params.experience_map) {}
+      map_(params.experience_map),
+      localiser_(params.localisation) {}
+
+void VitaSlam::start_localising(bool with_prior) {
+  if (map_.size() == 0) return;
+  localiser_.start(with_prior && map_.current_id() >= 0, params_.localisation.commit_margin);
+}
 
 // The match threshold for the terms in use: a visual-only ε and a three-term ε differ in scale.
 double VitaSlam::tau_of(const Terms& terms) const {
@@ -46,6 +53,11 @@ double VitaSlam::tau_of(const Terms& terms) const {
 CycleResult VitaSlam::process_cycle(const CycleInput& in) {
   CycleResult out;
   ++stats_.cycles;
+  if (resume_gap_s_ && !in.odometry.empty()) {
+    const double gap_s = (static_cast<double>(in.odometry.front().utime) - static_cast<double>(last_odometry_utime_)) * 1e-6;
+    if (!have_odometry_time_ || gap_s < 0.0 || gap_s > *resume_gap_s_) start_localising(true);
+    resume_gap_s_.reset();
+  }
   integrate_odometry(in.odometry);                           // 1. path integration
   const CycleTemplates templates = make_templates(in, out);  // 2. templates of this cycle
   PoseCellBest pc = match_or_create(templates, out);         // 3. match or create
@@ -58,6 +70,7 @@ CycleResult VitaSlam::process_cycle(const CycleInput& in) {
 // flushed at the cycle's end so that templates are matched against an up-to-date packet.
 void VitaSlam::integrate_odometry(const std::vector<OdometrySample>& odometry) {
   double acc_vx = 0.0, acc_vy = 0.0, acc_omega = 0.0, acc_dt = 0.0;
+  cycle_travel_m_ = 0.0;
   auto flush = [&] {
     if (acc_dt > 0.0) cells_.step(acc_vx / acc_dt, acc_vy / acc_dt, acc_omega / acc_dt, acc_dt);
     acc_vx = acc_vy = acc_omega = acc_dt = 0.0;
@@ -95,6 +108,7 @@ void VitaSlam::integrate_odometry(const std::vector<OdometrySample>& odometry) {
     have_odometry_time_ = true;
     last_odometry_utime_ = o.utime;
     map_.integrate(o.vx, o.vy, o.omega, dt);
+    cycle_travel_m_ += std::hypot(o.vx, o.vy) * dt;
     if (dt <= 0.0) continue;
     acc_vx += o.vx * dt;
     acc_vy += o.vy * dt;
@@ -169,7 +183,9 @@ VitaSlam::PoseCellBest VitaSlam::match_or_create(const CycleTemplates& t, CycleR
     if (b.id >= 0 && b.error <= tau) {
       m.template_id = b.id;
       m.is_new = false;
-      if (out.degraded) return pc;
+      // Recognised, but not to be learnt from: a degraded cycle's, or one while the place is
+      // unknown (the packet's position means nothing until a localisation commits).
+      if (out.degraded || localiser_.localising()) return pc;
       store_.bump_decay(b.id, params_.pose_cells.vt_active_decay);
       if (b.id < store_.size() - params_.pose_cells.inject_exclude_newest) {
         const double energy = params_.pose_cells.inject_energy *
@@ -178,7 +194,7 @@ VitaSlam::PoseCellBest VitaSlam::match_or_create(const CycleTemplates& t, CycleR
         for (int i = 0; i < params_.pose_cells.settle_steps; ++i) cells_.settle();
         cells_.best(pc.x, pc.y, pc.theta);
       }
-    } else if (!localise_only_ && !out.degraded) {
+    } else if (!localise_only_ && !out.degraded && !localiser_.localising()) {
       m.template_id = store_.add(q, pc.x, pc.y, pc.theta);
       m.is_new = true;
     }
@@ -190,24 +206,53 @@ VitaSlam::PoseCellBest VitaSlam::match_or_create(const CycleTemplates& t, CycleR
 void VitaSlam::update_map(int64_t utime, PoseCellBest& pc, CycleResult& out) {
   const MatchResult& m = out.match;
   const int tid = m.template_id;
-  out.event = map_.on_cycle(tid, tid >= 0 && store_.has_visual(tid) ? tid : -1,
-                            tid >= 0 && store_.has_tactile(tid) ? tid : -1, out.dense, pc.x, pc.y, pc.theta, cells_,
-                            utime, m.visual_used && !m.is_new ? m.visual_shift : 0, out.degraded);
-  // A re-localisation the map accepted beyond the packet's reach (the pose cells drifted with the
-  // odometry): the packet follows the map, so that what is recognised next is looked for there.
-  if (out.event.type == EventType::Relocalise && out.event.to_id >= 0) {
-    const Experience& e = map_.experiences()[static_cast<size_t>(out.event.to_id)];
-    if (cells_.distance(e.pc_x, e.pc_y, e.pc_theta, pc.x, pc.y, pc.theta) > params_.experience_map.delta_pc_threshold) {
-      cells_.relocate(e.pc_x, e.pc_y, e.pc_theta);
-      cells_.best(pc.x, pc.y, pc.theta);
+  const int recognised = tid >= 0 && !m.is_new ? tid : -1;
+  if (localiser_.localising()) {
+    localise(recognised, pc, out);
+  } else {
+    const int size_before = map_.size();
+    out.event = map_.on_cycle(tid, tid >= 0 && store_.has_visual(tid) ? tid : -1,
+                              tid >= 0 && store_.has_tactile(tid) ? tid : -1, out.dense, pc.x, pc.y, pc.theta, cells_,
+                              utime, m.visual_used && !m.is_new ? m.visual_shift : 0, out.degraded);
+    // A re-localisation the map accepted beyond the packet's reach (the pose cells drifted with the
+    // odometry): the packet follows the map, so that what is recognised next is looked for there.
+    if (out.event.type == EventType::Relocalise && out.event.to_id >= 0) move_packet_to(out.event.to_id, pc);
+    // What the robot sees stopped agreeing with where it thinks it is: localise, this recognition
+    // the first evidence.
+    if (localiser_.on_tracking_recognition(out.event.gate_refused, recognised, size_before, map_)) {
+      localise(recognised, pc, out);
     }
   }
+  out.localising = localiser_.localising();
+  out.hypotheses = localiser_.hypotheses();
   out.experience_id = map_.current_id();
   out.pose = map_.current_pose();
   out.pc_x = pc.x;
   out.pc_y = pc.y;
   out.pc_theta = pc.theta;
   out.num_templates = store_.size();
+}
+
+// One cycle while localising: the recognition weighs the hypotheses; a commit moves the map's
+// current experience (no link: the odometry since the last one says nothing about the way there)
+// and the packet there. Until then the map stays where it was.
+void VitaSlam::localise(int recognised, PoseCellBest& pc, CycleResult& out) {
+  const int from = map_.current_id();
+  out.event = {EventType::SameExperience, from, from};
+  const std::optional<Commit> c = localiser_.on_localising_cycle(recognised, cycle_travel_m_, map_);
+  if (!c) return;
+  map_.jump_to(c->experience, c->offset);
+  map_.retire(c->retire_from, c->retire_to);
+  if (c->experience != from) out.event = {EventType::Relocalise, from, c->experience};
+  if (c->experience >= 0) move_packet_to(c->experience, pc);
+}
+
+void VitaSlam::move_packet_to(int experience, PoseCellBest& pc) {
+  const Experience& e = map_.experiences()[static_cast<size_t>(experience)];
+  if (cells_.distance(e.pc_x, e.pc_y, e.pc_theta, pc.x, pc.y, pc.theta) > params_.experience_map.delta_pc_threshold) {
+    cells_.relocate(e.pc_x, e.pc_y, e.pc_theta);
+    cells_.best(pc.x, pc.y, pc.theta);
+  }
 }
 
 Pose2 VitaSlam::dead_reckon(const Pose2& offset) const { return compose(map_.current_pose(), offset); }
@@ -239,6 +284,7 @@ std::vector<uint8_t> VitaSlam::serialise_unsealed() const {
   store_.serialise(out);
   cells_.serialise(out);
   map_.serialise(out);
+  localiser_.serialise(out);
   return out;
 }
 
@@ -272,6 +318,7 @@ VitaSlam VitaSlam::deserialise(std::span<const uint8_t> data, const SlamParams& 
   s.store_ = TemplateStore::deserialise(in, pos, params.visual.template_width, params.visual.template_height);
   s.cells_.deserialise(in, pos);
   s.map_.deserialise(in, pos, version, s.store_.size());
+  if (version >= 4) s.localiser_.deserialise(in, pos, s.map_.size());
   if (pos != end) throw std::runtime_error("checkpoint: " + std::to_string(end - pos) + " unexpected trailing bytes");
   return s;
 }

@@ -64,6 +64,10 @@ int8_t event_code(slam::EventType type) {
   return vita_event_t::SAME_EXPERIENCE;
 }
 
+int8_t localisation_code(bool localising) {
+  return localising ? vita_pose_t::LOCALISATION_LOCALISING : vita_pose_t::LOCALISATION_TRACKING;
+}
+
 bool finite(double v) { return std::isfinite(v); }
 
 // "" for a sample time that can be one (after 1970, before 2100), else why not: one corrupt time
@@ -360,6 +364,7 @@ void SlamNode::on_odometry(const odometry_t& msg) {
   out.template_id = last_template_id_;
   out.mode = mode_code(slam_->params().mode);
   slam_->pose_cells().best(out.pose_cell_x, out.pose_cell_y, out.pose_cell_theta);
+  out.localisation = localisation_code(slam_->localiser().localising());
   publish(out_, params_.channels.pose, out);
 }
 
@@ -419,6 +424,7 @@ void SlamNode::process_one(const SyncedCycle& cycle) {
   ev.to_id = r.event.to_id;
   ev.template_id = r.match.template_id;
   ev.mode = mode;
+  ev.localisation = localisation_code(r.localising);
   publish(out_, params_.channels.event, ev);
 
   template_match_t m{};
@@ -518,14 +524,23 @@ slam_status_t SlamNode::status(int64_t utime, int64_t window_now_us) {
   s.cycles_without_camera = counters_.cycles_without_camera;
   s.cycles_without_contact = counters_.cycles_without_contact;
   s.input_gaps = counters_.input_gaps;
+  const slam::Localiser& loc = slam_->localiser();
+  s.localisation = localisation_code(loc.localising());
+  s.hypotheses = loc.hypotheses();
+  s.kidnaps_detected = loc.kidnaps_detected();
+  s.localisations = loc.localisations();
   constexpr int64_t kWindow = 10 * kUtimePerSecond;
   const bool rejecting =
       recent_errors_.changed_within(s.decode_errors + s.validation_errors, window_now_us, kWindow);
   const bool blind = slam::uses_visual(slam_->params().mode) &&
                      recent_without_camera_.changed_within(s.cycles_without_camera, window_now_us, kWindow);
-  s.state = rejecting || blind ? driver_status_t::STATE_DEGRADED : driver_status_t::STATE_OK;
+  s.state = rejecting || blind || loc.localising() ? driver_status_t::STATE_DEGRADED : driver_status_t::STATE_OK;
   if (rejecting) s.message = "rejected input in the last 10 s: see decode_errors / validation_errors";
   if (blind) s.message += std::string(s.message.empty() ? "" : "; ") + "cycles without a camera frame in the last 10 s";
+  if (loc.localising()) {
+    s.message += std::string(s.message.empty() ? "" : "; ") + "localising: where the robot is is unknown (" +
+                 std::to_string(loc.hypotheses()) + " candidate places)";
+  }
   return s;
 }
 

@@ -42,8 +42,10 @@ std::unique_ptr<slam::VitaSlam> load_map(const slam::SlamParams& params, const R
     throw std::runtime_error(o.map_file + ": " + e.what());
   }
   if (o.localise) s->set_localise_only(true);
+  // The robot may be anywhere in the loaded map: every place is a candidate until one wins.
+  s->start_localising(false);
   log(LogLevel::kInfo, "loaded map " + o.map_file + " (" + std::to_string(s->map().experiences().size()) + " experiences)" +
-      (o.localise ? ", localising without growing it" : ""));
+      (o.localise ? ", localising without growing it" : ", localising before growing it"));
   return s;
 }
 
@@ -66,6 +68,9 @@ std::unique_ptr<slam::VitaSlam> resume(const slam::SlamParams& params, const Rob
   }
   for (const auto& p : problems) log(LogLevel::kWarning, "skipped unusable checkpoint " + p);
   if (!cp) return nullptr;
+  // The robot may have been moved while slamd was down: if its odometry resumes long after the
+  // checkpoint's, where it was left is only the first candidate.
+  resumed->localise_if_moved_for(params.localisation.resume_gap_s);
   log(LogLevel::kInfo, "resuming from " + cp->path + " (after cycle " + std::to_string(cp->sequence) + ")");
   return resumed;
 }

@@ -65,6 +65,9 @@ struct Experience {
   int tactile_template_id = -1;  // -1: no tactile part
   bool dense = false;            // tactile data present (contact) — the paper's dense node
   int view_shift = 0;            // column shift of the view against its template at creation
+  // Made while the robot was lost (between a kidnap and its detection: localiser.h): where the map
+  // puts it is not where it was seen. Kept in the graph for its links, never a candidate again.
+  bool retired = false;
 };
 
 struct Link {
@@ -104,9 +107,21 @@ class ExperienceMap {
   int add_experience(const Pose2& pose, const Experience& meta);
   void add_link(int from, int to, const Pose2& delta, int64_t utime);
   void set_current(int id, const Pose2& offset = {});
+  // Moves the base to `offset` from experience `id` without a link (the odometry since the current
+  // experience says nothing about the way there: a localisation after a kidnap or a restart).
+  void jump_to(int id, const Pose2& offset);
+  // Whether the map has an experience within `radius` (m) of `pose`, turned at most `heading` (rad)
+  // from it: whether the place has been mapped at all.
+  // Retired experiences and those from `below_id` on do not count.
+  bool mapped_near(const Pose2& pose, double radius, double heading, int below_id) const;
+  // Retires experiences [from_id, to_id) (Experience::retired).
+  void retire(int from_id, int to_id);
+  // The experiences of a template that are not retired (empty if it has none).
+  const std::vector<int>& experiences_of(int template_id) const;
   void relax(int loops);
   // Frozen: on_cycle never creates experiences or links; a matched template moves the current
-  // experience to its nearest (in pose cells) experience, whatever the distance or view shift.
+  // experience to its nearest (in pose cells) experience within the gate's budget, whatever the
+  // view shift.
   void set_frozen(bool frozen) { frozen_ = frozen; }
 
   const ExperienceMapParams& params() const { return params_; }

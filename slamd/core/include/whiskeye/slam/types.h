@@ -105,6 +105,9 @@ struct Event {
   EventType type = EventType::SameExperience;
   int from_id = -1;
   int to_id = -1;
+  // A template was recognised whose every experience (that the view-shift rule allows) lies beyond
+  // the odometry-consistency gate's budget: what the robot sees disagrees with where it thinks it is.
+  bool gate_refused = false;
 };
 
 struct CycleResult {
@@ -120,6 +123,10 @@ struct CycleResult {
   // ViTa without one of its senses this cycle: matched on the other, but no template, energy or
   // experience came of it (VitaSlam, step 2).
   bool degraded = false;
+  // LOCALISING (a restart on a saved map, a suspected kidnap): `pose` is the dead-reckoned pose,
+  // not to be trusted, and no template or experience was made; `hypotheses` places are weighed.
+  bool localising = false;
+  int hypotheses = 0;
   std::string image_warning;  // non-empty: the frame was refused (the cycle went on without vision), and why
   std::string whisk_warning;  // non-empty: the whisk cycle had no valid sample (went on without touch)
 };

@@ -10,24 +10,30 @@
 //      as a match); the single-sense modes need their one sense;
 //   3. match against every stored template: ε ≤ τ → match (inject energy at the template's pose
 //      cells, with the decay rule) else a new template (stored with the current pose-cell estimate);
-//   4. the experience map's action rule (same / new / re-localise) and relaxation.
+//   4. the experience map's action rule (same / new / re-localise) and relaxation — or, while
+//      LOCALISING (a restart on a saved map, a suspected kidnap: localiser.h), the recognition is
+//      evidence for the competing places and the map is left as it is until one wins.
 // State (templates, pose cells, map, odometry clock) serialises to a versioned binary blob and
 // restores exactly: a restored instance produces byte-identical results.
 //
 // Checkpoint format (all little-endian):
-//   magic "VITASLAM" (8 bytes) | u32 version (3; 1 and 2 are still read) | u8 mode | i64 last odometry utime | u8 has it |
-//   5 × i64 stats | template store | pose cells | experience map | u32 FNV-1a of all previous bytes
+//   magic "VITASLAM" (8 bytes) | u32 version (4; 1 to 3 are still read) | u8 mode | i64 last odometry utime | u8 has it |
+//   5 × i64 stats | template store | pose cells | experience map | localiser (version ≥ 4) | u32 FNV-1a of all previous bytes
 //   template store: i32 w, i32 h, then arrays (u64 count + elements): visual u8, visual mean f32,
 //     has_visual u8, pfh u16, sda f32, has_tactile u8, num_contacts i32, pc (x,y,θ) f64, decay f64
 //   pose cells: i32 dim_xy, i32 dim_theta, u64 count + f32 activity [θ][y][x]
 //   experience map: u64 n, n × (f64 x, y, cos θ, sin θ, pc_x, pc_y, pc_θ, i64 utime, i32 template,
-//     visual, tactile id, u8 dense, i32 view shift (version ≥ 2)) | u64 links, each (i32 from, to, f64 dx, dy, dθ, i64 utime) |
+//     visual, tactile id, u8 dense, i32 view shift (version ≥ 2), u8 retired (version ≥ 4)) | u64 links, each (i32 from, to, f64 dx, dy, dθ, i64 utime) |
 //     i32 current | f64 offset x, y, θ | f64 distance travelled since the last re-localisation (version ≥ 3)
+//   localiser: u8 state | i32 disagreements | i32 first experience of the disagreements | i32 first experience
+//     not evidence | f64 m localising | i64 kidnaps detected | i64 localisations |
+//     u64 n, n × (f64 correction x, y, θ, i32 anchor, i32 score, u8 prior)
 #pragma once
 
 #include "whiskeye/common/params.h"
 #include "whiskeye/common/robot_geometry.h"
 #include "whiskeye/slam/experience_map.h"
+#include "whiskeye/slam/localiser.h"
 #include "whiskeye/slam/pose_cells.h"
 #include "whiskeye/slam/tactile_template.h"
 #include "whiskeye/slam/template_store.h"
@@ -48,6 +54,7 @@ struct SlamParams {
   MatchParams match;
   PoseCellParams pose_cells;
   ExperienceMapParams experience_map;
+  LocaliserParams localisation;
   double max_odometry_dt = 1.0;  // s; a longer gap between odometry samples is integrated as this
   // s; odometry is summed over this long before one pose-cell step (attractor dynamics + shift).
   // The cells' dynamics need not run at the base's 50 Hz: the packet moves under a cell per step
@@ -92,6 +99,16 @@ class VitaSlam {
   }
   bool localise_only() const { return localise_only_; }
 
+  // Holds the pose as unknown until a place wins (localiser.h): after loading a saved map
+  // (with_prior false: the robot may be anywhere) or resuming a checkpoint (true: where it was
+  // left is one of the candidates). Nothing to do on an empty map.
+  void start_localising(bool with_prior);
+  // A resumed checkpoint: the first cycle with odometry starts localising, with where the robot was
+  // left as a candidate, if its odometry comes more than `gap_s` after the checkpoint's last sample
+  // (or its time went back, or the checkpoint had none). Not part of the state: a property of the run.
+  void localise_if_moved_for(double gap_s) { resume_gap_s_ = gap_s; }
+  const Localiser& localiser() const { return localiser_; }
+
   // The decoder of a compressed camera format (MJPEG), injected by the daemon's edge; without it such
   // a frame is refused (counted in bad_images) like any format the core does not read.
   void set_frame_decoder(FrameDecoder decoder) { decoder_ = std::move(decoder); }
@@ -122,6 +139,8 @@ class VitaSlam {
   CycleTemplates make_templates(const CycleInput& in, CycleResult& out);
   PoseCellBest match_or_create(const CycleTemplates& templates, CycleResult& out);
   void update_map(int64_t utime, PoseCellBest& pc, CycleResult& out);
+  void localise(int recognised, PoseCellBest& pc, CycleResult& out);
+  void move_packet_to(int experience, PoseCellBest& pc);
   double tau_of(const Terms& terms) const;
 
   SlamParams params_;
@@ -129,7 +148,10 @@ class VitaSlam {
   TemplateStore store_;
   PoseCells cells_;
   ExperienceMap map_;
+  Localiser localiser_;
   SlamStats stats_;
+  std::optional<double> resume_gap_s_;  // armed by localise_if_moved_for() until odometry comes
+  double cycle_travel_m_ = 0.0;  // odometry distance of the current cycle (the localiser's give-up clock)
   int64_t last_odometry_utime_ = 0;
   bool have_odometry_time_ = false;
   bool localise_only_ = false;  // not serialised: a property of the run, not of the map

@@ -1,0 +1,226 @@
+// Global localisation: hypotheses weighed over cycles, kidnap detection. See localiser.h.
+#include "whiskeye/slam/localiser.h"
+
+#include "binary_io.h"
+#include "whiskeye/slam/experience_map.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace whiskeye::slam {
+
+void load(const ParamNode& n, LocaliserParams& p) {
+  n.get("kidnap_disagreements", p.kidnap_disagreements, 0, 1000);
+  n.get("radius", p.radius, 0.0, 100.0);
+  n.get("heading", p.heading, 0.0, kPi);
+  n.get("commit_score", p.commit_score, 1, 1000);
+  n.get("commit_margin", p.commit_margin, 0, 1000);
+  n.get("max_hypotheses", p.max_hypotheses, 1, 100000);
+  n.get("drop_score", p.drop_score, -1000, 0);
+  n.get("give_up_m", p.give_up_m, 0.0, 1e6);
+  n.get("resume_gap_s", p.resume_gap_s, 0.0, 1e9);
+}
+
+Localiser::Localiser(const LocaliserParams& params) : params_(params) {}
+
+void Localiser::start(bool with_prior, int prior_score) {
+  state_ = LocalisationState::Localising;
+  hyps_.clear();
+  disagreements_ = 0;
+  evidence_below_ = std::numeric_limits<int>::max();
+  localising_m_ = 0.0;
+  if (with_prior) hyps_.push_back({Pose2{}, -1, prior_score, true});
+}
+
+bool Localiser::on_tracking_recognition(bool refused, int recognised_template, int first_new_id,
+                                        const ExperienceMap& map) {
+  if (localising() || recognised_template < 0) return false;
+  if (!refused) {
+    disagreements_ = 0;
+    return false;
+  }
+  const int streak_from = disagreements_ == 0 ? first_new_id : streak_from_;
+  // A disagreement only where the map knows the place the robot thinks it is at (by what it held
+  // before the disagreements began): in a place never mapped, a view that is only like one
+  // elsewhere is aliasing, not a kidnap.
+  if (!map.mapped_near(map.current_pose(), std::max(params_.radius, map.drift_budget()), params_.heading, streak_from)) {
+    return false;
+  }
+  streak_from_ = streak_from;
+  ++disagreements_;
+  if (params_.kidnap_disagreements <= 0 || disagreements_ < params_.kidnap_disagreements) return false;
+  ++kidnaps_detected_;
+  // Odometry was trusted until now: where it says the robot is starts as far ahead as a commit must be.
+  start(true, params_.commit_margin);
+  evidence_below_ = streak_from_;
+  return true;
+}
+
+std::optional<Commit> Localiser::on_localising_cycle(int template_id, double travelled_m, const ExperienceMap& map) {
+  if (!localising()) return std::nullopt;
+  localising_m_ += travelled_m;
+  const Pose2 dr = map.current_pose();
+  if (template_id >= 0) {
+    const std::vector<Experience>& exps = map.experiences();
+    const std::vector<int>& candidates = map.experiences_of(template_id);
+    std::vector<bool> used(candidates.size(), false);
+    for (Hypothesis& h : hyps_) {
+      const Pose2 p = pose_of(h, dr);
+      int best = -1;
+      double dbest = params_.radius;
+      for (size_t k = 0; k < candidates.size(); ++k) {
+        if (candidates[k] >= evidence_below_) continue;
+        const Experience& e = exps[static_cast<size_t>(candidates[k])];
+        const double d = std::hypot(e.pose.x - p.x, e.pose.y - p.y);
+        if (d <= dbest && std::abs(angle_diff(e.pose.theta, p.theta)) <= params_.heading) {
+          best = static_cast<int>(k);
+          dbest = d;
+        }
+      }
+      if (best < 0) {
+        // The map knows this place and what it holds here is not what is seen: evidence against.
+        // A place never mapped says nothing either way.
+        if (map.mapped_near(p, params_.radius, params_.heading, evidence_below_)) --h.score;
+        continue;
+      }
+      used[static_cast<size_t>(best)] = true;
+      ++h.score;
+      // Re-anchored: from here the hypothesis is that experience (its drift so far removed).
+      h.anchor = candidates[static_cast<size_t>(best)];
+      h.correction = compose(exps[static_cast<size_t>(h.anchor)].pose, inverse(dr));
+    }
+    // Two hypotheses re-anchored on one experience are one: the better stays.
+    std::stable_sort(hyps_.begin(), hyps_.end(), [](const Hypothesis& a, const Hypothesis& b) { return a.score > b.score; });
+    std::vector<Hypothesis> kept;
+    kept.reserve(hyps_.size() + candidates.size());
+    for (const Hypothesis& h : hyps_) {
+      if (h.score <= params_.drop_score && !h.prior) continue;
+      const auto twin = h.anchor < 0 ? kept.end() : std::find_if(kept.begin(), kept.end(), [&](const Hypothesis& k) {
+                                                     return k.anchor == h.anchor;
+                                                   });
+      if (twin == kept.end()) {
+        kept.push_back(h);
+      } else {
+        twin->prior = twin->prior || h.prior;  // the same place: the prior is still among the hypotheses
+      }
+    }
+    for (size_t k = 0; k < candidates.size(); ++k) {
+      const int id = candidates[k];
+      if (used[k] || id >= evidence_below_) continue;
+      kept.push_back({compose(exps[static_cast<size_t>(id)].pose, inverse(dr)), id, 1, false});
+    }
+    // Bounded: the best max_hypotheses (stable: among equals the older first, then by experience).
+    std::stable_sort(kept.begin(), kept.end(), [](const Hypothesis& a, const Hypothesis& b) { return a.score > b.score; });
+    if (static_cast<int>(kept.size()) > params_.max_hypotheses) {
+      const auto prior = std::find_if(kept.begin(), kept.end(), [](const Hypothesis& h) { return h.prior; });
+      const auto last = kept.begin() + (params_.max_hypotheses - 1);
+      if (prior > last) std::rotate(last, prior, prior + 1);  // the prior is never crowded out
+      kept.resize(static_cast<size_t>(params_.max_hypotheses));
+    }
+    hyps_ = std::move(kept);
+    if (auto c = commit_if_ahead(map)) return c;
+  }
+  if (localising_m_ >= params_.give_up_m) {
+    const auto prior = std::find_if(hyps_.begin(), hyps_.end(), [](const Hypothesis& h) { return h.prior; });
+    if (prior != hyps_.end()) return commit(*prior, map, true);
+  }
+  return std::nullopt;
+}
+
+std::optional<Commit> Localiser::commit_if_ahead(const ExperienceMap& map) {
+  if (hyps_.empty()) return std::nullopt;
+  const Pose2 dr = map.current_pose();
+  // hyps_ is sorted by score: the first is the best (the older among equals).
+  const Hypothesis& best = hyps_.front();
+  if (best.score < params_.commit_score || best.anchor < 0) return std::nullopt;
+  const Pose2 pb = pose_of(best, dr);
+  int rival = std::numeric_limits<int>::min();
+  for (size_t i = 1; i < hyps_.size(); ++i) {
+    const Pose2 p = pose_of(hyps_[i], dr);
+    if (std::hypot(p.x - pb.x, p.y - pb.y) > params_.radius) rival = std::max(rival, hyps_[i].score);
+  }
+  if (rival != std::numeric_limits<int>::min() && best.score - rival < params_.commit_margin) return std::nullopt;
+  return commit(best, map, false);
+}
+
+Commit Localiser::commit(const Hypothesis& h, const ExperienceMap& map, bool gave_up) {
+  const Pose2 dr = map.current_pose();
+  Commit c;
+  c.gave_up = gave_up;
+  c.experience = h.anchor >= 0 ? h.anchor : map.current_id();
+  const Pose2 here = pose_of(h, dr);
+  c.offset = c.experience >= 0 ? between(map.experiences()[static_cast<size_t>(c.experience)].pose, here) : here;
+  if (!h.prior) {
+    c.retire_from = std::min(evidence_below_, map.size());
+    c.retire_to = map.size();
+  }
+  state_ = LocalisationState::Tracking;
+  hyps_.clear();
+  disagreements_ = 0;
+  localising_m_ = 0.0;
+  ++localisations_;
+  return c;
+}
+
+Pose2 Localiser::best_pose(const ExperienceMap& map) const {
+  const Pose2 dr = map.current_pose();
+  return hyps_.empty() ? dr : pose_of(hyps_.front(), dr);
+}
+
+void Localiser::serialise(std::vector<uint8_t>& out) const {
+  bin::put<uint8_t>(out, static_cast<uint8_t>(state_));
+  bin::put<int32_t>(out, disagreements_);
+  bin::put<int32_t>(out, streak_from_);
+  bin::put<int32_t>(out, evidence_below_);
+  bin::put<double>(out, localising_m_);
+  bin::put<int64_t>(out, kidnaps_detected_);
+  bin::put<int64_t>(out, localisations_);
+  bin::put<uint64_t>(out, hyps_.size());
+  for (const Hypothesis& h : hyps_) {
+    bin::put<double>(out, h.correction.x);
+    bin::put<double>(out, h.correction.y);
+    bin::put<double>(out, h.correction.theta);
+    bin::put<int32_t>(out, h.anchor);
+    bin::put<int32_t>(out, h.score);
+    bin::put<uint8_t>(out, h.prior ? 1 : 0);
+  }
+}
+
+void Localiser::deserialise(const std::vector<uint8_t>& in, size_t& pos, int num_experiences) {
+  Localiser l(params_);
+  const auto state = bin::get<uint8_t>(in, pos);
+  if (state > static_cast<uint8_t>(LocalisationState::Localising)) throw std::runtime_error("checkpoint: bad localisation state");
+  l.state_ = static_cast<LocalisationState>(state);
+  l.disagreements_ = bin::get<int32_t>(in, pos);
+  l.streak_from_ = bin::get<int32_t>(in, pos);
+  l.evidence_below_ = bin::get<int32_t>(in, pos);
+  l.localising_m_ = bin::get<double>(in, pos);
+  l.kidnaps_detected_ = bin::get<int64_t>(in, pos);
+  l.localisations_ = bin::get<int64_t>(in, pos);
+  if (l.disagreements_ < 0 || l.streak_from_ < 0 || l.evidence_below_ < 0 || !std::isfinite(l.localising_m_) || l.localising_m_ < 0.0 || l.kidnaps_detected_ < 0 ||
+      l.localisations_ < 0) {
+    throw std::runtime_error("checkpoint: bad localisation counters");
+  }
+  const auto n = bin::get<uint64_t>(in, pos);
+  if (n > in.size()) throw std::runtime_error("checkpoint: hypothesis count is larger than the data");
+  for (uint64_t i = 0; i < n; ++i) {
+    Hypothesis h;
+    h.correction.x = bin::get<double>(in, pos);
+    h.correction.y = bin::get<double>(in, pos);
+    h.correction.theta = bin::get<double>(in, pos);
+    h.anchor = bin::get<int32_t>(in, pos);
+    h.score = bin::get<int32_t>(in, pos);
+    h.prior = bin::get<uint8_t>(in, pos) != 0;
+    if (!std::isfinite(h.correction.x) || !std::isfinite(h.correction.y) || !std::isfinite(h.correction.theta) ||
+        h.anchor < -1 || h.anchor >= num_experiences) {
+      throw std::runtime_error("checkpoint: hypothesis " + std::to_string(i) + " is not finite or names no experience");
+    }
+    l.hyps_.push_back(h);
+  }
+  *this = std::move(l);
+}
+
+}  // namespace whiskeye::slam
