@@ -1,10 +1,12 @@
 // Strict YAML parameters (see params.h): the only file that includes yaml-cpp.
 #include "whiskeye/common/params.h"
 
+#include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
 #include <cstdint>
+#include <fstream>
 #include <map>
 #include <set>
 #include <sstream>
@@ -39,6 +41,55 @@ void check_no_duplicate_keys(const YAML::Node& node, const std::string& path, co
   }
 }
 
+// A config is written out in full: an anchor (&name) would let an alias (*name) stand for a copy of
+// it, and nested aliases expand exponentially (a few hundred bytes, billions of nodes) in every walk
+// of the tree. Refused before the tree is built, at the first anchor or alias, naming its line;
+// yaml-cpp's event parser reads the text once without expanding anything.
+class NoAnchors final : public YAML::EventHandler {
+ public:
+  explicit NoAnchors(const std::string& source) : source_(source) {}
+  void OnDocumentStart(const YAML::Mark&) override {}
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark& mark, YAML::anchor_t anchor) override { check(mark, anchor); }
+  void OnAlias(const YAML::Mark& mark, YAML::anchor_t) override { refuse(mark, "an alias (*name)"); }
+  void OnScalar(const YAML::Mark& mark, const std::string&, YAML::anchor_t anchor, const std::string&) override {
+    check(mark, anchor);
+  }
+  void OnSequenceStart(const YAML::Mark& mark, const std::string&, YAML::anchor_t anchor,
+                       YAML::EmitterStyle::value) override {
+    check(mark, anchor);
+  }
+  void OnSequenceEnd() override {}
+  void OnMapStart(const YAML::Mark& mark, const std::string&, YAML::anchor_t anchor, YAML::EmitterStyle::value) override {
+    check(mark, anchor);
+  }
+  void OnMapEnd() override {}
+  void OnAnchor(const YAML::Mark& mark, const std::string& name) override { refuse(mark, "an anchor (&" + name + ")"); }
+
+ private:
+  void check(const YAML::Mark& mark, YAML::anchor_t anchor) {
+    if (anchor != YAML::NullAnchor) refuse(mark, "an anchor");
+  }
+  [[noreturn]] void refuse(const YAML::Mark& mark, const std::string& what) {
+    throw ParamError(source_ + ": line " + std::to_string(mark.line + 1) + ": " + what +
+                     ": YAML anchors and aliases are not accepted (write each value out where it is used)");
+  }
+  const std::string& source_;
+};
+
+// The first document of `yaml`, refused if it is not valid YAML or holds an anchor or an alias.
+YAML::Node load_plain_yaml(const std::string& yaml, const std::string& source) {
+  try {
+    std::istringstream in(yaml);
+    YAML::Parser parser(in);
+    NoAnchors handler(source);
+    parser.HandleNextDocument(handler);
+    return YAML::Load(yaml);
+  } catch (const YAML::Exception& e) {
+    throw ParamError(source + ": not valid YAML: " + e.what());
+  }
+}
+
 }  // namespace
 
 struct ParamNode::State {
@@ -56,11 +107,7 @@ ParamNode::ParamNode(std::shared_ptr<State> state, const YAML::Node& node, std::
 ParamNode ParamNode::from_string(const std::string& yaml, const std::string& source) {
   auto state = std::make_shared<State>();
   state->source = source;
-  try {
-    state->root = YAML::Load(yaml);
-  } catch (const YAML::Exception& e) {
-    throw ParamError(source + ": not valid YAML: " + e.what());
-  }
+  state->root = load_plain_yaml(yaml, source);
   if (state->root.IsNull()) state->root = YAML::Node(YAML::NodeType::Map);
   if (!state->root.IsMap()) throw ParamError(source + ": the document must be a map of keys");
   check_no_duplicate_keys(state->root, "", source, 0);
@@ -70,13 +117,11 @@ ParamNode ParamNode::from_string(const std::string& yaml, const std::string& sou
 ParamNode ParamNode::from_file(const std::string& path) {
   auto state = std::make_shared<State>();
   state->source = path;
-  try {
-    state->root = YAML::LoadFile(path);
-  } catch (const YAML::BadFile&) {
-    throw ParamError(path + ": cannot open the file");
-  } catch (const YAML::Exception& e) {
-    throw ParamError(path + ": not valid YAML: " + e.what());
-  }
+  std::ifstream file(path, std::ios::binary);
+  if (!file) throw ParamError(path + ": cannot open the file");
+  std::ostringstream text;
+  text << file.rdbuf();  // an empty file sets text's failbit, and its string is empty: fine
+  state->root = load_plain_yaml(text.str(), path);
   if (state->root.IsNull()) state->root = YAML::Node(YAML::NodeType::Map);
   if (!state->root.IsMap()) throw ParamError(path + ": the document must be a map of keys");
   check_no_duplicate_keys(state->root, "", path, 0);

@@ -7,6 +7,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
+#include <fstream>
 #include <ostream>
 #include <regex>
 #include <string>
@@ -109,6 +111,29 @@ TEST_P(ProgramWithAConfig, AMissingConfigIsOneLineNamingTheFileAndExit2) {
   EXPECT_EQ(lines(out), 1u) << out;
   EXPECT_EQ(out.rfind(GetParam().name + ": ", 0), 0u) << out;
   EXPECT_THAT(out, HasSubstr(kMissing));
+}
+
+// 420 bytes of nested YAML aliases (9^9 scalars expanded): refused at its first anchor, at once.
+TEST_P(ProgramWithAConfig, AConfigWithYamlAliasesIsOneLineNamingItsLineAndExit2EvenForPrintConfig) {
+  const std::string bomb = ::testing::TempDir() + "whiskeye_alias_bomb_" + GetParam().name + ".yaml";
+  {
+    std::ofstream out(bomb);
+    out << "a: &a [x, x, x, x, x, x, x, x, x]\n";
+    for (char c = 'b'; c <= 'i'; ++c) {
+      out << c << ": &" << c << " [*" << static_cast<char>(c - 1);
+      for (int k = 1; k < 9; ++k) out << ", *" << static_cast<char>(c - 1);
+      out << "]\n";
+    }
+  }
+  std::vector<std::string> args = GetParam().missing_config;
+  std::replace(args.begin(), args.end(), std::string(kMissing), bomb);
+  if (GetParam().name != "vita-sim") args.push_back("--print-config");  // vita-sim has no --print-config
+  const auto [status, out] = run(GetParam().exe, args);
+  std::remove(bomb.c_str());
+  EXPECT_EQ(status, 2) << "-1: still expanding after 30 s\n" << out;
+  EXPECT_EQ(lines(out), 1u) << out;
+  EXPECT_EQ(out.rfind(GetParam().name + ": ", 0), 0u) << out;
+  EXPECT_THAT(out, HasSubstr(bomb + ": line 1: an anchor (&a): YAML anchors and aliases are not accepted"));
 }
 
 std::string test_name(const ::testing::TestParamInfo<Program>& info) {

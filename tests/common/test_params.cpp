@@ -217,6 +217,38 @@ TEST(Params, AnOverrideNoLoaderReadsIsAnErrorNamingIt) {
   }
 }
 
+// Nine lists of nine aliases of the list before: 420 bytes that expand to 9^9 scalars.
+std::string alias_bomb() {
+  std::string yaml = "a: &a [x, x, x, x, x, x, x, x, x]\n";
+  for (char c = 'b'; c <= 'i'; ++c) {
+    const char prev = static_cast<char>(c - 1);
+    yaml += std::string(1, c) + ": &" + c + " [";
+    for (int k = 0; k < 9; ++k) yaml += std::string(k ? ", " : "") + "*" + prev;
+    yaml += "]\n";
+  }
+  return yaml;
+}
+
+TEST(Params, AnAnchorOrAnAliasIsRefusedNamingItsLineBeforeAnythingIsExpanded) {
+  EXPECT_THAT(error_of("rate_hz: 10\ncells: &c 30\n"),
+              HasSubstr("test.yaml: line 2: an anchor (&c): YAML anchors and aliases are not accepted"));
+  EXPECT_THAT(error_of("base: &base {inner: 0.1}\nnested:\n  <<: *base\n"), HasSubstr("line 1: an anchor (&base)"));
+  EXPECT_THAT(error_of("nested:\n  - x\n  - &item {a: 1}\n"), HasSubstr("line 3: an anchor (&item)"));
+  EXPECT_THAT(error_of("a: *nothing\n"), HasSubstr("test.yaml: not valid YAML")) << "an alias of no anchor";
+  EXPECT_NO_THROW(ParamNode::from_string("url: http://host/a&b*c\nglob: '*.yaml'\n", "test.yaml"))
+      << "& and * inside a value are plain text";
+
+  const std::string path = whiskeye::testing::scratch_file("params_bomb", ".yaml");
+  std::ofstream(path) << alias_bomb();
+  try {
+    ParamNode::from_file(path);
+    FAIL();
+  } catch (const ParamError& e) {
+    EXPECT_EQ(std::string(e.what()), path + ": line 1: an anchor (&a): YAML anchors and aliases are not accepted "
+                                            "(write each value out where it is used)");
+  }
+}
+
 TEST(Params, FileErrorsNameTheFile) {
   try {
     ParamNode::from_file("/nonexistent/robot.yaml");
