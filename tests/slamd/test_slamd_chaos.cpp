@@ -105,14 +105,7 @@ std::size_t fill_disk(const fs::path& path) {
   return written;
 }
 
-long vm_hwm_kb(int pid) {
-  std::ifstream in("/proc/" + std::to_string(pid) + "/status");
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.rfind("VmHWM:", 0) == 0) return std::stol(line.substr(6));
-  }
-  return -1;
-}
+long vm_hwm_kb(int pid) { return static_cast<long>(testing::proc_status_kb(pid, "VmHWM")); }
 
 // What LCM says (with LCM_DBG=all) it dropped inside a process: a message missing fragments, a
 // fragment out of place. The kernel's drops are counted in SLAM_STATUS; these are not.

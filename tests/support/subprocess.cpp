@@ -106,4 +106,13 @@ std::string Subprocess::output() const {
   return ss.str();
 }
 
+int64_t proc_status_kb(int pid, const std::string& field) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/status");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind(field + ":", 0) == 0) return std::stoll(line.substr(field.size() + 1));
+  }
+  return -1;
+}
+
 }  // namespace whiskeye::testing

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <csignal>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,9 @@ class Subprocess {
   std::string output_path_;
   bool owns_output_ = false;  // a temp file of ours: removed with the process
 };
+
+// A memory field of /proc/PID/status in kB ("VmRSS", "VmHWM"), -1 when it cannot be read.
+int64_t proc_status_kb(int pid, const std::string& field);
 
 // Polls `pred` every 10 ms until true or timeout; returns its last value.
 template <typename Pred>

@@ -1,6 +1,8 @@
 // whiskeye-viewer as shipped: live behind the real lcm-logplayer and a live slamd, the page rendered
 // by headless Chromium (a screenshot kept in the build tree); its HTTP surface against path traversal,
-// too many clients and a client that stops reading; --log with the slider's time; the command line.
+// too many clients and a client that stops reading, clients sending or reading slowly, header floods,
+// many ranges, a foreign Host; --log with the slider's time and a log that gets shorter while served;
+// the command line.
 // Runs inside a private network namespace (NETNS in CMake): LCM over udpm:// reaches nothing outside.
 #include "scratch.h"
 #include "slamd_files.h"
@@ -18,6 +20,7 @@
 #include <gtest/gtest.h>
 #include <httplib.h>
 #include <netinet/in.h>
+#include <poll.h>
 #include <nlohmann/json.hpp>
 #include <sys/socket.h>
 #include <sys/time.h>
@@ -84,6 +87,15 @@ class RawClient {
   ~RawClient() { ::close(fd_); }
   bool connected() const { return connected_; }
   void send(const std::string& request) { EXPECT_EQ(::write(fd_, request.data(), request.size()), static_cast<ssize_t>(request.size())); }
+  // Whether something arrives to be read within `timeout_ms`.
+  bool readable(int timeout_ms) {
+    pollfd p{fd_, POLLIN, 0};
+    return ::poll(&p, 1, timeout_ms) == 1;
+  }
+  // False once the peer has closed or reset the connection (no SIGPIPE).
+  bool try_send(const std::string& bytes) {
+    return ::send(fd_, bytes.data(), bytes.size(), MSG_NOSIGNAL) == static_cast<ssize_t>(bytes.size());
+  }
   // Reads until the peer closes, `until` appears, or the 5 s timeout.
   std::string read(const std::string& until = "") {
     std::string out;
@@ -97,9 +109,10 @@ class RawClient {
     return out;
   }
   // One request, the whole answer (Connection: close).
-  static std::string exchange(int port, const std::string& request_line, const std::string& body = "") {
+  static std::string exchange(int port, const std::string& request_line, const std::string& body = "",
+                              const std::string& headers = "Host: 127.0.0.1\r\n") {
     RawClient c(port);
-    c.send(request_line + "\r\nHost: 127.0.0.1\r\nConnection: close\r\n" +
+    c.send(request_line + "\r\n" + headers + "Connection: close\r\n" +
            (body.empty() ? "" : "Content-Length: " + std::to_string(body.size()) + "\r\n") + "\r\n" + body);
     return c.read();
   }
@@ -464,6 +477,214 @@ TEST_F(ViewerBinary, LogModeShowsTheStateAtTheSlidersTime) {
   EXPECT_THAT(element_text(dom, "event-detail"), HasSubstr("cycle " + std::to_string(out.events.back().cycle) + ":"));
   fs::create_directories(VIEWER_RESULTS_DIR);
   chromium({"--screenshot=" + std::string(VIEWER_RESULTS_DIR) + "/viewer-log.png"}, url);
+  EXPECT_EQ(viewer.stop(10, SIGTERM), 0) << viewer.output();
+}
+
+
+// An LCM log holding one VITA_MAP of `n` experiences (220,000: a snapshot of 4.7 MB).
+std::string write_big_map_log(const fs::path& dir, int n) {
+  const std::string path = (dir / ("map" + std::to_string(n) + ".lcmlog")).string();
+  LogWriterBus log(path);
+  vita_map_t map{};
+  map.mode = vita_pose_t::MODE_VITA;
+  for (int i = 0; i < n; ++i) {
+    experience_t e{};
+    e.id = i;
+    e.x = 0.001 * i;
+    e.y = 0.002 * i;
+    map.experiences.push_back(e);
+  }
+  map.num_experiences = n;
+  map.utime = 1'700'000'000'000'000;
+  log.set_time(map.utime);
+  publish(log, channels::kVitaMap, map);
+  return path;
+}
+
+TEST_F(ViewerBinary, ClientsSendingOrReadingSlowlyHoldBackNoOtherRequest) {
+  const std::string log = write_big_map_log(dir_, 220000);
+  // --max-clients 1: five workers, fewer than the slow clients below.
+  Subprocess viewer({kViewer, "--listen", "127.0.0.1:0", "--log", log, "--max-clients", "1"});
+  const int port = start_viewer(viewer);
+  ASSERT_GT(port, 0);
+  const std::string big = RawClient::exchange(port, "GET /api/snapshot?t=99999999999999999 HTTP/1.1");
+  ASSERT_THAT(big, HasSubstr("HTTP/1.1 200"));
+  ASSERT_GT(big.size(), 4'500'000u) << "the answer must outgrow a socket's largest buffer (net.ipv4.tcp_wmem)";
+
+  // 8 clients asking for that answer and never reading it (2 kB receive buffers); once each has its
+  // first bytes, its answer is made.
+  std::vector<std::unique_ptr<RawClient>> readers;
+  for (int i = 0; i < 8; ++i) {
+    readers.push_back(std::make_unique<RawClient>(port, 2048));
+    readers.back()->send("GET /api/snapshot?t=99999999999999999 HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n");
+  }
+  for (auto& r : readers) ASSERT_TRUE(r->readable(60'000));
+  // 30 clients sending a request one byte every 100 ms.
+  std::vector<std::unique_ptr<RawClient>> senders;
+  for (int i = 0; i < 30; ++i) senders.push_back(std::make_unique<RawClient>(port));
+  const auto opened = std::chrono::steady_clock::now();
+  std::atomic<bool> stop{false};
+  std::thread drip([&] {
+    const std::string request = "GET /status HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Slow: " + std::string(200, 'b');
+    for (std::size_t i = 0; i < request.size() && !stop; ++i) {
+      for (auto& c : senders) c->try_send(request.substr(i, 1));
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+  });
+  // Every other request is answered at once, again and again, while the slow clients go on.
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  json status;
+  for (int i = 0; i < 6; ++i) {
+    const auto asked = std::chrono::steady_clock::now();
+    status = get_json(port, "/status");
+    EXPECT_LT(std::chrono::steady_clock::now() - asked, std::chrono::seconds(1)) << "request " << i;
+    EXPECT_TRUE(status.is_object()) << "request " << i;
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  }
+  const bool in_time = std::chrono::steady_clock::now() - opened < std::chrono::seconds(5);
+  // A request not whole 5 s after its connection opened gets 408 and is closed.
+  const std::string cut = senders.front()->read();
+  stop = true;
+  drip.join();
+  ASSERT_TRUE(in_time) << "the checks above took longer than the slow senders may";
+  ASSERT_TRUE(status.is_object());
+  // The answers the readers do not take wait in the viewer, not in its workers.
+  EXPECT_GT(status["http"]["buffered_bytes"].get<int64_t>(), 0) << status.dump(2);
+  EXPECT_THAT(cut, HasSubstr("HTTP/1.1 408"));
+  EXPECT_TRUE(wait_until([&] { return get_json(port, "/status")["http"]["timed_out"].get<int64_t>() >= 30; }, 10.0))
+      << get_json(port, "/status").dump(2);
+  EXPECT_EQ(viewer.stop(15, SIGTERM), 0) << viewer.output();
+}
+
+TEST_F(ViewerBinary, AFloodOfHeadersIsRefusedWithoutGrowingItsMemory) {
+  Subprocess viewer({kViewer, "--listen", "127.0.0.1:0", "--log", sim_log_});
+  const int port = start_viewer(viewer);
+  ASSERT_GT(port, 0);
+  ASSERT_TRUE(get_json(port, "/status").is_object());
+  const int64_t before = testing::proc_status_kb(viewer.pid(), "VmRSS");
+  // 100 MB of header lines on one connection: refused (431) within the first 32 kB, then closed.
+  RawClient flood(port);
+  flood.try_send("GET / HTTP/1.1\r\nHost: 127.0.0.1\r\n");
+  std::string lines;
+  for (int i = 0; i < 10000; ++i) lines += "X-aaaa: b\r\n";
+  std::size_t sent = 0;
+  while (sent < 100'000'000 && flood.try_send(lines)) sent += lines.size();
+  EXPECT_LT(sent, 100'000'000u) << "the viewer kept reading headers";
+  EXPECT_THAT(flood.read(), HasSubstr("HTTP/1.1 431"));
+  const int64_t after = testing::proc_status_kb(viewer.pid(), "VmRSS");
+  EXPECT_LT(after - before, 8 * 1024) << before << " kB before, " << after << " kB after";
+  // Too many fields, each short: refused too.
+  std::string fields = "Host: 127.0.0.1\r\n";
+  for (int i = 0; i < 150; ++i) fields += "X-" + std::to_string(i) + ": b\r\n";
+  EXPECT_THAT(RawClient::exchange(port, "GET /status HTTP/1.1", "", fields), HasSubstr("HTTP/1.1 431"));
+  // A body it would not read, announced or chunked: refused before it is sent.
+  EXPECT_THAT(RawClient::exchange(port, "GET /status HTTP/1.1", "", "Host: 127.0.0.1\r\nContent-Length: 100000000\r\n"),
+              HasSubstr("HTTP/1.1 413"));
+  EXPECT_THAT(RawClient::exchange(port, "GET /status HTTP/1.1", "", "Host: 127.0.0.1\r\nTransfer-Encoding: chunked\r\n"),
+              HasSubstr("HTTP/1.1 413"));
+  EXPECT_TRUE(get_json(port, "/status").is_object());
+  EXPECT_EQ(viewer.stop(10, SIGTERM), 0) << viewer.output();
+}
+
+TEST_F(ViewerBinary, RangesAreIgnoredAndEveryAnswerIsWhole) {
+  Subprocess viewer({kViewer, "--listen", "127.0.0.1:0", "--log", sim_log_});
+  const int port = start_viewer(viewer);
+  ASSERT_GT(port, 0);
+  const auto body_size = [](const std::string& answer) {
+    const auto at = answer.find("\r\n\r\n");
+    return at == std::string::npos ? std::string::npos : answer.size() - at - 4;
+  };
+  const std::string whole = RawClient::exchange(port, "GET /viewer.js HTTP/1.1");
+  ASSERT_THAT(whole, HasSubstr("HTTP/1.1 200"));
+  // 2,700 ranges of the whole file in an 8 kB request: one copy of it, not 2,700.
+  std::string ranges = "bytes=0-";
+  for (int i = 1; i < 2700; ++i) ranges += ",0-";
+  const std::string many = RawClient::exchange(port, "GET /viewer.js HTTP/1.1", "", "Host: 127.0.0.1\r\nRange: " + ranges + "\r\n");
+  EXPECT_THAT(many, HasSubstr("HTTP/1.1 200"));
+  EXPECT_EQ(body_size(many), body_size(whole));
+  // A range past the end of the camera frame: the whole frame, nothing beyond it.
+  const std::string jpeg = RawClient::exchange(port, "GET /api/camera.jpg?t=99999999999999999 HTTP/1.1");
+  ASSERT_THAT(jpeg, HasSubstr("HTTP/1.1 200"));
+  const std::string past = RawClient::exchange(port, "GET /api/camera.jpg?t=99999999999999999 HTTP/1.1", "",
+                                               "Host: 127.0.0.1\r\nRange: bytes=100000-200000\r\n");
+  EXPECT_THAT(past, HasSubstr("HTTP/1.1 200"));
+  EXPECT_EQ(body_size(past), body_size(jpeg));
+  EXPECT_THAT(past, HasSubstr("Accept-Ranges: none"));
+  EXPECT_EQ(viewer.stop(10, SIGTERM), 0) << viewer.output();
+}
+
+TEST_F(ViewerBinary, AForeignHostIsRefusedAndEveryAddressItServesOnIsPrinted) {
+  const std::string frame = "GET /api/camera.jpg?t=99999999999999999 HTTP/1.1";
+  {
+    Subprocess viewer({kViewer, "--listen", "127.0.0.1:0", "--log", sim_log_});
+    const int port = start_viewer(viewer);
+    ASSERT_GT(port, 0);
+    // A page of another site whose name resolves to 127.0.0.1 (DNS rebinding) reads nothing.
+    for (const std::string& host : std::vector<std::string>{"attacker.example", "attacker.example:" + std::to_string(port),
+                                                            "127.0.0.1.attacker.example", "localhost.attacker.example", "10.1.2.4"}) {
+      for (const std::string& request : {frame, std::string("GET / HTTP/1.1"), std::string("GET /api/snapshot HTTP/1.1")}) {
+        const std::string answer = RawClient::exchange(port, request, "", "Host: " + host + "\r\n");
+        EXPECT_THAT(answer, HasSubstr("HTTP/1.1 403")) << host << " " << request;
+        EXPECT_THAT(answer, Not(HasSubstr("image/jpeg"))) << host;
+      }
+    }
+    EXPECT_THAT(RawClient::exchange(port, frame, "", ""), HasSubstr("HTTP/1.1 400")) << "HTTP/1.1 without a Host";
+    // The names it serves on, with any port (an ssh tunnel may forward another).
+    for (const std::string& host : std::vector<std::string>{"127.0.0.1", "127.0.0.1:" + std::to_string(port), "localhost:9000", "LOCALHOST"}) {
+      EXPECT_THAT(RawClient::exchange(port, frame, "", "Host: " + host + "\r\n"), HasSubstr("HTTP/1.1 200")) << host;
+    }
+    EXPECT_EQ(viewer.stop(10, SIGTERM), 0) << viewer.output();
+  }
+  // --allow-host adds names and addresses, and only those.
+  Subprocess viewer({kViewer, "--listen", "127.0.0.1:0", "--log", sim_log_, "--allow-host", "robot.example",
+                     "--allow-host", "10.1.2.3"});
+  const int port = start_viewer(viewer);
+  ASSERT_GT(port, 0);
+  for (const std::string host : {"robot.example", "robot.example:8080", "10.1.2.3"}) {
+    EXPECT_THAT(RawClient::exchange(port, frame, "", "Host: " + host + "\r\n"), HasSubstr("HTTP/1.1 200")) << host;
+  }
+  EXPECT_THAT(RawClient::exchange(port, frame, "", "Host: 10.1.2.4\r\n"), HasSubstr("HTTP/1.1 403"));
+  EXPECT_EQ(viewer.stop(10, SIGTERM), 0) << viewer.output();
+
+  // Every address: the URLs printed are real ones, never http://0:PORT/.
+  Subprocess any({kViewer, "--listen", "0:0", "--log", sim_log_});
+  const int any_port = start_viewer(any);
+  ASSERT_GT(any_port, 0);
+  EXPECT_THAT(any.output(), Not(HasSubstr("http://0:"))) << any.output();
+  EXPECT_THAT(any.output(), Not(HasSubstr("http://0.0.0.0:"))) << any.output();
+  EXPECT_THAT(RawClient::exchange(any_port, frame, "", "Host: 127.0.0.1\r\n"), HasSubstr("HTTP/1.1 200"));
+  EXPECT_THAT(RawClient::exchange(any_port, frame, "", "Host: attacker.example\r\n"), HasSubstr("HTTP/1.1 403"));
+  EXPECT_EQ(any.stop(10, SIGTERM), 0) << any.output();
+}
+
+TEST_F(ViewerBinary, ALogThatGetsShorterWhileServedIsAnErrorOnThePageNotACrash) {
+  // The ordinary workflow: a log served, then a replay written into the same file.
+  const std::string served = (dir_ / "served.lcmlog").string();
+  fs::copy_file(sim_log_, served, fs::copy_options::overwrite_existing);
+  Subprocess viewer({kViewer, "--listen", "127.0.0.1:0", "--log", served});
+  const int port = start_viewer(viewer);
+  ASSERT_GT(port, 0);
+  const json status = get_json(port, "/status");
+  const int64_t start = status["log"]["start"], end = status["log"]["end"];
+  ASSERT_TRUE(get_json(port, "/api/snapshot?t=" + std::to_string(end))["camera"].is_object());
+  {
+    Subprocess replay({SLAMD_EXE, "--replay", sim_log_, "--output", served, "--config", kConfig});
+    ASSERT_EQ(replay.wait(120), 0) << replay.output();
+  }
+  ASSERT_LT(fs::file_size(served), fs::file_size(sim_log_) / 10);
+  // Back to the start (every message read again) and the camera frame: an error saying why.
+  for (const std::string& path : std::vector<std::string>{"/api/snapshot?t=" + std::to_string(start),
+                                                          "/api/camera.jpg?t=" + std::to_string(start), "/api/snapshot"}) {
+    const std::string answer = RawClient::exchange(port, "GET " + path + " HTTP/1.1");
+    EXPECT_THAT(answer, HasSubstr("HTTP/1.1 503")) << path;
+    EXPECT_THAT(answer, HasSubstr("got shorter under the viewer")) << path;
+  }
+  const json after = get_json(port, "/status");
+  ASSERT_TRUE(after.is_object()) << "the viewer is still serving";
+  EXPECT_THAT(after["log"]["error"].get<std::string>(), HasSubstr("served.lcmlog got shorter"));
+  // The page says so.
+  const std::string dom = chromium({"--dump-dom"}, "http://127.0.0.1:" + std::to_string(port) + "/");
+  EXPECT_THAT(element_text(dom, "connection"), HasSubstr("got shorter under the viewer")) << dom.substr(0, 2000);
   EXPECT_EQ(viewer.stop(10, SIGTERM), 0) << viewer.output();
 }
 

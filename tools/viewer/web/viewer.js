@@ -264,6 +264,20 @@ function live() {
   es.onerror = () => { $('connection').textContent = 'reconnecting…'; $('connection').className = 'pill lost'; };
 }
 
+// The whole state from the server; an answer that is not the state (a log that changed under the
+// viewer) is thrown with the server's reason, which the page shows.
+async function snapshot(url) {
+  const res = await fetch(url);
+  const body = await res.json().catch(() => ({}));
+  if (!res.ok) throw new Error(body.error || `HTTP ${res.status}`);
+  return body;
+}
+
+function showError(e) {
+  $('connection').textContent = 'error: ' + (e && e.message ? e.message : e);
+  $('connection').className = 'pill lost';
+}
+
 // ---- a log: the slider asks the server for the state at a time ----
 let fetching = false, pending = null;
 async function showAt(t) {
@@ -272,10 +286,12 @@ async function showAt(t) {
   if (fetching) { pending = sliderT; return; }
   fetching = true;
   try {
-    const snap = await (await fetch(`/api/snapshot?t=${sliderT}`)).json();
+    const snap = await snapshot(`/api/snapshot?t=${sliderT}`);
     S.v = -1;
     take(snap);
     renderAll();
+  } catch (e) {
+    showError(e);
   } finally {
     fetching = false;
     if (pending !== null) { const p = pending; pending = null; showAt(p); }
@@ -306,7 +322,7 @@ function logMode(server) {
 }
 
 async function start() {
-  const snap = await (await fetch('/api/snapshot')).json();
+  const snap = await snapshot('/api/snapshot');
   mode = snap.server.mode;
   $('mode').textContent = mode === 'log' ? 'log ' + snap.server.log.file.split('/').pop() : 'live';
   $('mode').className = 'pill ' + mode;
@@ -320,4 +336,4 @@ async function start() {
   }
 }
 
-start().catch((e) => { $('connection').textContent = 'error: ' + e; $('connection').className = 'pill lost'; });
+start().catch(showError);

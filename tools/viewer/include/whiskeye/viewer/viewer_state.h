@@ -90,6 +90,8 @@ class ViewerState {
   // an empty object when nothing changed, else with "v" as in snapshot(). The trail is included at most every trail_period_us of
   // `now_us` (it is the largest section and changes with every pose).
   nlohmann::json delta(Cursor& cursor, int64_t now_us) const;
+  // One section, as snapshot() has it (/status takes two without building the map's).
+  nlohmann::json section(Section s) const;
   const Versions& versions() const { return versions_; }
   uint64_t version() const { return version_counter_; }
 
@@ -108,7 +110,6 @@ class ViewerState {
   void bump(Section s) { versions_[s] = ++version_counter_; }
   void received(std::string_view channel, int64_t recv_utime);
   void decode_error(std::string_view channel, const std::string& reason);
-  nlohmann::json section(Section s) const;
   nlohmann::json map_json() const;
   nlohmann::json pose_json() const;
   nlohmann::json trail_json() const;
