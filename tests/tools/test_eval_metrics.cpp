@@ -615,5 +615,177 @@ TEST(ExperienceIndex, AnswersAsFindForEveryIdTheFirstOfRepeatedIdsAndNothingForA
   EXPECT_EQ(index.find(5), nullptr);
 }
 
+// ---- Localisation after a kidnap, and in a session on a saved map ----
+
+// A 1 m circle, one lap in 20 s (lap 2π m), facing outwards; kidnapped at 25 s half a lap ahead. In
+// the first lap an experience every second: experience i was created where the robot is at i s (and
+// again at i + 20 s, and, after the kidnap, at i - 10 s).
+class Localising : public ::testing::Test {
+ protected:
+  static Pose2 truth(double t_s) { return t_s < 25.0 ? circle_pose(t_s, 20.0) : circle_pose(t_s + 10.0, 20.0); }
+  void SetUp() override {
+    for (int64_t u = 0; u <= 31 * kSecond; u += 20'000) in_.ground_truth.push_back({u, truth(u * 1e-6)});
+    in_.kidnaps.push_back({25 * kSecond, truth(25.0)});
+    for (int i = 0; i < 20; ++i) {
+      in_.map.experiences.push_back({i, Pose2{}, i * kSecond, false});
+      ev(i, EventType::kNewExperience, i - 1, i);
+    }
+    for (int j = 0; j < 5; ++j) ev(20 + j, EventType::kRelocalise, j == 0 ? 19 : j - 1, j);  // the second lap: correct
+    // Kidnapped at 25 s: slamd goes on from experience 4 as if nothing happened.
+    ev(26, EventType::kSameExperience, 4, 4);
+    ev(27, EventType::kNewExperience, 4, 100);
+    ev(28, EventType::kNewExperience, 100, 101);
+  }
+  void ev(double t_s, EventType type, int32_t from, int32_t to, bool localising = false) {
+    in_.events.push_back({std::llround(t_s * kSecond), ++cycle_, type, from, to, localising});
+  }
+  LocalisationReport run(const EvalParams& params = {}) {
+    const EvalResult r = evaluate(in_, params);
+    EXPECT_TRUE(r.localisation.has_value());
+    return r.localisation.value_or(LocalisationReport{});
+  }
+  EvalInput in_;
+  int64_t cycle_ = 0;
+};
+
+TEST_F(Localising, AKidnapRecoveredWithoutAFalseLocalisation) {
+  ev(29, EventType::kNewExperience, 101, 102);
+  ev(30, EventType::kRelocalise, 102, 0);    // at 30 s the robot is where experience 0 was made: correct
+  ev(30.5, EventType::kSameExperience, 0, 0);  // half a second on: a neighbour, 0.157 m / 9 deg
+  const LocalisationReport r = run();
+  ASSERT_EQ(r.instants.size(), 1u);
+  const Localisation& l = r.instants[0];
+  EXPECT_EQ(l.instant.kind, LocalisationInstant::Kind::kKidnap);
+  EXPECT_EQ(l.instant.utime, 25 * kSecond);
+  ASSERT_TRUE(l.localised);
+  EXPECT_EQ(l.localised_utime, 30 * kSecond);
+  EXPECT_EQ(l.localised_by.to_id, 0);
+  EXPECT_NEAR(*l.time_s, 5.0, 1e-9);
+  EXPECT_NEAR(*l.distance_m, 5.0 * kTwoPi / 20.0, 1e-3) << "the jump itself is no travel";
+  ASSERT_TRUE(r.lap_length_m.has_value());
+  EXPECT_NEAR(*r.lap_length_m, kTwoPi, 1e-3) << "path per 2 pi of heading, not across the kidnap";
+  EXPECT_NEAR(*l.laps, 0.25, 1e-3);
+  EXPECT_EQ(l.false_localisations, 0u) << "staying on experience 4 after the kidnap is no closure";
+  const double neighbour = 2.0 * std::sin(kTwoPi / 20.0 * 0.5 / 2.0);
+  EXPECT_EQ(l.lem_events, 2u);
+  EXPECT_NEAR(*l.lem_after_m, 0.5 * neighbour, 1e-6);
+  EXPECT_NEAR(*l.lem_after_angle_rad, 0.5 * kTwoPi / 40.0, 1e-6);
+  EXPECT_EQ(r.localised, 1u);
+  EXPECT_EQ(r.within_one_lap, 1u);
+  EXPECT_NEAR(*r.worst_laps, 0.25, 1e-3);
+  EXPECT_EQ(r.false_localisations, 0u);
+}
+
+TEST_F(Localising, AFalseLocalisationBeforeTheRecoveryIsCountedOnce) {
+  ev(29, EventType::kRelocalise, 101, 5);     // the robot is where 19 was made: 5 is 1.6 m off
+  ev(29.5, EventType::kSameExperience, 5, 5);  // still there: the same false claim
+  ev(30, EventType::kRelocalise, 5, 0);
+  const LocalisationReport r = run();
+  const Localisation& l = r.instants.at(0);
+  ASSERT_TRUE(l.localised);
+  EXPECT_EQ(l.localised_utime, 30 * kSecond);
+  EXPECT_EQ(l.false_localisations, 1u);
+  ASSERT_EQ(l.false_events.size(), 1u);
+  EXPECT_EQ(l.false_events[0].to_id, 5);
+  EXPECT_NEAR(l.false_events[0].position_error_m, 2.0 * std::sin(kTwoPi * 6.0 / 20.0 / 2.0), 1e-6);
+  EXPECT_EQ(r.with_false_localisation, 1u);
+  EXPECT_EQ(r.false_localisations_max, 1u);
+}
+
+TEST_F(Localising, ACorrectLocalisationFollowedByAFalseOneIsNotTheRecovery) {
+  ev(29, EventType::kRelocalise, 101, 19);   // correct ...
+  ev(30, EventType::kRelocalise, 19, 7);     // ... then a false closure: the first did not hold
+  const LocalisationReport never = run();
+  EXPECT_FALSE(never.instants.at(0).localised);
+  EXPECT_FALSE(never.instants.at(0).time_s.has_value());
+  EXPECT_EQ(never.instants.at(0).false_localisations, 1u);
+  EXPECT_EQ(never.localised, 0u);
+  EXPECT_EQ(never.within_two_laps, 0u);
+  EXPECT_FALSE(never.worst_laps.has_value()) << "never localised: no worst figure";
+  EXPECT_FALSE(never.lem_after_m.has_value());
+  ev(31, EventType::kRelocalise, 7, 1);      // at 31 s the robot is where 1 was made
+  const Localisation& l = run().instants.at(0);
+  ASSERT_TRUE(l.localised);
+  EXPECT_EQ(l.localised_utime, 31 * kSecond);
+  EXPECT_EQ(l.false_localisations, 1u);
+}
+
+TEST_F(Localising, ANewExperienceOrAnEventReportingLocalisingIsNoClaim) {
+  ev(29, EventType::kSameExperience, 101, 7, true);  // a hypothesis while LOCALISING: no claim
+  ev(30, EventType::kNewExperience, 101, 102);
+  const Localisation& l = run().instants.at(0);
+  EXPECT_FALSE(l.localised) << "a new experience is made where the robot is: it recognises nothing";
+  EXPECT_EQ(l.false_localisations, 0u);
+}
+
+TEST_F(Localising, TimeReportingLocalisingIsCountedFromTheStateSamples) {
+  for (int64_t u = 24 * kSecond; u <= 31 * kSecond; u += 100'000) {
+    in_.states.push_back({u, u >= 26 * kSecond && u < 29'500'000});
+  }
+  ev(30, EventType::kRelocalise, 101, 0);
+  const LocalisationReport r = run();
+  EXPECT_NEAR(r.instants.at(0).localising_s, 3.5, 1e-9);
+  EXPECT_NEAR(r.localising_s, 3.5, 1e-9);
+  in_.states.clear();  // without VITA_POSE: VITA_EVENT's state, held until the next event
+  in_.events.back().localising = false;
+  in_.events[in_.events.size() - 2].localising = true;  // 28 s: LOCALISING until the event at 30 s
+  EXPECT_NEAR(run().instants.at(0).localising_s, 2.0, 1e-9);
+}
+
+TEST(LocalisingSession, ASessionOnASavedMapIsJudgedByTheFirstSessionsTruth) {
+  // Session 1 made experiences 0..19 around the circle in its first 20 s; session 2 starts 1000 s
+  // later where experience 7 was made.
+  EvalInput in;
+  in.map_ground_truth = circle_gt(20.0, 20.0);
+  for (int i = 0; i < 20; ++i) in.map.experiences.push_back({i, Pose2{}, i * kSecond, false});
+  constexpr int64_t k2 = 1000 * kSecond;
+  for (int64_t u = 0; u <= 10 * kSecond; u += 20'000) in.ground_truth.push_back({k2 + u, circle_pose(u * 1e-6 + 7.0, 20.0)});
+  int64_t cycle = 0;
+  const auto ev = [&](double t_s, EventType type, int32_t from, int32_t to, bool localising) {
+    in.events.push_back({k2 + std::llround(t_s * kSecond), ++cycle, type, from, to, localising});
+    in.states.push_back({k2 + std::llround(t_s * kSecond), localising});
+  };
+  in.states.push_back({k2, true});
+  ev(1, EventType::kSameExperience, 19, 19, true);  // where the map was saved: LOCALISING
+  ev(2, EventType::kSameExperience, 19, 19, false);  // staying there is no claim
+  ev(3, EventType::kRelocalise, 19, 10, false);     // at 3 s the robot is where 10 was made
+  ev(4, EventType::kRelocalise, 10, 11, false);
+  const LocalisationReport r = *evaluate(in, EvalParams{}).localisation;
+  ASSERT_EQ(r.instants.size(), 1u) << "detected: the map is older than the log";
+  const Localisation& l = r.instants[0];
+  EXPECT_EQ(l.instant.kind, LocalisationInstant::Kind::kSessionStart);
+  EXPECT_EQ(l.instant.utime, k2);
+  ASSERT_TRUE(l.localised);
+  EXPECT_EQ(l.localised_utime, k2 + 3 * kSecond);
+  EXPECT_NEAR(*l.distance_m, 3.0 * kTwoPi / 20.0, 1e-3);
+  EXPECT_NEAR(l.localising_s, 1.0 + 1.0, 1e-9) << "from the start to the event at 2 s";
+  EXPECT_EQ(l.false_localisations, 0u);
+  EXPECT_NEAR(*l.lem_after_m, 0.0, 1e-9);
+  // Without the first session's truth the map's experiences cannot be judged: never localised.
+  EvalInput blind = in;
+  blind.map_ground_truth.clear();
+  const Localisation& b = evaluate(blind, EvalParams{}).localisation->instants.at(0);
+  EXPECT_FALSE(b.localised);
+  EXPECT_EQ(b.unjudged_events, 2u);
+  // The first session's truth judges the rest of the metrics too, and nothing lies between the sessions.
+  const EvalResult full = evaluate(in, EvalParams{});
+  EXPECT_TRUE(full.alignment.valid);
+  EXPECT_EQ(full.exm.relocalisations_total, 2u);
+  EXPECT_EQ(full.exm.correct_total, 2u);
+  EXPECT_FALSE(truth_of(in).at(500 * kSecond).has_value());
+  EXPECT_TRUE(truth_of(in).at(10 * kSecond).has_value());
+}
+
+TEST(GroundTruth, IsNeverInterpolatedAcrossAKidnap) {
+  const GroundTruth gt({{0, {0.0, 0.0, 0.0}}, {100, {2.0, 0.0, 1.0}}, {200, {2.0, 1.0, 1.0}}}, {50});
+  EXPECT_EQ(gt.at(49)->x, 0.0) << "before the jump: the sample before it";
+  EXPECT_EQ(gt.at(50)->x, 2.0) << "at and after it: the sample after it";
+  EXPECT_NEAR(gt.at(150)->y, 0.5, 1e-12) << "elsewhere interpolated";
+  EXPECT_TRUE(gt.breaks_between(0, 100));
+  EXPECT_FALSE(gt.breaks_between(50, 200));
+  EXPECT_NEAR(gt.path_length(0, 200), 1.0, 1e-12) << "the jump is no travel";
+  EXPECT_NEAR(gt.path_length(50, 150), 0.5, 1e-12);
+}
+
 }  // namespace
 }  // namespace whiskeye::eval

@@ -83,6 +83,13 @@ struct Script {
   // The re-localisation of 35 s made 0.3 s later (0.094 m and 5.4 deg past where experience 15 was
   // made): wrong by the paper's thresholds, within the false-closure tolerance.
   bool neighbour_miss = false;
+  // A kidnap at 25 s half a revolution ahead (SIM_FAULT, GROUND_TRUTH jumps): slamd stays on its
+  // experience reporting LOCALISING until 28 s, re-localises correctly at 28 and 29 s, falsely onto
+  // experience 3 at 30 s, and correctly from 31 s on.
+  bool kidnap = false;
+  // A second session: every time 1000 s (50 revolutions) later, the final map's experiences created
+  // in the first session (1000 s earlier).
+  bool second_session = false;
 };
 
 // Two revolutions. Experiences 0..19 are created once a second in the first; in the second the
@@ -92,6 +99,11 @@ struct Script {
 // Expected: ARR = 19/20, ARCR = 18/19, valid 20/21, LEM 0, EnM = 0.2² / 20 links; the wrong one a
 // false closure 1.78 m off; experiences 18 deg (0.3129 m) apart.
 void write_log(const std::string& path, const Script& script) {
+  const int64_t start = kStart + (script.second_session ? 1000 * kSecond : 0);
+  const auto truth = [&](int64_t t) { return script.kidnap && t >= start + 25 * kSecond ? gt_at(t + 10 * kSecond) : gt_at(t); };
+  const auto localising = [&](int64_t t) {
+    return script.kidnap && t >= start + 25 * kSecond && t < start + 28 * kSecond;
+  };
   LogWriterBus bus(path);
   vita_map_t map{};
   map.mode = script.mode;
@@ -99,11 +111,12 @@ void write_log(const std::string& path, const Script& script) {
   auto publish_event = [&](int64_t t, int8_t type, int32_t to) {
     vita_event_t e{};
     e.utime = t;
-    e.cycle = (t - kStart) / (kSecond / 2);
+    e.cycle = (t - start) / (kSecond / 2);
     e.type = type;
     e.from_id = current;
     e.to_id = to;
     e.mode = script.mode;
+    e.localisation = localising(t) ? vita_pose_t::LOCALISATION_LOCALISING : vita_pose_t::LOCALISATION_TRACKING;
     bus.set_time(t);
     publish(bus, "VITA_EVENT", e);
     template_match_t m{};  // the cycle's match: the target's template, new with a new experience
@@ -124,17 +137,27 @@ void write_log(const std::string& path, const Script& script) {
     publish_event(t, vita_event_t::NEW_EXPERIENCE, id);
   };
   for (int64_t u = 0; u <= static_cast<int64_t>(2 * kPeriodS) * kSecond; u += 20'000) {  // 50 Hz
-    const int64_t t = kStart + u;
+    const int64_t t = start + u;
     bus.set_time(t);
     pose2d_t gt{};
-    set_pose(gt, t, gt_at(t));
+    set_pose(gt, t, truth(t));
     if (script.ground_truth) publish(bus, "GROUND_TRUTH", gt);
     if (u % 100'000 == 0) {  // 10 Hz pose estimate, exact in the map frame
       vita_pose_t vp{};
       set_pose(vp, t + script.pose_delay_us, map_pose(t));
       vp.experience_id = current;
       vp.mode = script.mode;
+      vp.localisation = localising(t) ? vita_pose_t::LOCALISATION_LOCALISING : vita_pose_t::LOCALISATION_TRACKING;
       publish(bus, "VITA_POSE", vp);
+    }
+    if (script.kidnap && u == 25 * kSecond) {
+      sim_fault_t f{};
+      f.utime = t;
+      f.kind = sim_fault_t::KIND_KIDNAP;
+      f.active = true;
+      f.index = -1;
+      set_pose(f, t, truth(t));
+      publish(bus, "SIM_FAULT", f);
     }
     if (u % kSecond == 0 && script.board_fault && (u == 10 * kSecond || u == 25 * kSecond)) {
       sim_fault_t f{};
@@ -150,11 +173,14 @@ void write_log(const std::string& path, const Script& script) {
         add_experience(t, static_cast<int32_t>(s));
       } else if (s == 35 && script.relocalise && script.neighbour_miss) {
         // published 0.3 s later, below
+      } else if (script.kidnap && (s == 26 || s == 27)) {
+        publish_event(t, vita_event_t::SAME_EXPERIENCE, current);
       } else if (s > 20 && s < 40 && script.relocalise) {
-        publish_event(t, vita_event_t::RELOCALISE, s == 30 ? 3 : static_cast<int32_t>(s - 20));
+        const int64_t place = script.kidnap && s > 25 ? (s + 10) % 20 : s - 20;  // where the robot is
+        publish_event(t, vita_event_t::RELOCALISE, s == 30 ? 3 : static_cast<int32_t>(place));
       } else if (s > 20 && s < 40) {
         add_experience(t, static_cast<int32_t>(s + 100));  // never recognises a place: no loop closure
-      } else if (s == 40) {
+      } else if (s == 40 && !script.kidnap && !script.second_session) {  // 0.31 m past where 19 was made
         publish_event(t, vita_event_t::SAME_EXPERIENCE, current);
       }
       if (s == 10) {  // an early, partial map that must not be the one evaluated
@@ -171,10 +197,13 @@ void write_log(const std::string& path, const Script& script) {
     }
     if (u == 0) publish(bus, "SOMETHING_ELSE", gt);  // other channels are ignored
   }
-  map.utime = kStart + static_cast<int64_t>(2 * kPeriodS) * kSecond;
+  map.utime = start + static_cast<int64_t>(2 * kPeriodS) * kSecond;
   map.num_experiences = static_cast<int32_t>(map.experiences.size());
   map.num_links = static_cast<int32_t>(map.links.size());
   map.current_experience_id = current;
+  if (script.second_session) {
+    for (experience_t& e : map.experiences) e.utime_created -= 1000 * kSecond;
+  }
   bus.set_time(map.utime);
   publish(bus, "VITA_MAP", map);
 }
@@ -405,7 +434,7 @@ TEST_F(VitaEvalBinary, AttributesEachCycleToTheSimulatedFaultsActiveThen) {
   int with = 0, without = 0;
   while (std::getline(csv, line)) {
     const double t = std::stod(line.substr(line.find(',') + 1));
-    const bool listed = line.size() > 15 && line.substr(line.size() - 15) == "board_offline 2";
+    const bool listed = line.find(",board_offline 2,") != std::string::npos;
     if (t >= 10.0 - 1e-6 && t < 25.0 - 1e-6) {
       EXPECT_TRUE(listed) << line;
       ++with;
@@ -444,6 +473,92 @@ TEST_F(VitaEvalBinary, ADamagedLogIsEvaluatedFromWhatCanBeReadAndTheDamageReport
   // An undamaged log says so with null.
   ASSERT_EQ(run_vita_eval("--input " + file("vita.lcmlog") + " --json " + file("out2.json"), file("stdout2.txt")), 0);
   EXPECT_TRUE(nlohmann::json::parse(read_text(file("out2.json")))["runs"][0]["log_damage"].is_null());
+}
+
+TEST_F(VitaEvalBinary, MeasuresTheRecoveryFromAKidnapInTheTableTheJsonTheTraceAndAPlot) {
+  Script script;
+  script.kidnap = true;
+  write_log(file("vita.lcmlog"), script);
+  const std::string outputs = " --json " + file("m.json") + " --plots " + file("plots") + " --trace " + file("trace");
+  ASSERT_EQ(run_vita_eval("--input " + file("vita.lcmlog") + outputs, file("stdout.txt")), 0) << read_text(file("stdout.txt"));
+  const nlohmann::json j = nlohmann::json::parse(read_text(file("m.json")));
+  const nlohmann::json& loc = j["runs"][0]["localisation"];
+  ASSERT_TRUE(loc.is_object()) << j["runs"][0].dump(2);
+  EXPECT_NEAR(loc["lap_length_m"].get<double>(), kTwoPi, 1e-3);
+  ASSERT_EQ(loc["instants"].size(), 1u);
+  const nlohmann::json& k = loc["instants"][0];
+  EXPECT_EQ(k["kind"], "kidnap");
+  EXPECT_EQ(k["utime"], kStart + 25 * kSecond);
+  EXPECT_NEAR(k["t_s"].get<double>(), 25.0, 1e-9);
+  EXPECT_EQ(k["localised"], true) << "the correct one at 28 s did not hold: the false one at 30 s followed";
+  EXPECT_EQ(k["localised_utime"], kStart + 31 * kSecond);
+  EXPECT_EQ(k["localised_to_id"], 1);
+  EXPECT_NEAR(k["time_to_localise_s"].get<double>(), 6.0, 1e-9);
+  EXPECT_NEAR(k["distance_to_localise_m"].get<double>(), 6.0 * kTwoPi / kPeriodS, 1e-3);
+  EXPECT_NEAR(k["laps_to_localise"].get<double>(), 0.3, 1e-3);
+  EXPECT_EQ(k["false_localisations"], 1);
+  EXPECT_NEAR(k["false_localisation_events"][0]["position_error_m"].get<double>(), 2.0 * std::sin(3.0 * kPi / 20.0), 1e-4);
+  EXPECT_NEAR(k["localising_s"].get<double>(), 3.0, 1e-9);
+  EXPECT_NEAR(k["lem_after_m"].get<double>(), 0.0, 1e-9);
+  EXPECT_EQ(k["lem_after_events"], 9);
+  EXPECT_EQ(loc["summary"]["within_one_lap"], 1);
+  EXPECT_EQ(loc["summary"]["false_localisations"], 1);
+  EXPECT_TRUE(j["runs"][0]["faults"].empty()) << "a kidnap is an instant, not a fault that is active";
+  const std::string table = read_text(file("stdout.txt"));
+  EXPECT_NE(table.find("kidnap at 25.000 s: localised after 6.00 s, 1.88 m (0.30 laps) onto experience 1"),
+            std::string::npos)
+      << table;
+  EXPECT_NE(table.find("<=1 lap"), std::string::npos) << table;
+  const std::string trace = read_text(file("trace/vita_trace.csv"));
+  EXPECT_NE(trace.find(",active_faults,localisation,localisation_marks\n"), std::string::npos);
+  EXPECT_NE(trace.find(",26.000,same,5,5,"), std::string::npos) << "staying on the experience of 25 s";
+  const auto row = [&](const std::string& key) {
+    const std::size_t at = trace.find(key);
+    return at == std::string::npos ? std::string() : trace.substr(at, trace.find('\n', at) - at);
+  };
+  EXPECT_NE(row(",26.000,same,").find(",localising,kidnap"), std::string::npos) << row(",26.000,same,");
+  EXPECT_NE(row(",30.000,relocalise,").find(",tracking,false_localisation"), std::string::npos) << row(",30.000,");
+  EXPECT_NE(row(",31.000,relocalise,").find(",tracking,localised"), std::string::npos) << row(",31.000,");
+  const cv::Mat png = cv::imread(file("plots/vita_localisation.png"));
+  ASSERT_FALSE(png.empty());
+  EXPECT_TRUE(std::filesystem::exists(file("plots/vita_localisation.svg")));
+  EXPECT_GT(count_colour(png, 40, 160, 40), 50);    // the first correct localisation (green)
+  EXPECT_GT(count_colour(png, 40, 40, 220), 20);    // the false one (red)
+  EXPECT_GT(count_colour(png, 120, 220, 255), 100);  // the LOCALISING stretch (band)
+}
+
+TEST_F(VitaEvalBinary, ASecondSessionIsJudgedByTheFirstSessionsTruthAndAClockThatOverlapsItIsRefused) {
+  write_log(file("session1.lcmlog"), Script{});
+  Script second;
+  second.second_session = true;
+  write_log(file("session2.lcmlog"), second);
+  ASSERT_EQ(run_vita_eval("--input " + file("session2.lcmlog") + " --map-truth " + file("session1.lcmlog") + " --json " +
+                              file("m.json"),
+                          file("stdout.txt")),
+            0)
+      << read_text(file("stdout.txt"));
+  const nlohmann::json j = nlohmann::json::parse(read_text(file("m.json")));
+  const nlohmann::json& k = j["runs"][0]["localisation"]["instants"].at(0);
+  EXPECT_EQ(k["kind"], "session_start") << "detected: the map is older than the log";
+  EXPECT_EQ(k["utime"], kStart + 1000 * kSecond);
+  EXPECT_EQ(k["localised"], true);
+  EXPECT_EQ(k["localised_utime"], kStart + 1031 * kSecond);
+  EXPECT_EQ(k["false_localisations"], 1);
+  EXPECT_NEAR(k["laps_to_localise"].get<double>(), 1.55, 1e-3);
+  EXPECT_TRUE(j["runs"][0]["alignment"]["valid"]) << "the first experience, made in session 1, is on its truth";
+  // Without the first session's truth: nothing to judge the map by, and a line says so.
+  ASSERT_EQ(run_vita_eval("--input " + file("session2.lcmlog") + " --json " + file("blind.json"), file("blind.txt")), 0);
+  EXPECT_NE(read_text(file("blind.txt")).find("(--map-truth)"), std::string::npos) << read_text(file("blind.txt"));
+  const nlohmann::json blind = nlohmann::json::parse(read_text(file("blind.json")));
+  EXPECT_EQ(blind["runs"][0]["localisation"]["instants"][0]["localised"], false);
+  // The same clock in both sessions: refused with one line.
+  EXPECT_EQ(WEXITSTATUS(run_vita_eval("--input " + file("session1.lcmlog") + " --map-truth " + file("session1.lcmlog"),
+                                      file("overlap.txt"))),
+            1);
+  const std::string err = read_text(file("overlap.txt"));
+  EXPECT_EQ(err.rfind("vita-eval: --map-truth ", 0), 0u) << err;
+  EXPECT_NE(err.find("overlaps"), std::string::npos) << err;
+  EXPECT_EQ(count(err, "\n"), 1) << err;
 }
 
 TEST_F(VitaEvalBinary, PrintsOneRowPerInputAndNullArcrWithoutReLocalisations) {

@@ -57,6 +57,7 @@ LoadedRun load_run(const std::string& path) {
       vita_pose_t m{};
       if (!decode_counted(ev, m, run)) continue;
       run.input.estimate.push_back({m.utime, {m.x, m.y, m.theta}});
+      run.input.states.push_back({m.utime, m.localisation == vita_pose_t::LOCALISATION_LOCALISING});
       pose_mode = m.mode;
     } else if (ev.channel == channels::kVitaEvent) {
       vita_event_t m{};
@@ -70,7 +71,8 @@ LoadedRun load_run(const std::string& path) {
         ++run.decode_errors[ev.channel];  // an event type this contract does not know
         continue;
       }
-      run.input.events.push_back({m.utime, m.cycle, type, m.from_id, m.to_id});
+      run.input.events.push_back(
+          {m.utime, m.cycle, type, m.from_id, m.to_id, m.localisation == vita_pose_t::LOCALISATION_LOCALISING});
     } else if (ev.channel == channels::kVitaMap) {
       vita_map_t m{};
       if (!decode_counted(ev, m, run)) continue;
@@ -84,7 +86,11 @@ LoadedRun load_run(const std::string& path) {
     } else if (ev.channel == channels::kSimFault) {
       sim_fault_t m{};
       if (!decode_counted(ev, m, run)) continue;
-      run.input.faults.push_back({m.utime, fault_name(m), m.active != 0});
+      if (m.kind == sim_fault_t::KIND_KIDNAP) {
+        run.input.kidnaps.push_back({m.utime, {m.x, m.y, m.theta}});  // an instant, not a fault that ends
+      } else {
+        run.input.faults.push_back({m.utime, fault_name(m), m.active != 0});
+      }
     } else if (ev.channel == channels::kGroundTruth) {
       pose2d_t m{};
       if (!decode_counted(ev, m, run)) continue;
@@ -102,6 +108,19 @@ LoadedRun load_run(const std::string& path) {
   run.mode = mode_name(last_map.mode);
   if (run.mode == "unknown" && pose_mode) run.mode = mode_name(*pose_mode);
   return run;
+}
+
+std::vector<PoseSample> load_ground_truth(const std::string& path) {
+  LogReader reader(path, LogReader::Access::kStreamed);
+  LogEvent ev;
+  std::vector<PoseSample> out;
+  while (reader.next(ev)) {
+    if (ev.channel != channels::kGroundTruth) continue;
+    pose2d_t m{};
+    if (decode_message(std::span<const uint8_t>(ev.data), m)) out.push_back({m.utime, {m.x, m.y, m.theta}});
+  }
+  if (out.empty()) throw std::runtime_error(path + ": no GROUND_TRUTH messages");
+  return out;
 }
 
 }  // namespace whiskeye::eval

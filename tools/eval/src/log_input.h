@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <map>
 #include <string>
+#include <vector>
 
 namespace whiskeye::eval {
 
@@ -23,5 +24,10 @@ struct LoadedRun {
 // `input.ground_truth` empty. A damaged log (a corrupt event, a cut-off end) is evaluated from the
 // events that could be read, and `log_damage` says what was skipped.
 LoadedRun load_run(const std::string& path);
+
+// Every GROUND_TRUTH sample of a log (vita-sim's, or a slamd output log that copied them): the truth
+// of the session that made a saved map. Throws std::runtime_error with a one-line reason if the file
+// cannot be read or has none.
+std::vector<PoseSample> load_ground_truth(const std::string& path);
 
 }  // namespace whiskeye::eval

@@ -28,7 +28,9 @@ const MapExperience* ExperienceIndex::find(int32_t id) const {
   return it == by_id_.end() ? nullptr : it->second;
 }
 
-GroundTruth::GroundTruth(std::vector<PoseSample> samples) : samples_(std::move(samples)) {
+GroundTruth::GroundTruth(std::vector<PoseSample> samples, std::vector<int64_t> jumps)
+    : samples_(std::move(samples)), jumps_(std::move(jumps)) {
+  std::sort(jumps_.begin(), jumps_.end());
   std::stable_sort(samples_.begin(), samples_.end(),
                    [](const PoseSample& a, const PoseSample& b) { return a.utime < b.utime; });
   // Keep the last of equal-time samples: the newest publication is the simulator's final word.
@@ -44,6 +46,57 @@ GroundTruth::GroundTruth(std::vector<PoseSample> samples) : samples_(std::move(s
   samples_ = std::move(unique);
 }
 
+namespace {
+
+std::vector<PoseSample> concatenated(const std::vector<PoseSample>& a, const std::vector<PoseSample>& b) {
+  std::vector<PoseSample> out = a;
+  out.insert(out.end(), b.begin(), b.end());
+  return out;
+}
+
+int64_t last_utime(const std::vector<PoseSample>& v) {
+  int64_t t = std::numeric_limits<int64_t>::min();
+  for (const PoseSample& s : v) t = std::max(t, s.utime);
+  return t;
+}
+
+}  // namespace
+
+GroundTruth::GroundTruth(const std::vector<PoseSample>& samples, const std::vector<PoseSample>& earlier_session,
+                         std::vector<int64_t> jumps)
+    : GroundTruth(concatenated(samples, earlier_session), std::move(jumps)) {
+  // The session that ends first ends before the other begins: no truth in between.
+  if (!samples.empty() && !earlier_session.empty()) {
+    hole_after_.push_back(std::min(last_utime(samples), last_utime(earlier_session)));
+  }
+}
+
+bool GroundTruth::breaks_between(int64_t from, int64_t to) const {
+  const auto j = std::upper_bound(jumps_.begin(), jumps_.end(), from);
+  if (j != jumps_.end() && *j <= to) return true;
+  for (const int64_t h : hole_after_) {
+    if (from <= h && to > h) return true;
+  }
+  return false;
+}
+
+double GroundTruth::path_length(int64_t from, int64_t to) const {
+  if (samples_.empty() || to <= from) return 0.0;
+  double d = 0.0;
+  std::optional<Pose2> prev = at(from);
+  int64_t prev_utime = from;
+  const auto step = [&](const Pose2& p, int64_t utime) {
+    if (prev && !breaks_between(prev_utime, utime)) d += std::hypot(p.x - prev->x, p.y - prev->y);
+    prev = p;
+    prev_utime = utime;
+  };
+  auto it = std::upper_bound(samples_.begin(), samples_.end(), from,
+                             [](int64_t t, const PoseSample& s) { return t < s.utime; });
+  for (; it != samples_.end() && it->utime < to; ++it) step(it->pose, it->utime);
+  if (const std::optional<Pose2> end = at(to)) step(*end, to);
+  return d;
+}
+
 std::optional<Pose2> GroundTruth::at(int64_t utime) const {
   if (samples_.empty() || utime < samples_.front().utime || utime > samples_.back().utime) {
     return std::nullopt;
@@ -52,6 +105,11 @@ std::optional<Pose2> GroundTruth::at(int64_t utime) const {
                                    [](const PoseSample& s, int64_t t) { return s.utime < t; });
   if (hi->utime == utime) return hi->pose;
   const auto lo = hi - 1;
+  if (std::find(hole_after_.begin(), hole_after_.end(), lo->utime) != hole_after_.end()) return std::nullopt;
+  // Never a pose between the place before a kidnap and the place after it.
+  if (const auto j = std::upper_bound(jumps_.begin(), jumps_.end(), lo->utime); j != jumps_.end() && *j <= hi->utime) {
+    return utime < *j ? lo->pose : hi->pose;
+  }
   const double f = static_cast<double>(utime - lo->utime) / static_cast<double>(hi->utime - lo->utime);
   return interpolate(lo->pose, hi->pose, f);
 }
@@ -134,6 +192,16 @@ std::vector<ExperienceEvent> in_time_order(std::vector<ExperienceEvent> events) 
   return events;
 }
 
+// Creation time of every experience: utime_created in the final map, else its NEW_EXPERIENCE event.
+std::map<int32_t, int64_t> creation_times(const std::vector<ExperienceEvent>& sorted_events, const ExperienceMap& map) {
+  std::map<int32_t, int64_t> created;
+  for (const MapExperience& e : map.experiences) created[e.id] = e.utime_created;
+  for (const ExperienceEvent& e : sorted_events) {
+    if (e.type == EventType::kNewExperience && e.to_id != e.from_id) created.emplace(e.to_id, e.utime);
+  }
+  return created;
+}
+
 class StatsAccumulator {
  public:
   void add(double abs_error) {
@@ -197,6 +265,7 @@ std::optional<int64_t> base_set_end(const GroundTruth& gt, const EvalParams& par
     const double dy = s.pose.y - params.centre_y;
     if (std::hypot(dx, dy) < 0.01) continue;
     const double phi = std::atan2(dy, dx);
+    if (prev_phi && gt.breaks_between(prev_utime, s.utime)) prev_phi.reset();  // a kidnap is no travel
     if (prev_phi) {
       const double next = travelled + angle_diff(phi, *prev_phi);
       if (std::abs(next) >= kTwoPi) {
@@ -240,6 +309,22 @@ double median(std::vector<double> v) {
   return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
+// An event that puts the robot at experience e.to_id, judged by the truth now and where the target
+// was created (alignment-free).
+Relocalisation judge_claim(const ExperienceEvent& e, const Pose2& gt_now, const Pose2& gt_target, const EvalParams& params) {
+  Relocalisation rl;
+  rl.utime = e.utime;
+  rl.from_id = e.from_id;
+  rl.to_id = e.to_id;
+  rl.gt_now = gt_now;
+  rl.gt_target_created = gt_target;
+  rl.position_error_m = std::hypot(gt_now.x - gt_target.x, gt_now.y - gt_target.y);
+  rl.angle_error_rad = std::abs(angle_diff(gt_now.theta, gt_target.theta));
+  rl.closure = classify_closure(rl.position_error_m, rl.angle_error_rad, params);
+  rl.correct = rl.closure == Closure::kCorrect;
+  return rl;
+}
+
 // ExM over `events`, the base set ending at `end` (none: everything is base); `origin` is the time
 // base_end_s counts from. With ground truth every re-localisation is judged; without (`gt` empty),
 // the events are only counted and nothing that judges is set.
@@ -249,11 +334,7 @@ ExmResult exm(const std::vector<ExperienceEvent>& events_in, const ExperienceMap
   const bool judge = !gt.empty();
   const std::vector<ExperienceEvent> events = in_time_order(events_in);
 
-  std::map<int32_t, int64_t> created;
-  for (const MapExperience& e : map.experiences) created[e.id] = e.utime_created;
-  for (const ExperienceEvent& e : events) {
-    if (e.type == EventType::kNewExperience && e.to_id != e.from_id) created.emplace(e.to_id, e.utime);
-  }
+  const std::map<int32_t, int64_t> created = creation_times(events, map);
 
   r.base_end_found = end.has_value();
   r.base_end_utime = end.value_or(std::numeric_limits<int64_t>::max());
@@ -309,16 +390,7 @@ ExmResult exm(const std::vector<ExperienceEvent>& events_in, const ExperienceMap
       ++r.events_outside_gt;
       continue;
     }
-    Relocalisation rl;
-    rl.utime = e.utime;
-    rl.from_id = e.from_id;
-    rl.to_id = e.to_id;
-    rl.gt_now = *gt_now;
-    rl.gt_target_created = *gt_target;
-    rl.position_error_m = std::hypot(gt_now->x - gt_target->x, gt_now->y - gt_target->y);
-    rl.angle_error_rad = std::abs(angle_diff(gt_now->theta, gt_target->theta));
-    rl.closure = classify_closure(rl.position_error_m, rl.angle_error_rad, params);
-    rl.correct = rl.closure == Closure::kCorrect;
+    Relocalisation rl = judge_claim(e, *gt_now, *gt_target, params);
     rl.after_base_set = after;
     ++r.relocalisations_total;
     if (rl.correct) ++r.correct_total;
@@ -406,7 +478,203 @@ EnmResult compute_enm(const ExperienceMap& map, const GroundTruth& gt) {
   return r;
 }
 
+// ---- Localisation ----
+
+const char* instant_name(LocalisationInstant::Kind kind) {
+  return kind == LocalisationInstant::Kind::kKidnap ? "kidnap" : "session_start";
+}
+
+std::optional<double> lap_length(const GroundTruth& gt) {
+  double distance = 0.0;
+  double turned = 0.0;
+  const std::vector<PoseSample>& v = gt.samples();
+  for (std::size_t i = 1; i < v.size(); ++i) {
+    if (gt.breaks_between(v[i - 1].utime, v[i].utime)) continue;
+    distance += std::hypot(v[i].pose.x - v[i - 1].pose.x, v[i].pose.y - v[i - 1].pose.y);
+    turned += std::abs(angle_diff(v[i].pose.theta, v[i - 1].pose.theta));
+  }
+  if (turned < kPi) return std::nullopt;
+  return kTwoPi * distance / turned;
+}
+
+namespace {
+
+// Seconds the state was LOCALISING in [from, to): each sample holds until the next one (the last
+// until `to`).
+double localising_seconds(const std::vector<StateSample>& sorted, int64_t from, int64_t to) {
+  int64_t total = 0;
+  for (std::size_t i = 0; i < sorted.size(); ++i) {
+    if (!sorted[i].localising) continue;
+    const int64_t a = std::max(sorted[i].utime, from);
+    const int64_t b = std::min(i + 1 < sorted.size() ? sorted[i + 1].utime : to, to);
+    if (b > a) total += b - a;
+  }
+  return static_cast<double>(total) * 1e-6;
+}
+
+// One event of a window judged as a claim of where the robot is.
+struct Claim {
+  ExperienceEvent event;
+  Relocalisation judged;
+  bool known_before = false;  // its target was created at or before the instant
+};
+
+}  // namespace
+
+LocalisationReport compute_localisation(const std::vector<ExperienceEvent>& events_in, const ExperienceMap& map,
+                                        const GroundTruth& truth, const GroundTruth& own,
+                                        std::vector<LocalisationInstant> instants,
+                                        const std::vector<StateSample>& states_in, const EvalParams& params) {
+  LocalisationReport report;
+  const std::vector<ExperienceEvent> events = in_time_order(events_in);
+  const std::map<int32_t, int64_t> created = creation_times(events, map);
+  std::vector<StateSample> states = states_in;
+  if (states.empty()) {
+    for (const ExperienceEvent& e : events) states.push_back({e.utime, e.localising});
+  }
+  std::stable_sort(states.begin(), states.end(), [](const StateSample& a, const StateSample& b) { return a.utime < b.utime; });
+  std::stable_sort(instants.begin(), instants.end(),
+                   [](const LocalisationInstant& a, const LocalisationInstant& b) { return a.utime < b.utime; });
+  int64_t log_end = own.empty() ? std::numeric_limits<int64_t>::min() : own.end_utime();
+  if (!events.empty()) log_end = std::max(log_end, events.back().utime);
+  if (!states.empty()) log_end = std::max(log_end, states.back().utime);
+  report.lap_length_m = lap_length(own);
+
+  StatsAccumulator lem_all;
+  for (std::size_t k = 0; k < instants.size(); ++k) {
+    Localisation loc;
+    loc.instant = instants[k];
+    const int64_t t0 = loc.instant.utime;
+    loc.window_end_utime = k + 1 < instants.size() ? instants[k + 1].utime : std::max(log_end, t0);
+    loc.gt_at = own.at(t0);
+    // The experience current at the instant: staying on it is not a claim.
+    int32_t stale = -1;
+    const auto first_after = std::upper_bound(events.begin(), events.end(), t0,
+                                              [](int64_t t, const ExperienceEvent& e) { return t < e.utime; });
+    if (first_after != events.begin()) {
+      stale = std::prev(first_after)->to_id;
+    } else if (first_after != events.end()) {
+      stale = first_after->from_id;
+    }
+    std::vector<Claim> claims;
+    const bool last = k + 1 == instants.size();  // its window includes the log's last event
+    for (auto it = first_after; it != events.end() && (it->utime < loc.window_end_utime ||
+                                                       (last && it->utime == loc.window_end_utime));
+         ++it) {
+      const ExperienceEvent& e = *it;
+      if (e.type == EventType::kNewExperience || e.localising) continue;
+      if (e.to_id == stale && (e.type == EventType::kSameExperience || e.to_id == e.from_id)) continue;
+      const auto target = created.find(e.to_id);
+      const std::optional<Pose2> now = truth.at(e.utime);
+      const std::optional<Pose2> then =
+          target != created.end() && target->second <= e.utime ? truth.at(target->second) : std::nullopt;
+      if (!now || !then) {
+        ++loc.unjudged_events;
+        continue;
+      }
+      claims.push_back({e, judge_claim(e, *now, *then, params), target->second <= t0});
+    }
+    loc.judged_events = claims.size();
+    std::size_t after_last_false = 0;
+    for (std::size_t i = 0; i < claims.size(); ++i) {
+      if (claims[i].judged.closure == Closure::kFalse) after_last_false = i + 1;
+    }
+    std::size_t localised_at = claims.size();
+    for (std::size_t i = after_last_false; i < claims.size(); ++i) {
+      if (claims[i].judged.correct && claims[i].known_before) {
+        localised_at = i;
+        break;
+      }
+    }
+    int32_t last_false_target = -1;
+    for (std::size_t i = 0; i < localised_at; ++i) {
+      const Relocalisation& r = claims[i].judged;
+      if (r.closure != Closure::kFalse) {
+        last_false_target = -1;
+        continue;
+      }
+      if (r.to_id != last_false_target) {
+        ++loc.false_localisations;
+        loc.false_events.push_back(r);
+      }
+      last_false_target = r.to_id;
+    }
+    loc.localising_s = localising_seconds(states, t0, loc.window_end_utime);
+    if (localised_at < claims.size()) {
+      const Claim& c = claims[localised_at];
+      loc.localised = true;
+      loc.localised_utime = c.event.utime;
+      loc.localised_by = c.event;
+      loc.gt_localised = c.judged.gt_now;
+      loc.gt_target_created = c.judged.gt_target_created;
+      loc.position_error_m = c.judged.position_error_m;
+      loc.angle_error_rad = c.judged.angle_error_rad;
+      loc.time_s = utime_delta_seconds(t0, c.event.utime);
+      loc.distance_m = own.path_length(t0, c.event.utime);
+      if (report.lap_length_m) loc.laps = *loc.distance_m / *report.lap_length_m;
+      StatsAccumulator pos;
+      StatsAccumulator ori;
+      for (std::size_t i = localised_at; i < claims.size(); ++i) {
+        pos.add(claims[i].judged.position_error_m);
+        ori.add(claims[i].judged.angle_error_rad);
+        lem_all.add(claims[i].judged.position_error_m);
+      }
+      loc.lem_events = claims.size() - localised_at;
+      loc.lem_after_m = pos.stats().mean_abs;
+      loc.lem_after_angle_rad = ori.stats().mean_abs;
+      report.lem_events += loc.lem_events;
+    }
+    report.instants.push_back(std::move(loc));
+  }
+  bool all_laps = !report.instants.empty();
+  for (const Localisation& l : report.instants) {
+    report.localised += l.localised;
+    report.within_one_lap += l.laps && *l.laps <= 1.0;
+    report.within_two_laps += l.laps && *l.laps <= 2.0;
+    if (l.laps) {
+      report.worst_laps = std::max(report.worst_laps.value_or(0.0), *l.laps);
+    } else {
+      all_laps = false;
+    }
+    report.false_localisations += l.false_localisations;
+    report.false_localisations_max = std::max(report.false_localisations_max, l.false_localisations);
+    report.with_false_localisation += l.false_localisations > 0;
+    report.localising_s += l.localising_s;
+  }
+  if (!all_laps) report.worst_laps.reset();
+  if (report.lem_events > 0) report.lem_after_m = lem_all.stats().mean_abs;
+  return report;
+}
+
 // ---- Everything ----
+
+namespace {
+
+std::vector<int64_t> kidnap_utimes(const EvalInput& input) {
+  std::vector<int64_t> out;
+  for (const PoseSample& k : input.kidnaps) out.push_back(k.utime);
+  return out;
+}
+
+}  // namespace
+
+GroundTruth truth_of(const EvalInput& input) {
+  if (input.map_ground_truth.empty()) return GroundTruth(input.ground_truth, kidnap_utimes(input));
+  return GroundTruth(input.ground_truth, input.map_ground_truth, kidnap_utimes(input));
+}
+
+std::vector<LocalisationInstant> localisation_instants(const EvalInput& input, const EvalParams& params) {
+  std::vector<LocalisationInstant> out;
+  if (input.ground_truth.empty()) return out;
+  const int64_t start = GroundTruth(input.ground_truth).begin_utime();
+  bool session = params.session_start;
+  for (const MapExperience& e : input.map.experiences) session = session || e.utime_created < start;
+  if (session) out.push_back({LocalisationInstant::Kind::kSessionStart, start});
+  for (const PoseSample& k : input.kidnaps) out.push_back({LocalisationInstant::Kind::kKidnap, k.utime});
+  std::stable_sort(out.begin(), out.end(),
+                   [](const LocalisationInstant& a, const LocalisationInstant& b) { return a.utime < b.utime; });
+  return out;
+}
 
 int64_t run_start_utime(const EvalInput& input) {
   if (!input.ground_truth.empty()) return GroundTruth(input.ground_truth).begin_utime();
@@ -431,26 +699,45 @@ EvalResult evaluate(const EvalInput& input, const EvalParams& params) {
     r.exm = count_exm_without_truth(input.events, input.map, params, run_start_utime(input));
     return r;
   }
-  const GroundTruth gt(input.ground_truth);
+  // This log's truth decides the base set and the distances; the map's session's too judges.
+  const GroundTruth own(input.ground_truth, kidnap_utimes(input));
+  const GroundTruth gt = truth_of(input);
   r.alignment = align_by_first_experience(input.map, gt);
   r.best_fit = align_best_fit(input.estimate, gt);
   if (r.alignment.valid) r.lem = compute_lem(input.estimate, gt, r.alignment.T_world_map);
   if (r.best_fit.valid) r.lem_best_fit = compute_lem(input.estimate, gt, r.best_fit.T_world_map);
-  r.exm = compute_exm(input.events, input.map, gt, params);
+  r.exm = exm(input.events, input.map, gt, params, base_set_end(own, params), own.begin_utime());
   r.enm = compute_enm(input.map, gt);
+  const std::vector<LocalisationInstant> instants = localisation_instants(input, params);
+  if (!instants.empty()) {
+    r.localisation = compute_localisation(input.events, input.map, gt, own, instants, input.states, params);
+  }
   return r;
 }
 
 // ---- Per-cycle trace ----
 
-std::vector<CycleTrace> trace_cycles(const EvalInput& input, const ExmResult& exm) {
-  const GroundTruth gt(input.ground_truth);
+std::vector<CycleTrace> trace_cycles(const EvalInput& input, const ExmResult& exm,
+                                     const LocalisationReport* localisation) {
+  const GroundTruth gt = truth_of(input);
   const int64_t start = run_start_utime(input);
   const std::vector<ExperienceEvent> events = in_time_order(input.events);
   std::map<std::pair<int64_t, int32_t>, const Relocalisation*> relocs;
   for (const Relocalisation& r : exm.relocalisations) relocs[{r.utime, r.to_id}] = &r;
   std::map<int64_t, const TemplateMatch*> matches;
   for (const TemplateMatch& m : input.matches) matches[m.cycle] = &m;
+  // The localisation metric's marks, by (utime, to_id) of the event they mark; an instant marks the
+  // first event after it.
+  std::map<std::pair<int64_t, int32_t>, std::vector<std::string>> marks;
+  if (localisation != nullptr) {
+    for (const Localisation& l : localisation->instants) {
+      const auto first = std::upper_bound(events.begin(), events.end(), l.instant.utime,
+                                          [](int64_t t, const ExperienceEvent& e) { return t < e.utime; });
+      if (first != events.end()) marks[{first->utime, first->to_id}].push_back(instant_name(l.instant.kind));
+      for (const Relocalisation& f : l.false_events) marks[{f.utime, f.to_id}].push_back("false_localisation");
+      if (l.localised) marks[{l.localised_by.utime, l.localised_by.to_id}].push_back("localised");
+    }
+  }
 
   std::vector<CycleTrace> out;
   out.reserve(events.size());
@@ -476,6 +763,10 @@ std::vector<CycleTrace> trace_cycles(const EvalInput& input, const ExmResult& ex
     }
     const auto m = matches.find(e.cycle);
     if (m != matches.end()) row.match = *m->second;
+    if (const auto k = marks.find({e.utime, e.to_id}); k != marks.end()) {
+      row.localisation_marks = std::move(k->second);
+      marks.erase(k);  // on one event only
+    }
     out.push_back(std::move(row));
   }
   return out;

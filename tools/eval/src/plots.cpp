@@ -20,6 +20,9 @@ const Rgb kGreen{40, 160, 40};      // correct re-localisation
 const Rgb kAmber{235, 150, 0};      // neighbour miss: wrong by the paper, within the false-closure tolerance
 const Rgb kRed{220, 40, 40};        // false closure
 const Rgb kMagenta{190, 0, 190};    // re-localisation, correctness unknown (no ground truth)
+const Rgb kSearching{120, 60, 170}; // the path driven before the first correct localisation
+const Rgb kLocalisingBand{255, 220, 120};  // under the path while the run reported LOCALISING
+const Rgb kLocalisedPath{150, 210, 150};   // the path driven after the first correct localisation
 const Rgb kBlack{0, 0, 0};
 const Rgb kWall{105, 105, 105};
 const Rgb kSolid{80, 80, 80};
@@ -81,11 +84,34 @@ void draw_world(FigurePanel& panel, const sim::World& world) {
   }
 }
 
+// This log's ground truth in [from, to], one polyline per stretch between kidnaps.
+std::vector<std::vector<Xy>> truth_path(const GroundTruth& gt, int64_t from, int64_t to) {
+  std::vector<std::vector<Xy>> out(1);
+  int64_t prev = from;
+  const auto add = [&](const Pose2& p, int64_t utime) {
+    if (!out.back().empty() && gt.breaks_between(prev, utime)) out.emplace_back();
+    out.back().push_back(at(p));
+    prev = utime;
+  };
+  if (const auto p = gt.at(from)) add(*p, from);
+  for (const PoseSample& s : gt.samples()) {
+    if (s.utime > from && s.utime < to) add(s.pose, s.utime);
+  }
+  if (const auto p = gt.at(to)) add(*p, to);
+  return out;
+}
+
+GroundTruth own_truth(const EvalInput& input) {
+  std::vector<int64_t> jumps;
+  for (const PoseSample& k : input.kidnaps) jumps.push_back(k.utime);
+  return GroundTruth(input.ground_truth, jumps);
+}
+
 void draw_ground_truth(FigurePanel& panel, const EvalInput& input) {
-  const GroundTruth gt(input.ground_truth);  // sorted, one sample per time
-  std::vector<Xy> pts;
-  for (const PoseSample& s : gt.samples()) pts.push_back(at(s.pose));
-  panel.polyline(std::move(pts), kGrey, 2, "ground-truth");
+  const GroundTruth gt = own_truth(input);  // sorted, one sample per time, broken at the kidnaps
+  for (std::vector<Xy>& pts : truth_path(gt, gt.begin_utime(), gt.end_utime())) {
+    panel.polyline(std::move(pts), kGrey, 2, "ground-truth");
+  }
 }
 
 void draw_experience_map(FigurePanel& panel, const EvalInput& input, const Pose2& T) {
@@ -179,6 +205,79 @@ void closure_legend(Figure& fig, LegendEntry::Kind kind, double size, const std:
   std::snprintf(text, sizeof text, "false closure: beyond %g m or %g deg (%zu)", p.false_closure_position_m,
                 rad_to_deg(p.false_closure_angle_rad), n[2]);
   fig.legend({kind, kRed, size, text});
+}
+
+// When the run reported LOCALISING within [from, to): VITA_POSE's state held until its next sample,
+// else VITA_EVENT's.
+std::vector<std::pair<int64_t, int64_t>> localising_spans(const EvalInput& input, int64_t from, int64_t to) {
+  std::vector<StateSample> states = input.states;
+  if (states.empty()) {
+    for (const ExperienceEvent& e : input.events) states.push_back({e.utime, e.localising});
+  }
+  std::stable_sort(states.begin(), states.end(), [](const StateSample& a, const StateSample& b) { return a.utime < b.utime; });
+  std::vector<std::pair<int64_t, int64_t>> spans;
+  for (std::size_t i = 0; i < states.size(); ++i) {
+    if (!states[i].localising) continue;
+    const int64_t a = std::max(states[i].utime, from);
+    const int64_t b = std::min(i + 1 < states.size() ? states[i + 1].utime : to, to);
+    if (b <= a) continue;
+    if (!spans.empty() && spans.back().second == a) {
+      spans.back().second = b;
+    } else {
+      spans.emplace_back(a, b);
+    }
+  }
+  return spans;
+}
+
+// One panel per localisation instant: where the robot was put down (or started), the path it drove
+// while it had not found where it was, the stretches it reported LOCALISING, every false
+// localisation, and the first correct one.
+void draw_localisation(FigurePanel& panel, const EvalInput& input, const Localisation& l) {
+  const GroundTruth gt = own_truth(input);
+  const int64_t t0 = l.instant.utime;
+  const int64_t found = l.localised ? l.localised_utime : l.window_end_utime;
+  for (const auto& [a, b] : localising_spans(input, t0, l.window_end_utime)) {
+    for (std::vector<Xy>& pts : truth_path(gt, a, b)) panel.polyline(std::move(pts), kLocalisingBand, 12, "localising");
+  }
+  // After the localisation the path often goes round again: drawn under the search, which matters.
+  if (l.localised) {
+    for (std::vector<Xy>& pts : truth_path(gt, found, l.window_end_utime)) {
+      panel.polyline(std::move(pts), kLocalisedPath, 2, "localised-path");
+    }
+  }
+  for (std::vector<Xy>& pts : truth_path(gt, t0, found)) panel.polyline(std::move(pts), kSearching, 4, "searching");
+  if (l.instant.kind == LocalisationInstant::Kind::kKidnap && l.gt_at) {
+    if (const auto before = gt.at(t0 - 1)) {
+      panel.polyline({at(*before), at(*l.gt_at)}, kBlack, 1, "kidnap");
+      panel.marker(at(*before), 6, kBlack, false, "kidnap-from");
+    }
+  }
+  if (l.gt_at) panel.marker(at(*l.gt_at), 6, kBlack, true, "put-down");
+  for (const Relocalisation& f : l.false_events) {
+    panel.polyline({at(f.gt_now), at(f.gt_target_created)}, kRed, 2, "false-localisation");
+    panel.marker(at(f.gt_target_created), 5, kRed, false, "false-localisation-target");
+  }
+  if (l.localised) {
+    panel.polyline({at(l.gt_localised), at(l.gt_target_created)}, kGreen, 2, "localisation");
+    panel.marker(at(l.gt_target_created), 6, kGreen, false, "localisation-target");
+    panel.marker(at(l.gt_localised), 9, kGreen, true, "localised");
+  }
+  panel.set_frame("world frame (ground truth)");
+}
+
+std::string localisation_title(const Localisation& l, int64_t origin) {
+  char buf[200];
+  const double t = seconds(origin, l.instant.utime);
+  const char* what = l.instant.kind == LocalisationInstant::Kind::kKidnap ? "kidnap" : "session start";
+  if (l.localised) {
+    std::snprintf(buf, sizeof buf, "%s at %.1f s: localised after %.2f m (%s laps), %.1f s; %zu false", what, t,
+                  *l.distance_m, l.laps ? (std::to_string(std::lround(*l.laps * 100) / 100.0).substr(0, 4)).c_str() : "n/a",
+                  *l.time_s, l.false_localisations);
+  } else {
+    std::snprintf(buf, sizeof buf, "%s at %.1f s: NEVER localised; %zu false", what, t, l.false_localisations);
+  }
+  return buf;
 }
 
 std::vector<std::string> write(const Figure& fig, const std::string& base) {
@@ -336,6 +435,27 @@ std::vector<std::string> plot_run(const std::string& dir, const PlotRun& run, co
       fig.legend({LegendEntry::Kind::Ring, kMagenta, 7, "the target experience (final map)"});
     }
     keep(write(fig, base + "_relocalisations"));
+  }
+
+  if (result.localisation && !result.localisation->instants.empty()) {  // Kidnaps and session starts.
+    const int64_t origin = run_start_utime(input);
+    Figure fig(run.label + ": localisation after each kidnap or session start");
+    for (const Localisation& l : result.localisation->instants) {
+      FigurePanel& panel = fig.add_panel(localisation_title(l, origin));
+      if (scene.world != nullptr) draw_world(panel, *scene.world);
+      draw_ground_truth(panel, input);
+      draw_localisation(panel, input, l);
+    }
+    world_legend(fig, scene);
+    fig.legend({LegendEntry::Kind::Line, kGrey, 2, "ground truth"});
+    fig.legend({LegendEntry::Kind::Ring, kBlack, 6, "kidnap: picked up (ring), put down (dot); or the session's start"});
+    fig.legend({LegendEntry::Kind::Line, kSearching, 3, "driven before the first correct localisation"});
+    fig.legend({LegendEntry::Kind::Line, kLocalisingBand, 12, "slamd reported LOCALISING"});
+    fig.legend({LegendEntry::Kind::Line, kRed, 2, "false localisation: to where its target was made"});
+    fig.legend({LegendEntry::Kind::Dot, kGreen, 9, "first correct localisation (and its target, ring)"});
+    fig.legend({LegendEntry::Kind::Line, kLocalisedPath, 2, "driven after it"});
+    fig.share_axes(true);
+    keep(write(fig, base + "_localisation"));
   }
   return written;
 }

@@ -1,6 +1,8 @@
 // Formats the metrics as a Table-I-like table and as JSON (undefined values: "n/a" / null).
 #include "report.h"
 
+#include "whiskeye/common/utime.h"
+
 #include <cstdio>
 #include <sstream>
 
@@ -42,12 +44,17 @@ std::string pad(const std::string& s, std::size_t width) {
   return s + std::string(cps < width ? width - cps : 0, ' ');
 }
 
-std::string row(const std::vector<std::string>& cells) {
-  static const std::size_t widths[] = {22, 9, 8, 8, 8, 30, 30};
+std::string padded_row(const std::vector<std::string>& cells, const std::vector<std::size_t>& widths) {
   std::string out;
   for (std::size_t i = 0; i < cells.size(); ++i) out += pad(cells[i], widths[i]) + (i + 1 < cells.size() ? " " : "");
   while (!out.empty() && out.back() == ' ') out.pop_back();
   return out + "\n";
+}
+
+std::string row(const std::vector<std::string>& cells) { return padded_row(cells, {22, 9, 8, 8, 8, 30, 30}); }
+
+std::string localisation_row(const std::vector<std::string>& cells) {
+  return padded_row(cells, {22, 9, 10, 8, 9, 7, 9, 11, 10});
 }
 
 nlohmann::json opt_json(const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); }
@@ -123,6 +130,85 @@ nlohmann::json exm_json(const ExmResult& x, bool judged) {
           {"relocalisations", judging(relocs)}};
 }
 
+nlohmann::json localisation_json(const std::optional<LocalisationReport>& report, int64_t origin) {
+  if (!report) return nullptr;
+  const auto deg = [](const std::optional<double>& rad) {
+    return rad ? nlohmann::json(rad_to_deg(*rad)) : nlohmann::json(nullptr);
+  };
+  nlohmann::json instants = nlohmann::json::array();
+  for (const Localisation& l : report->instants) {
+    nlohmann::json falses = nlohmann::json::array();
+    for (const Relocalisation& f : l.false_events) {
+      falses.push_back({{"utime", f.utime},
+                        {"to_id", f.to_id},
+                        {"position_error_m", f.position_error_m},
+                        {"angle_error_deg", rad_to_deg(f.angle_error_rad)}});
+    }
+    instants.push_back(
+        {{"kind", instant_name(l.instant.kind)},
+         {"utime", l.instant.utime},
+         {"t_s", utime_delta_seconds(origin, l.instant.utime)},
+         {"pose", l.gt_at ? pose_json(*l.gt_at) : nlohmann::json(nullptr)},
+         {"window_end_s", utime_delta_seconds(origin, l.window_end_utime)},
+         {"localised", l.localised},
+         {"localised_utime", l.localised ? nlohmann::json(l.localised_utime) : nlohmann::json(nullptr)},
+         {"localised_to_id", l.localised ? nlohmann::json(l.localised_by.to_id) : nlohmann::json(nullptr)},
+         {"localised_error_m", l.localised ? nlohmann::json(l.position_error_m) : nlohmann::json(nullptr)},
+         {"localised_error_deg", l.localised ? nlohmann::json(rad_to_deg(l.angle_error_rad)) : nlohmann::json(nullptr)},
+         {"time_to_localise_s", opt_json(l.time_s)},
+         {"distance_to_localise_m", opt_json(l.distance_m)},
+         {"laps_to_localise", opt_json(l.laps)},
+         {"false_localisations", l.false_localisations},
+         {"false_localisation_events", falses},
+         {"localising_s", l.localising_s},
+         {"lem_after_m", opt_json(l.lem_after_m)},
+         {"lem_after_deg", deg(l.lem_after_angle_rad)},
+         {"lem_after_events", l.lem_events},
+         {"judged_events", l.judged_events},
+         {"unjudged_events", l.unjudged_events}});
+  }
+  return {{"lap_length_m", opt_json(report->lap_length_m)},
+          {"instants", instants},
+          {"summary",
+           {{"instants", report->instants.size()},
+            {"localised", report->localised},
+            {"within_one_lap", report->within_one_lap},
+            {"within_two_laps", report->within_two_laps},
+            {"worst_laps", opt_json(report->worst_laps)},
+            {"false_localisations", report->false_localisations},
+            {"false_localisations_max", report->false_localisations_max},
+            {"with_false_localisation", report->with_false_localisation},
+            {"localising_s", report->localising_s},
+            {"lem_after_m", opt_json(report->lem_after_m)},
+            {"lem_after_events", report->lem_events}}}};
+}
+
+// The localisation block of a run: a line per instant.
+void localisation_block(std::ostringstream& out, const LocalisationReport& l, int64_t origin) {
+  out << "  localisation (after a kidnap or a session start; lap " << opt(l.lap_length_m, "%.3f")
+      << " m by ground truth): " << l.localised << " of " << l.instants.size() << " localised, "
+      << l.false_localisations << " false localisations\n";
+  for (const Localisation& i : l.instants) {
+    out << "    " << instant_name(i.instant.kind) << " at " << fmt("%.3f", utime_delta_seconds(origin, i.instant.utime))
+        << " s: ";
+    if (i.localised) {
+      out << "localised after " << fmt("%.2f", *i.time_s) << " s, " << fmt("%.2f", *i.distance_m) << " m ("
+          << opt(i.laps, "%.2f") << " laps) onto experience " << i.localised_by.to_id << " ("
+          << fmt("%.3f", i.position_error_m) << " m, " << fmt("%.1f", rad_to_deg(i.angle_error_rad)) << " deg off)";
+    } else {
+      out << "never localised (up to " << fmt("%.3f", utime_delta_seconds(origin, i.window_end_utime)) << " s)";
+    }
+    out << "; " << i.false_localisations << " false localisations";
+    for (std::size_t k = 0; k < i.false_events.size() && k < 5; ++k) {
+      out << (k == 0 ? " (" : ", ") << fmt("%.2f", i.false_events[k].position_error_m) << " m";
+    }
+    if (!i.false_events.empty()) out << (i.false_events.size() > 5 ? ", ...)" : ")");
+    out << "; LOCALISING " << fmt("%.2f", i.localising_s) << " s";
+    if (i.localised) out << "; LEM after " << opt(i.lem_after_m, "%.3f") << " m over " << i.lem_events << " events";
+    out << "\n";
+  }
+}
+
 nlohmann::json enm_json(const EnmResult& e) {
   return {{"enm", opt_json(e.enm)},
           {"translation_m2", opt_json(e.translation)},
@@ -154,6 +240,23 @@ std::string format_table(const std::vector<RunReport>& runs, const EvalParams& p
                 fmt("%.4f", p.lem_ori) + " ± " + fmt("%.4f", p.lem_ori_spread)});
   }
   out << "\n";
+  bool any_localisation = false;
+  for (const RunReport& r : runs) any_localisation = any_localisation || r.result.localisation;
+  if (any_localisation) {
+    out << localisation_row({"localisation", "instants", "localised", "<=1 lap", "<=2 laps", "worst", "false",
+                             "LOCALISING", "LEM after"});
+    out << localisation_row({"", "", "", "", "", "laps", "localis.", "(s)", "loc. (m)"});
+    out << std::string(112, '-') << "\n";
+    for (const RunReport& r : runs) {
+      if (!r.result.localisation) continue;
+      const LocalisationReport& l = *r.result.localisation;
+      out << localisation_row({r.label, std::to_string(l.instants.size()), std::to_string(l.localised),
+                               std::to_string(l.within_one_lap), std::to_string(l.within_two_laps),
+                               opt(l.worst_laps, "%.2f"), std::to_string(l.false_localisations),
+                               fmt("%.1f", l.localising_s), opt(l.lem_after_m, "%.3f")});
+    }
+    out << "\n";
+  }
   for (const RunReport& r : runs) {
     const EvalResult& e = r.result;
     out << r.label << " (" << r.path << "):\n";
@@ -229,6 +332,7 @@ std::string format_table(const std::vector<RunReport>& runs, const EvalParams& p
     out << "  EnM: " << opt(e.enm.enm) << " = translation " << opt(e.enm.translation) << " m² + rotation "
         << opt(e.enm.rotation) << " rad² over " << e.enm.links_used << " links (" << e.enm.links_excluded
         << " excluded)\n";
+    if (e.localisation) localisation_block(out, *e.localisation, r.start_utime);
   }
   return out.str();
 }
@@ -269,6 +373,7 @@ nlohmann::json to_json(const std::vector<RunReport>& runs, const EvalParams& par
                          {"unavailable", e.ground_truth ? nlohmann::json(nullptr)
                                                         : nlohmann::json("no ground truth: no GROUND_TRUTH in the log")},
                          {"exm", exm_json(e.exm, e.ground_truth)},
+                         {"localisation", localisation_json(e.localisation, r.start_utime)},
                          {"enm", e.ground_truth ? enm_json(e.enm)
                                                 : nlohmann::json({{"enm", nullptr},
                                                                   {"translation_m2", nullptr},
@@ -292,7 +397,7 @@ std::string format_trace_csv(const std::vector<CycleTrace>& rows) {
   std::ostringstream out;
   out << "cycle,t_s,event,from_id,to_id,gt_x,gt_y,gt_theta,target_error_m,target_error_deg,correct,after_base_set,closure,"
          "template_id,template_new,error,visual_error,pfh_error,sda_error,visual_shift,visual_used,tactile_used,"
-         "active_faults\n";
+         "active_faults,localisation,localisation_marks\n";
   const auto g = [](double v) { return fmt("%.6g", v); };
   for (const CycleTrace& r : rows) {
     const ExperienceEvent& e = r.event;
@@ -320,6 +425,8 @@ std::string format_trace_csv(const std::vector<CycleTrace>& rows) {
     }
     out << ',';
     for (std::size_t i = 0; i < r.active_faults.size(); ++i) out << (i ? ";" : "") << r.active_faults[i];
+    out << ',' << (e.localising ? "localising" : "tracking") << ',';
+    for (std::size_t i = 0; i < r.localisation_marks.size(); ++i) out << (i ? ";" : "") << r.localisation_marks[i];
     out << '\n';
   }
   return out.str();

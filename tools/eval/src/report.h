@@ -24,6 +24,7 @@ struct RunReport {
   std::map<std::string, int64_t> decode_errors;
   std::string log_damage;  // empty: the log was read whole
   std::vector<FaultEvent> faults;  // simulated faults beginning and ending (SIM_FAULT)
+  int64_t start_utime = 0;         // run_start_utime(): the origin of the times printed (s)
   EvalResult result;
 };
 

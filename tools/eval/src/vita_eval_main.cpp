@@ -69,6 +69,8 @@ int run(int argc, char** argv) {
   std::snprintf(default_tolerance, sizeof default_tolerance, "%g,%g", kFalseClosurePosition_m, kFalseClosureAngle_deg);
   std::string false_closure_tolerance = default_tolerance;
   double base_duration_s = -1.0;
+  std::string map_truth_path;
+  bool session_start = false;
   app.add_option("--input", inputs, "slamd output log (repeat for a multi-row table)")->required();
   app.add_option("--json", json_path, "write all results as JSON to this file");
   app.add_option("--plots", plots_dir,
@@ -82,6 +84,13 @@ int run(int argc, char** argv) {
   app.add_option("--trace", trace_dir,
                  "write a CSV per run into this directory: every cycle's event, its re-localisation's error against "
                  "ground truth and its template match (created if missing)");
+  app.add_option("--map-truth", map_truth_path,
+                 "a log with the GROUND_TRUTH of the session that made the map the inputs localised in (the first "
+                 "session's vita-sim or slamd output log; its clock must not overlap the inputs')")
+      ->check(CLI::ExistingFile);
+  app.add_flag("--session-start", session_start,
+               "the inputs are sessions on a saved map: their start is a localisation instant (detected anyway when "
+               "the map has experiences created before the log's first ground truth)");
   app.add_option("--paper-row", paper_names, "add the paper's Table I row: visual, tactile or vita (repeatable)")
       ->check(CLI::IsMember({"visual", "tactile", "vita"}));
   app.add_option("--centre", centre, "arena centre X,Y (m) for the first revolution (base set)")
@@ -112,6 +121,9 @@ int run(int argc, char** argv) {
       return 2;
     }
     if (base_duration_s > 0) params.base_duration_s = base_duration_s;
+    params.session_start = session_start;
+    std::vector<PoseSample> map_truth;
+    if (!map_truth_path.empty()) map_truth = load_ground_truth(map_truth_path);
     PlotScene scene;
     scene.params = params;
     Pose2 start;
@@ -152,6 +164,16 @@ int run(int argc, char** argv) {
       r.decode_errors = run.decode_errors;
       r.log_damage = run.log_damage;
       r.faults = run.input.faults;
+      r.start_utime = run_start_utime(run.input);
+      if (!map_truth.empty() && !run.input.ground_truth.empty()) {
+        const GroundTruth own(run.input.ground_truth);
+        const GroundTruth earlier(map_truth);
+        if (own.begin_utime() <= earlier.end_utime() && earlier.begin_utime() <= own.end_utime()) {
+          throw std::runtime_error("--map-truth " + map_truth_path + ": its ground truth overlaps " + path +
+                                   "'s in time (a second session needs a later clock: vita-sim --start-utime)");
+        }
+        run.input.map_ground_truth = map_truth;
+      }
       if (!r.log_damage.empty()) std::cerr << "vita-eval: " << r.log_damage << " (evaluated what could be read)\n";
       r.result = evaluate(run.input, params);
       for (const auto& [ch, n] : run.decode_errors) {
@@ -162,6 +184,14 @@ int run(int argc, char** argv) {
                   << ": no GROUND_TRUTH: the metrics that need it (EnM, ARCR, LEM, valid fraction) are unavailable\n";
       } else if (!r.result.alignment.valid) {
         std::cerr << "vita-eval: " << path << ": " << r.result.alignment.reason << "\n";
+      }
+      if (r.result.localisation && run.input.map_ground_truth.empty()) {
+        for (const Localisation& l : r.result.localisation->instants) {
+          if (l.instant.kind != LocalisationInstant::Kind::kSessionStart) continue;
+          std::cerr << "vita-eval: " << path
+                    << ": a session on a saved map without the map's session's ground truth: its experiences "
+                       "cannot be judged (--map-truth)\n";
+        }
       }
       if (r.result.ground_truth && !r.result.exm.base_end_found) {
         std::cerr << "vita-eval: " << path
@@ -191,7 +221,9 @@ int run(int argc, char** argv) {
       std::filesystem::create_directories(trace_dir);
       for (std::size_t i = 0; i < reports.size(); ++i) {
         write_text((std::filesystem::path(trace_dir) / (plot_stem(reports[i].label) + "_trace.csv")).string(),
-                   format_trace_csv(trace_cycles(loaded_inputs[i], reports[i].result.exm)));
+                   format_trace_csv(trace_cycles(loaded_inputs[i], reports[i].result.exm,
+                                                 reports[i].result.localisation ? &*reports[i].result.localisation
+                                                                                : nullptr)));
       }
     }
     return 0;

@@ -31,6 +31,7 @@ struct ExperienceEvent {
   EventType type = EventType::kSameExperience;
   int32_t from_id = -1;
   int32_t to_id = -1;
+  bool localising = false;  // VITA_EVENT.localisation after the cycle: LOCALISING (to_id is then no claim)
 };
 
 struct MapExperience {
@@ -64,19 +65,32 @@ class ExperienceIndex {
 
 // Ground truth, interpolated between samples: positions linearly, headings along the shorter arc.
 // Queries outside [begin, end] return nothing: the metrics exclude (and count) such times rather
-// than extrapolate.
+// than extrapolate. Never interpolated across a jump (a kidnap: the truth moves metres between two
+// samples): a time before the jump gets the sample before it, a time at or after it the sample after
+// it. Two sessions' truth merged (a map made in an earlier session) has none between the sessions.
 class GroundTruth {
  public:
-  // Sorts by time; of samples with equal times the last one wins.
-  explicit GroundTruth(std::vector<PoseSample> samples);
+  // Sorts by time; of samples with equal times the last one wins. `jumps`: the kidnaps' utimes.
+  explicit GroundTruth(std::vector<PoseSample> samples, std::vector<int64_t> jumps = {});
+  // This session's truth and an earlier session's (whose time range must not overlap it), with
+  // nothing in between.
+  GroundTruth(const std::vector<PoseSample>& samples, const std::vector<PoseSample>& earlier_session,
+              std::vector<int64_t> jumps);
   std::optional<Pose2> at(int64_t utime) const;
+  // True when the truth jumps (or the sessions change) in (from, to]: no path runs from one to the other.
+  bool breaks_between(int64_t from, int64_t to) const;
   bool empty() const { return samples_.empty(); }
   int64_t begin_utime() const { return samples_.empty() ? 0 : samples_.front().utime; }
   int64_t end_utime() const { return samples_.empty() ? 0 : samples_.back().utime; }
   const std::vector<PoseSample>& samples() const { return samples_; }
 
+  // Distance travelled (m) in [from, to], along the samples and never across a jump.
+  double path_length(int64_t from, int64_t to) const;
+
  private:
   std::vector<PoseSample> samples_;
+  std::vector<int64_t> jumps_;        // sorted
+  std::vector<int64_t> hole_after_;   // sample times after which there is no truth until the next sample
 };
 
 // The paper's correct re-localisation (metrics.md): the robot now within this of where the target
@@ -97,6 +111,9 @@ struct EvalParams {
   double centre_x = 0.0;                         // arena centre for the first revolution (m)
   double centre_y = 0.0;
   std::optional<double> base_duration_s;         // if set, base set = first S seconds of GT instead
+  // The log is a session on a saved map: its start is a localisation instant (also detected when the
+  // map has experiences created before the log's first ground truth).
+  bool session_start = false;
 };
 
 // ---- Alignment ----
@@ -220,6 +237,92 @@ struct EnmResult {
 // For every link (i = from, j = to): δ̂ = x̂_i ⊖ x̂_j, δ = x_i ⊖ x_j, error = δ̂ ⊖ δ.
 EnmResult compute_enm(const ExperienceMap& map, const GroundTruth& gt);
 
+// ---- Localisation: after a kidnap, or in a session on a saved map ----
+//
+// An instant T at which the robot does not know where it is and odometry cannot tell it: every
+// kidnap (SIM_FAULT), and the start of a session on a saved map. Until the next instant (or the
+// log's end), every VITA_EVENT that claims a place is judged alignment-free as a re-localisation is
+// (the truth now against the truth where its target was created, classify_closure()): a RELOCALISE,
+// or a SAME_EXPERIENCE, but not a NEW_EXPERIENCE (made where the robot is, it claims nothing), not
+// an event that reports LOCALISING (it says it does not know), and not staying on the experience
+// current at T (the place before the kidnap: not a closure, the robot just has not noticed yet).
+//   - the first correct localisation: the first judged event whose target was created before T and
+//     is correct by the paper's tolerance, after which no judged event up to the window's end is a
+//     false closure (the pose then stays within the false-closure tolerance); its time and the
+//     distance travelled (ground truth) from T, and that distance in laps;
+//   - false localisations: false closures among the judged events before it (all of the window's if
+//     it never comes); consecutive events on the same target count once;
+//   - time reporting LOCALISING in the window (VITA_POSE.localisation held until the next sample,
+//     else VITA_EVENT's);
+//   - LEM after localisation: the mean position (and heading) error of the judged events from the
+//     localisation to the window's end.
+
+struct LocalisationInstant {
+  enum class Kind { kKidnap, kSessionStart };
+  Kind kind = Kind::kKidnap;
+  int64_t utime = 0;
+};
+
+// "kidnap" or "session_start" (the JSON's and the trace's spelling).
+const char* instant_name(LocalisationInstant::Kind kind);
+
+// VITA_POSE's localisation state at a time.
+struct StateSample {
+  int64_t utime = 0;
+  bool localising = false;
+};
+
+struct Localisation {
+  LocalisationInstant instant;
+  int64_t window_end_utime = 0;          // the next instant, or the log's end
+  std::optional<Pose2> gt_at;            // the truth at the instant (where the robot was put down)
+  bool localised = false;
+  int64_t localised_utime = 0;
+  ExperienceEvent localised_by;          // the event of the first correct localisation
+  Pose2 gt_localised;                    // the truth then ...
+  Pose2 gt_target_created;               // ... and where its target was created
+  double position_error_m = 0.0;
+  double angle_error_rad = 0.0;
+  std::optional<double> time_s;          // from the instant to the first correct localisation
+  std::optional<double> distance_m;      // travelled meanwhile (ground truth)
+  std::optional<double> laps;            // distance_m / the lap length
+  std::size_t false_localisations = 0;
+  std::vector<Relocalisation> false_events;  // each false localisation counted
+  std::size_t judged_events = 0;
+  std::size_t unjudged_events = 0;       // claims without ground truth or with an unknown target
+  double localising_s = 0.0;
+  std::size_t lem_events = 0;
+  std::optional<double> lem_after_m;     // mean position error from the localisation on
+  std::optional<double> lem_after_angle_rad;
+};
+
+struct LocalisationReport {
+  std::vector<Localisation> instants;
+  std::optional<double> lap_length_m;    // lap_length() of this run's ground truth
+  std::size_t localised = 0;
+  std::size_t within_one_lap = 0;
+  std::size_t within_two_laps = 0;
+  std::optional<double> worst_laps;      // undefined when one was never localised (or no lap length)
+  std::size_t false_localisations = 0;
+  std::size_t false_localisations_max = 0;  // at one instant
+  std::size_t with_false_localisation = 0;  // instants with at least one
+  double localising_s = 0.0;
+  std::size_t lem_events = 0;
+  std::optional<double> lem_after_m;     // over every instant's events after its localisation
+};
+
+// The length of one lap of the trajectory: the distance travelled per 2π of heading change, by ground
+// truth (the robot circles facing outwards or inwards, so its heading turns once a lap), never across
+// a jump. Undefined when the heading turns less than half a turn in all.
+std::optional<double> lap_length(const GroundTruth& gt);
+
+// `truth` judges the targets (it includes the session that made a saved map); `own` is this log's
+// ground truth (distances, the log's end).
+LocalisationReport compute_localisation(const std::vector<ExperienceEvent>& events, const ExperienceMap& map,
+                                        const GroundTruth& truth, const GroundTruth& own,
+                                        std::vector<LocalisationInstant> instants,
+                                        const std::vector<StateSample>& states, const EvalParams& params);
+
 // ---- Everything ----
 
 // One cycle's template-matching result (VITA_MATCH); only the per-cycle trace uses it.
@@ -244,12 +347,25 @@ struct FaultEvent {
 
 struct EvalInput {
   std::vector<PoseSample> estimate;       // VITA_POSE
+  std::vector<StateSample> states;        // VITA_POSE.localisation
   std::vector<ExperienceEvent> events;    // VITA_EVENT
   ExperienceMap map;                      // last VITA_MAP
   std::vector<PoseSample> ground_truth;   // GROUND_TRUTH
   std::vector<TemplateMatch> matches;     // VITA_MATCH
-  std::vector<FaultEvent> faults;         // SIM_FAULT, in log order
+  std::vector<FaultEvent> faults;         // SIM_FAULT, in log order (kidnaps apart)
+  std::vector<PoseSample> kidnaps;        // SIM_FAULT KIND_KIDNAP: when, and the true pose put down at
+  // GROUND_TRUTH of the session that made a saved map (vita-eval --map-truth): the map's experiences
+  // created then are judged by it.
+  std::vector<PoseSample> map_ground_truth;
 };
+
+// The ground truth every judgement uses: the log's, with its kidnaps as jumps, and the map's session's
+// before it.
+GroundTruth truth_of(const EvalInput& input);
+
+// The localisation instants of a run: its kidnaps, and its start when `params.session_start` or when
+// its map has an experience created before its first ground truth.
+std::vector<LocalisationInstant> localisation_instants(const EvalInput& input, const EvalParams& params);
 
 struct EvalResult {
   // False for a log without GROUND_TRUTH (a real robot's run): then nothing that needs truth is
@@ -262,6 +378,7 @@ struct EvalResult {
   std::optional<LemResult> lem_best_fit;  // labelled: best-fit alignment
   ExmResult exm;
   EnmResult enm;
+  std::optional<LocalisationReport> localisation;  // when the run has a localisation instant
 };
 
 EvalResult evaluate(const EvalInput& input, const EvalParams& params);
@@ -286,10 +403,14 @@ struct CycleTrace {
   std::optional<Relocalisation> relocalisation;  // a counted re-localisation: its error, correctness
   std::optional<TemplateMatch> match;            // the cycle's VITA_MATCH (the same cycle number)
   std::vector<std::string> active_faults;        // simulated faults active at the event (SIM_FAULT)
+  // The localisation metric's marks: "kidnap" / "session_start" on the first event after an
+  // instant, "localised" on its first correct localisation, "false_localisation" on a counted one.
+  std::vector<std::string> localisation_marks;
 };
 
 // `exm` is compute_exm()'s result for the same input (its re-localisations are joined by time and
-// target).
-std::vector<CycleTrace> trace_cycles(const EvalInput& input, const ExmResult& exm);
+// target); `localisation`, if given, compute_localisation()'s.
+std::vector<CycleTrace> trace_cycles(const EvalInput& input, const ExmResult& exm,
+                                     const LocalisationReport* localisation = nullptr);
 
 }  // namespace whiskeye::eval
