@@ -104,6 +104,12 @@ def check_layout(a, destdir):
             fail(f"{d}.service: no WatchdogSec=")
         if not re.search(r"^RestrictAddressFamilies=", text, re.M):
             fail(f"{d}.service: no RestrictAddressFamilies=")
+    # Every service is bounded in memory and tasks (docs/deployment.md, "Resource limits").
+    for unit in [d + ".service" for d in DAEMONS] + ["whiskeye-can0.service"]:
+        lines = unit_text(destdir, a.prefix, unit).splitlines()
+        for key in ["MemoryMax=", "TasksMax="]:
+            if not any(l.startswith(key) and len(l) > len(key) for l in lines):
+                fail(f"{unit}: no {key}")
     whiskerd = unit_text(destdir, a.prefix, "whiskerd.service").splitlines()
     for key in ["CPUSchedulingPolicy=fifo", "LimitMEMLOCK=infinity", "DeviceAllow=char-gpiochip rw",
                 "CapabilityBoundingSet=", "Requires=whiskeye-can0.service"]:
