@@ -4,11 +4,20 @@ RESULTS_FILE=$RESULTS_DIR/results.txt
 
 pass() { echo "PASS $1" >> "$RESULTS_FILE"; echo "PASS $1"; }
 fail() { echo "FAIL $1: $2" >> "$RESULTS_FILE"; echo "FAIL $1: $2"; }
-# check NAME COMMAND...: one reported test per call.
+# check NAME COMMAND...: one reported test per call. A failure says what was seen: the last lines the
+# command printed (the scenarios' predicates print the value they saw when they fail), else the
+# command as it ran, its arguments expanded (`test 1 = 0`: the value was 1), and for a grep of a
+# file the file's last line.
 check() {
   local name=$1; shift
-  local out
-  if out=$("$@" 2>&1); then pass "$name"; else fail "$name" "$(echo "$out" | tail -n 3 | tr '\n' ' ')"; fi
+  local out seen
+  if out=$("$@" 2>&1); then pass "$name"; return; fi
+  seen=$(echo "$out" | tail -n 3 | tr '\n' ' ')
+  if [ -z "${seen// /}" ]; then
+    seen="false: $*"
+    if [ "$1" = grep ] && [ -f "${!#}" ]; then seen+="; last line of ${!#}: $(tail -n 1 "${!#}")"; fi
+  fi
+  fail "$name" "$seen"
 }
 # exited_ok NAME STATUS: one reported test that a checker program ran to its end. A checker writes its
 # own PASS/FAIL lines as it goes or at its end; one that crashes or cannot start would otherwise
@@ -20,6 +29,16 @@ exited_ok() {
 # in FILE (a TCG guest starts programs slowly).
 wait_for() {
   for _ in $(seq $((${3:-30} * 10))); do grep -q "$2" "$1" 2>/dev/null && return 0; sleep 0.1; done
+  echo "no line matching '$2' in $1 after ${3:-30} s; its last line: $(tail -n 1 "$1" 2>&1)"
+  return 1
+}
+# Reading a driver_status_probe output file (KEY=VALUE lines) of the scenario's probes:
+# probe_value FILE NAME: the value of NAME.
+probe_value() { sed -n "s/^$2=//p" "$1"; }
+# probe_has FILE 'NAME=REGEX': NAME's value matches REGEX; else says what it was.
+probe_has() {
+  grep -Eq "^$2\$" "$1" && return 0
+  echo "${2%%=*}=$(probe_value "$1" "${2%%=*}") in $(basename "$1"), expected ${2#*=}"
   return 1
 }
 # Loopback multicast for LCM udpm:// inside the guest.

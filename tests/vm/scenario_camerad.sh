@@ -47,8 +47,8 @@ printf 'camera: {match_card: vivid}\n' > /tmp/faults.yaml
 faults_pid=$!
 wait_for "$RESULTS_DIR/camerad_faults.log" streaming 60 || true
 probe() { "$PROBE" --driver camerad --seconds "${2:-3}" > "/tmp/faults_$1.txt"; cp "/tmp/faults_$1.txt" "$RESULTS_DIR/status_$1.txt"; }
-counter() { sed -n "s/^$2=//p" "/tmp/faults_$1.txt"; }
-has() { grep -Eq "^$2\$" "/tmp/faults_$1.txt"; }  # has PROBE 'name=regex'
+counter() { probe_value "/tmp/faults_$1.txt" "$2"; }
+has() { probe_has "/tmp/faults_$1.txt" "$2"; }  # has PROBE 'name=regex'
 ctl() { v4l2-ctl -d /dev/video0 -c "$1"; }
 probe streaming
 check camerad_is_ok_while_frames_arrive has streaming 'state=1'
@@ -63,7 +63,11 @@ check camerad_counts_a_buffer_the_driver_flagged_as_damaged has injected 'corrup
 check camerad_counts_a_failed_requeue has injected 'requeue_failures=[1-9][0-9]*'
 sleep 2
 probe after_requeue
-streams_on() { [ $(( $(counter after_requeue frames) - $(counter injected frames) )) -ge 5 ] && has after_requeue 'state=1'; }
+streams_on() {
+  [ $(( $(counter after_requeue frames) - $(counter injected frames) )) -ge 5 ] ||
+    { echo "frames $(counter injected frames) then $(counter after_requeue frames), expected 5 more"; return 1; }
+  has after_requeue 'state=1'
+}
 check camerad_streams_on_after_a_failed_requeue streams_on
 # Half the buffers dropped by the driver: the sequence numbers say how many.
 ctl percentage_of_dropped_buffers=50
@@ -85,7 +89,11 @@ ctl inject_fatal_streaming_error=1
 wait_for "$RESULTS_DIR/camerad_faults.log" "closing and reopening" 20 || true
 sleep 4
 probe after_fatal
-reopened() { [ "$(counter back device_lost)" -lt "$(counter after_fatal device_lost)" ] && has after_fatal 'state=1'; }
+reopened() {
+  [ "$(counter back device_lost)" -lt "$(counter after_fatal device_lost)" ] ||
+    { echo "device_lost $(counter back device_lost) then $(counter after_fatal device_lost), expected more"; return 1; }
+  has after_fatal 'state=1'
+}
 check camerad_reopens_after_a_fatal_streaming_error reopened
 kill -TERM $faults_pid
 wait $faults_pid

@@ -64,6 +64,7 @@ check whiskerd_stops_cleanly test $code = 0
 # poll_enable VALUE: up to 10 s for the enable line to read VALUE.
 poll_enable() {
   for _ in $(seq 500); do [ "$(cat "$chip/0")" = "$1" ] && return 0; sleep 0.02; done
+  echo "the enable line reads $(cat "$chip/0") after 10 s, expected $1"
   return 1
 }
 # start_streaming LOG: whiskerd (pid in $wd, output in LOG) with the simulated boards replayed to

@@ -57,6 +57,7 @@ const char* frame_check_name(FrameCheck c) {
     case FrameCheck::kJpegCutShort: return "cut short (no JPEG end-of-image marker)";
     case FrameCheck::kJpegDamagedData: return "with damaged JPEG data after its header";
     case FrameCheck::kJpegWrongSize: return "whose JPEG header says another size than negotiated";
+    case FrameCheck::kOverwritten: return "overwritten by the driver while it was read (torn)";
   }
   return "?";
 }
@@ -351,10 +352,14 @@ Capture::Result Capture::next(FrameView& frame, int timeout_ms) {
   FrameCheck c = check_frame(b.flags, b.bytesused, buffers_[b.index].length, pixelformat_, stride_, height_);
   if (c == FrameCheck::kUsable && pixelformat_ == kMJPG) c = check_mjpeg({data, b.bytesused}, width_, height_);
   if (c != FrameCheck::kUsable) {
-    ++corrupt_frames_;
-    last_skip_ = c;
+    if (!overwritten(b.index, b.sequence)) {  // a torn frame counts as such, whatever its bytes looked like
+      ++corrupt_frames_;
+      last_skip_ = c;
+    }
     return requeue_pending() ? Result::kSkipped : Result::kGone;
   }
+  lent_index_ = b.index;
+  lent_sequence_ = b.sequence;
   frame.data = data;
   frame.size = b.bytesused;
   frame.width = width_;
@@ -369,6 +374,20 @@ Capture::Result Capture::next(FrameView& frame, int timeout_ms) {
     frame.utime = clock_us(CLOCK_REALTIME);  // driver without usable timestamps: dequeue time
   }
   return Result::kFrame;
+}
+
+bool Capture::lent_frame_overwritten() { return overwritten(lent_index_, lent_sequence_); }
+
+bool Capture::overwritten(uint32_t index, uint32_t sequence) {
+  v4l2_buffer q{};
+  q.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  q.memory = V4L2_MEMORY_MMAP;
+  q.index = index;
+  if (xioctl(fd_, VIDIOC_QUERYBUF, &q) < 0 || q.sequence == sequence) return false;  // a vanished device: next() says
+  ++corrupt_frames_;
+  ++overwritten_frames_;
+  last_skip_ = FrameCheck::kOverwritten;
+  return true;
 }
 
 }  // namespace whiskeye::v4l2

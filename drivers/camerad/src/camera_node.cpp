@@ -59,6 +59,8 @@ class V4l2Session final : public CaptureSession {
   int64_t corrupt_frames() const override { return cap_.corrupt_frames(); }
   v4l2::FrameCheck last_skip() const override { return cap_.last_skip(); }
   int64_t requeue_failures() const override { return cap_.requeue_failures(); }
+  bool lent_frame_overwritten() override { return cap_.lent_frame_overwritten(); }
+  int64_t overwritten_frames() const override { return cap_.overwritten_frames(); }
 
  private:
   v4l2::Capture cap_;
@@ -138,7 +140,11 @@ void CameraNode::open(int64_t now) {
 
 void CameraNode::read_frame() {
   v4l2::FrameView f;
-  const auto r = cap_->next(f, 200);
+  auto r = cap_->next(f, 200);
+  if (r == v4l2::Capture::Result::kFrame) {
+    img_.data.assign(f.data, f.data + f.size);
+    if (cap_->lent_frame_overwritten()) r = v4l2::Capture::Result::kSkipped;  // torn while copied: not published
+  }
   if (r == v4l2::Capture::Result::kFrame) {
     img_.utime = f.utime;
     img_.seq = f.sequence;
@@ -147,7 +153,6 @@ void CameraNode::read_frame() {
     img_.row_stride = static_cast<int32_t>(f.stride);
     img_.pixelformat = static_cast<int32_t>(f.pixelformat);
     img_.size = static_cast<int32_t>(f.size);
-    img_.data.assign(f.data, f.data + f.size);
     publish(bus_, params_.channel, img_);  // a failed send is counted by the bus
     ++frames_;
     ++interval_frames_;
@@ -186,6 +191,7 @@ void CameraNode::read_frame() {
 void CameraNode::close_capture() {
   closed_corrupt_frames_ += cap_->corrupt_frames();
   closed_requeue_failures_ += cap_->requeue_failures();
+  closed_overwritten_frames_ += cap_->overwritten_frames();
   cap_.reset();
 }
 
@@ -205,12 +211,13 @@ void CameraNode::publish_status(int64_t t) {
                     : "no camera: " + (last_open_error_.empty() ? std::string("reopening") : last_open_error_);
   const int64_t corrupt_frames = closed_corrupt_frames_ + (cap_ ? cap_->corrupt_frames() : 0);
   const int64_t requeue_failures = closed_requeue_failures_ + (cap_ ? cap_->requeue_failures() : 0);
+  const int64_t overwritten_frames = closed_overwritten_frames_ + (cap_ ? cap_->overwritten_frames() : 0);
   st.counter_names = {"frames",           "device_lost",    "reopens",        "open_failures",
                       "sequence_gaps",    "corrupt_frames", "dequeue_errors", "requeue_failures",
-                      "lcm_publish_errors"};
+                      "lcm_publish_errors", "overwritten_frames"};
   st.counter_values = {frames_,        device_lost_,   reopens_,         open_failures_,
                        sequence_gaps_, corrupt_frames, dequeue_errors_,  requeue_failures,
-                       bus_.publish_errors()};
+                       bus_.publish_errors(), overwritten_frames};
   st.num_counters = static_cast<int32_t>(st.counter_names.size());
   st.stat_names = {"fps", "latency_mean_us", "latency_max_us"};
   st.stat_values = {static_cast<double>(interval_frames_) / params_.status_period_s,

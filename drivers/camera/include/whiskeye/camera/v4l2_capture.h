@@ -40,7 +40,9 @@ inline int64_t monotonic_to_utime(int64_t ts_mono_us, int64_t now_mono_us, int64
 enum class FrameCheck {
   kUsable, kErrorFlag, kShortPayload, kEmpty, kOverlong,
   // MJPG only (check_mjpeg):
-  kJpegNoStartMarker, kJpegBadHeader, kJpegCutShort, kJpegDamagedData, kJpegWrongSize
+  kJpegNoStartMarker, kJpegBadHeader, kJpegCutShort, kJpegDamagedData, kJpegWrongSize,
+  // Written again by the driver while it was read (Capture::lent_frame_overwritten()).
+  kOverwritten
 };
 const char* frame_check_name(FrameCheck c);
 inline constexpr uint32_t kBufFlagError = 0x00000040;  // V4L2_BUF_FLAG_ERROR (checked in the source)
@@ -161,8 +163,16 @@ class Capture {
   double fps() const { return fps_; }
   std::size_t num_buffers() const { return buffers_.size(); }
   const std::string& last_error() const { return last_error_; }
-  // Buffers skipped by check_frame() since open.
+  // A driver owns a buffer again only once it is queued back, and vb2 drivers keep to that;
+  // v4l2loopback writes its ring round regardless, so a frame read slowly (more than the ring's
+  // length of frame periods) can be overwritten while it is read: torn. True if the driver says the
+  // buffer of the frame last returned by next() holds another frame now (its sequence number
+  // changed since it was dequeued); that frame is then counted in corrupt_frames() and
+  // overwritten_frames() and must not be used. Call it after the frame's bytes were copied.
+  bool lent_frame_overwritten();
+  // Buffers skipped by check_frame() or found overwritten since open; of them, overwritten ones.
   int64_t corrupt_frames() const { return corrupt_frames_; }
+  int64_t overwritten_frames() const { return overwritten_frames_; }
   FrameCheck last_skip() const { return last_skip_; }
   // QBUF calls that failed since open. The buffer is kept and given back at the next call, so a
   // transient failure does not shrink the buffer ring.
@@ -189,8 +199,12 @@ class Capture {
   // Dequeued buffers not yet given back (the one lent to the caller, or one whose QBUF failed):
   // requeued at the next call. At most one entry per buffer.
   std::vector<uint32_t> pending_;
+  // True if buffer `index` holds another frame than `sequence` (QUERYBUF); counts it if so.
+  bool overwritten(uint32_t index, uint32_t sequence);
   int64_t corrupt_frames_ = 0;
+  int64_t overwritten_frames_ = 0;
   int64_t requeue_failures_ = 0;
+  uint32_t lent_index_ = 0, lent_sequence_ = 0;  // the frame next() last returned
   FrameCheck last_skip_ = FrameCheck::kUsable;
   bool streaming_ = false;
   uint32_t width_ = 0, height_ = 0, stride_ = 0, pixelformat_ = 0;

@@ -58,6 +58,10 @@ class CaptureSession {
   virtual int64_t corrupt_frames() const = 0;
   virtual v4l2::FrameCheck last_skip() const = 0;
   virtual int64_t requeue_failures() const = 0;
+  // The frame next() last returned was overwritten while read (see v4l2::Capture); a device that
+  // never writes into a dequeued buffer (every vb2 driver, a test's fake) needs neither.
+  virtual bool lent_frame_overwritten() { return false; }
+  virtual int64_t overwritten_frames() const { return 0; }
 };
 
 // Opens a session or throws v4l2::CaptureError.
@@ -113,7 +117,7 @@ class CameraNode {
   std::string last_open_error_;
   int64_t frames_ = 0, reopens_ = 0, device_lost_ = 0, open_failures_ = 0, sequence_gaps_ = 0, dequeue_errors_ = 0;
   // Totals of the capture sessions already closed; the open one adds its own (Capture counts since open).
-  int64_t closed_corrupt_frames_ = 0, closed_requeue_failures_ = 0;
+  int64_t closed_corrupt_frames_ = 0, closed_requeue_failures_ = 0, closed_overwritten_frames_ = 0;
   // One log line per reason of skipping and capture session; corrupt_frames says how many.
   uint32_t corrupt_logged_ = 0;        // bit i: a frame skipped as FrameCheck i was logged
   bool dequeue_error_logged_ = false;  // likewise
