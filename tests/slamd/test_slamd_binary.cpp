@@ -415,7 +415,13 @@ TEST_F(SlamdBinary, LiveRunFedByLcmLogplayerTakesTheSameDecisionsAsReplay) {
 // same messages had, and its map drifted apart from the replay's (the chaos test's rare divergence,
 // docs/reliability.md). Here slamd is stopped (SIGSTOP) while 9 s of odometry are published, so the
 // whole burst is waiting on its socket when it continues.
-TEST_F(SlamdBinary, ABurstOfOdometryThatArrivedWhileItWasStoppedIsTakenWhole) {
+class SlamdBurst : public SlamdBinary {
+ protected:
+  // `suffix`: the inputs renamed (slam.yaml's slamd.channel_*, here by --set) to their names plus it.
+  void a_burst_is_taken_whole(const std::string& suffix);
+};
+
+void SlamdBurst::a_burst_is_taken_whole(const std::string& suffix) {
   LcmBus bus;
   DecodeErrors errors;
   std::set<int64_t> poses;  // VITA_POSE: one per odometry sample taken, once a cycle is done
@@ -432,7 +438,14 @@ TEST_F(SlamdBinary, ABurstOfOdometryThatArrivedWhileItWasStoppedIsTakenWhole) {
   }, errors);
 
   const fs::path state = fresh_dir("burst_state");
-  Subprocess slamd({kSlamd, "--config", kConfig, "--state-dir", state.string()});
+  std::vector<std::string> argv{kSlamd, "--config", kConfig, "--state-dir", state.string()};
+  if (!suffix.empty()) {
+    for (const std::string input : {"odometry", "camera", "cycle"}) {
+      const std::string name = input == "odometry" ? "ODOMETRY" : input == "camera" ? "CAMERA" : "WHISK_CYCLE";
+      argv.insert(argv.end(), {"--set", "slamd.channel_" + input + "=" + name + suffix});
+    }
+  }
+  Subprocess slamd(argv);
   ASSERT_TRUE(started(slamd)) << slamd.output();
 
   // The first 5 s of the run at 4x real time: cycles are done, so each later sample gives a pose.
@@ -447,7 +460,7 @@ TEST_F(SlamdBinary, ABurstOfOdometryThatArrivedWhileItWasStoppedIsTakenWhole) {
     if (t0 < 0) t0 = ev.utime;
     if (ev.utime - t0 < 5'000'000) {
       std::this_thread::sleep_until(start + std::chrono::microseconds((ev.utime - t0) / 4));
-      bus.publish_raw(channel, ev.data);
+      bus.publish_raw(channel + suffix, ev.data);
       while (bus.handle_timeout(0) > 0) {
       }
       continue;
@@ -463,7 +476,7 @@ TEST_F(SlamdBinary, ABurstOfOdometryThatArrivedWhileItWasStoppedIsTakenWhole) {
     if (channel != "ODOMETRY") continue;
     odometry_t odometry;
     ASSERT_TRUE(decode_message(ev.data, odometry));
-    bus.publish_raw(channel, ev.data);
+    bus.publish_raw(channel + suffix, ev.data);
     burst.push_back(odometry.utime);
   }
   ASSERT_GT(burst.size(), 300u);
@@ -481,6 +494,16 @@ TEST_F(SlamdBinary, ABurstOfOdometryThatArrivedWhileItWasStoppedIsTakenWhole) {
   EXPECT_EQ(missing(), 0u) << "of the " << burst.size() << " odometry samples of the burst";
   EXPECT_EQ(slamd.stop(20, SIGTERM), 0) << slamd.output();
   EXPECT_EQ(errors.total(), 0);
+}
+
+TEST_F(SlamdBurst, ABurstOfOdometryThatArrivedWhileItWasStoppedIsTakenWhole) {
+  a_burst_is_taken_whole("");
+}
+
+// The input queues follow the configured channel names: renamed inputs fell back to LCM's 30
+// messages, and the burst was lost.
+TEST_F(SlamdBurst, OnRenamedInputChannelsTooIsTakenWhole) {
+  a_burst_is_taken_whole("_RENAMED");
 }
 
 }  // namespace

@@ -13,17 +13,21 @@
 #include <csignal>
 #include <cstdint>
 #include <optional>
+#include <string>
 #include <utility>
+#include <vector>
 
 namespace whiskeye::slamd {
 namespace {
 
 std::atomic<bool> g_stop{false};
 
-// Messages LCM may hold for slamd's loop per input: a minute of odometry and whisk cycles at their
-// nominal rates (50 Hz, about 1 Hz; ~0.3 MB and ~10 MB), ten seconds of camera frames at 5 fps
-// (~30 MB of 640x480 YUYV). A burst beyond them is lost as before, but only a burst that long.
-constexpr std::pair<const char*, int> kInputQueues[] = {{"ODOMETRY", 3000}, {"WHISK_CYCLE", 60}, {"CAMERA", 50}};
+// Messages LCM may hold for slamd's loop per input, by the configured channel names: a minute of
+// odometry and whisk cycles at their nominal rates (50 Hz, about 1 Hz; ~0.3 MB and ~10 MB), ten
+// seconds of camera frames at 5 fps (~30 MB of 640x480 YUYV). A longer burst loses its excess.
+std::vector<std::pair<std::string, int>> input_queues(const NodeChannels& c) {
+  return {{c.odometry, 3000}, {c.cycle, 60}, {c.camera, 50}};
+}
 
 void on_signal(int) { g_stop = true; }
 
@@ -39,7 +43,7 @@ int run_live(const Loaded& cfg, const Options& o) {
   // LCM keeps at most 30 unhandled messages per subscription and drops the rest without a trace: a
   // burst of input (a sender catching up, a busy cycle) then cost the map odometry and frames that a
   // replay of the same messages had (docs/slamd.md, "Input queues").
-  for (const auto& [channel, messages] : kInputQueues) bus.set_queue_capacity(channel, messages);
+  for (const auto& [channel, messages] : input_queues(cfg.node.channels)) bus.set_queue_capacity(channel, messages);
   node.set_logger(warn_line);
   node.set_latency_clock(monotonic_us);
   // The loop only copies the state out; the checksum and the disk are the writer thread's work.
