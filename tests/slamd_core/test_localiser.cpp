@@ -160,15 +160,17 @@ TEST(Localiser, DetectsAKidnapAfterRepeatedDisagreementsInAMappedPlaceOnly) {
   Ring ring([](int i) { return i; });
   LocaliserParams p;
   p.kidnap_disagreements = 3;
+  p.kidnap_window = 3;
   Localiser loc(p);
   ring.map.set_current(10);
-  EXPECT_FALSE(loc.on_tracking_recognition(true, 30, ring.map.size(), ring.map));
-  EXPECT_FALSE(loc.on_tracking_recognition(true, 31, ring.map.size(), ring.map));
-  EXPECT_FALSE(loc.on_tracking_recognition(false, 11, ring.map.size(), ring.map));  // one the gate accepts: the streak restarts
-  EXPECT_FALSE(loc.on_tracking_recognition(true, 30, ring.map.size(), ring.map));
-  EXPECT_FALSE(loc.on_tracking_recognition(true, 31, ring.map.size(), ring.map));
-  EXPECT_FALSE(loc.on_tracking_recognition(false, -1, ring.map.size(), ring.map));  // nothing recognised: no news either way
-  EXPECT_TRUE(loc.on_tracking_recognition(true, 32, ring.map.size(), ring.map));
+  const int n = ring.map.size();
+  EXPECT_FALSE(loc.on_tracking_recognition(true, 30, n, ring.map));
+  EXPECT_FALSE(loc.on_tracking_recognition(true, 31, n, ring.map));
+  EXPECT_FALSE(loc.on_tracking_recognition(false, 11, n, ring.map));  // one the gate accepts
+  EXPECT_FALSE(loc.on_tracking_recognition(true, 30, n, ring.map));   // 2 of the last 3
+  EXPECT_FALSE(loc.on_tracking_recognition(true, 31, n, ring.map));   // 2 of the last 3
+  EXPECT_FALSE(loc.on_tracking_recognition(false, -1, n, ring.map));  // nothing recognised: no news either way
+  EXPECT_TRUE(loc.on_tracking_recognition(true, 32, n, ring.map));    // 3 of the last 3
   EXPECT_TRUE(loc.localising());
   EXPECT_EQ(loc.kidnaps_detected(), 1);
   EXPECT_EQ(loc.hypotheses(), 1);  // the tracked pose; the caller passes the recognition on as evidence
@@ -176,8 +178,28 @@ TEST(Localiser, DetectsAKidnapAfterRepeatedDisagreementsInAMappedPlaceOnly) {
   // Far from everything the map holds (a place never mapped), refusals are aliasing, not a kidnap.
   Localiser away(p);
   ring.map.set_current(10, Pose2{0.0, 5.0, 0.0});
-  for (int i = 0; i < 10; ++i) EXPECT_FALSE(away.on_tracking_recognition(true, 30, ring.map.size(), ring.map));
+  for (int i = 0; i < 10; ++i) EXPECT_FALSE(away.on_tracking_recognition(true, 30, n, ring.map));
   EXPECT_FALSE(away.localising());
+}
+
+// After a kidnap a look-alike within the gate's budget is accepted now and then; the refusals in
+// between still add up. In a normal run a refusal now and then among acceptances never does.
+TEST(Localiser, ALookAlikeAcceptedNowAndThenDoesNotHideAKidnap) {
+  Ring ring([](int i) { return i; });
+  ring.map.set_current(10);
+  const int n = ring.map.size();
+  Localiser kidnapped;  // 4 of the last 8
+  const bool after_kidnap[] = {true, true, false, true, false};
+  for (bool refused : after_kidnap) EXPECT_FALSE(kidnapped.on_tracking_recognition(refused, 30, n, ring.map));
+  EXPECT_TRUE(kidnapped.on_tracking_recognition(true, 30, n, ring.map));
+  Localiser tracking;
+  for (int i = 0; i < 40; ++i) EXPECT_FALSE(tracking.on_tracking_recognition(i % 3 == 0, 30, n, ring.map)) << i;
+  EXPECT_FALSE(tracking.localising());
+}
+
+TEST(Localiser, AWindowTooSmallForItsDisagreementsIsAParamError) {
+  LocaliserParams p;
+  EXPECT_THROW(load(ParamNode::from_string("kidnap_disagreements: 5\nkidnap_window: 4\n"), p), ParamError);
 }
 
 TEST(Localiser, KeepsAtMostMaxHypothesesAndNeverDropsThePrior) {

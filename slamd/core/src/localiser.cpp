@@ -14,6 +14,11 @@ namespace whiskeye::slam {
 
 void load(const ParamNode& n, LocaliserParams& p) {
   n.get("kidnap_disagreements", p.kidnap_disagreements, 0, 1000);
+  n.get("kidnap_window", p.kidnap_window, 1, 1000);
+  if (p.kidnap_disagreements > p.kidnap_window) {
+    n.fail("kidnap_disagreements", "is " + std::to_string(p.kidnap_disagreements) + ", more than kidnap_window (" +
+                                       std::to_string(p.kidnap_window) + "): a kidnap could never be detected");
+  }
   n.get("radius", p.radius, 0.0, 100.0);
   n.get("heading", p.heading, 0.0, kPi);
   n.get("commit_score", p.commit_score, 1, 1000);
@@ -29,7 +34,7 @@ Localiser::Localiser(const LocaliserParams& params) : params_(params) {}
 void Localiser::start(bool with_prior, int prior_score) {
   state_ = LocalisationState::Localising;
   hyps_.clear();
-  disagreements_ = 0;
+  recent_.clear();
   evidence_below_ = std::numeric_limits<int>::max();
   localising_m_ = 0.0;
   if (with_prior) hyps_.push_back({Pose2{}, -1, prior_score, true});
@@ -38,24 +43,27 @@ void Localiser::start(bool with_prior, int prior_score) {
 bool Localiser::on_tracking_recognition(bool refused, int recognised_template, int first_new_id,
                                         const ExperienceMap& map) {
   if (localising() || recognised_template < 0) return false;
-  if (!refused) {
-    disagreements_ = 0;
-    return false;
-  }
-  const int streak_from = disagreements_ == 0 ? first_new_id : streak_from_;
+  // The experiences made since the oldest disagreement still in the window are no evidence.
+  const auto first_refused = std::find_if(recent_.begin(), recent_.end(), [](const Recognition& r) { return r.refused; });
+  const int suspect_from = first_refused != recent_.end() ? first_refused->first_new_id : first_new_id;
   // A disagreement only where the map knows the place the robot thinks it is at (by what it held
   // before the disagreements began): in a place never mapped, a view that is only like one
-  // elsewhere is aliasing, not a kidnap.
-  if (!map.mapped_near(map.current_pose(), std::max(params_.radius, map.drift_budget()), params_.heading, streak_from)) {
+  // elsewhere is aliasing, not a kidnap, and says nothing either way.
+  if (refused && !map.mapped_near(map.current_pose(), std::max(params_.radius, map.drift_budget()), params_.heading,
+                                  suspect_from)) {
     return false;
   }
-  streak_from_ = streak_from;
-  ++disagreements_;
-  if (params_.kidnap_disagreements <= 0 || disagreements_ < params_.kidnap_disagreements) return false;
+  recent_.push_back({refused, first_new_id});
+  while (static_cast<int>(recent_.size()) > params_.kidnap_window) recent_.pop_front();
+  const auto refusals = std::count_if(recent_.begin(), recent_.end(), [](const Recognition& r) { return r.refused; });
+  if (params_.kidnap_disagreements <= 0 || refusals < params_.kidnap_disagreements) return false;
+  const int evidence_below = std::find_if(recent_.begin(), recent_.end(), [](const Recognition& r) {
+                               return r.refused;
+                             })->first_new_id;
   ++kidnaps_detected_;
   // Odometry was trusted until now: where it says the robot is starts as far ahead as a commit must be.
   start(true, params_.commit_margin);
-  evidence_below_ = streak_from_;
+  evidence_below_ = evidence_below;
   return true;
 }
 
@@ -159,7 +167,7 @@ Commit Localiser::commit(const Hypothesis& h, const ExperienceMap& map, bool gav
   }
   state_ = LocalisationState::Tracking;
   hyps_.clear();
-  disagreements_ = 0;
+  recent_.clear();
   localising_m_ = 0.0;
   ++localisations_;
   return c;
@@ -172,8 +180,11 @@ Pose2 Localiser::best_pose(const ExperienceMap& map) const {
 
 void Localiser::serialise(std::vector<uint8_t>& out) const {
   bin::put<uint8_t>(out, static_cast<uint8_t>(state_));
-  bin::put<int32_t>(out, disagreements_);
-  bin::put<int32_t>(out, streak_from_);
+  bin::put<uint32_t>(out, static_cast<uint32_t>(recent_.size()));
+  for (const Recognition& r : recent_) {
+    bin::put<uint8_t>(out, r.refused ? 1 : 0);
+    bin::put<int32_t>(out, r.first_new_id);
+  }
   bin::put<int32_t>(out, evidence_below_);
   bin::put<double>(out, localising_m_);
   bin::put<int64_t>(out, kidnaps_detected_);
@@ -194,13 +205,20 @@ void Localiser::deserialise(const std::vector<uint8_t>& in, size_t& pos, int num
   const auto state = bin::get<uint8_t>(in, pos);
   if (state > static_cast<uint8_t>(LocalisationState::Localising)) throw std::runtime_error("checkpoint: bad localisation state");
   l.state_ = static_cast<LocalisationState>(state);
-  l.disagreements_ = bin::get<int32_t>(in, pos);
-  l.streak_from_ = bin::get<int32_t>(in, pos);
+  const auto recent = bin::get<uint32_t>(in, pos);
+  if (recent > in.size()) throw std::runtime_error("checkpoint: recognition count is larger than the data");
+  for (uint32_t i = 0; i < recent; ++i) {
+    Recognition r;
+    r.refused = bin::get<uint8_t>(in, pos) != 0;
+    r.first_new_id = bin::get<int32_t>(in, pos);
+    if (r.first_new_id < 0) throw std::runtime_error("checkpoint: bad recognition record");
+    l.recent_.push_back(r);
+  }
   l.evidence_below_ = bin::get<int32_t>(in, pos);
   l.localising_m_ = bin::get<double>(in, pos);
   l.kidnaps_detected_ = bin::get<int64_t>(in, pos);
   l.localisations_ = bin::get<int64_t>(in, pos);
-  if (l.disagreements_ < 0 || l.streak_from_ < 0 || l.evidence_below_ < 0 || !std::isfinite(l.localising_m_) || l.localising_m_ < 0.0 || l.kidnaps_detected_ < 0 ||
+  if (l.evidence_below_ < 0 || !std::isfinite(l.localising_m_) || l.localising_m_ < 0.0 || l.kidnaps_detected_ < 0 ||
       l.localisations_ < 0) {
     throw std::runtime_error("checkpoint: bad localisation counters");
   }

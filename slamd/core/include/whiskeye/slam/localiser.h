@@ -17,15 +17,17 @@
 // While tracking, kidnap detection: a recognised template whose every experience lies beyond the
 // odometry-consistency gate's budget is a disagreement between what the robot sees and where it
 // thinks it is — if the map knows the place it thinks it is at (in a place never mapped, a view
-// like one elsewhere is aliasing). `kidnap_disagreements` of them in a row, with no recognition the
-// gate accepts in between, start localising with the tracked pose as one of the hypotheses, ahead
-// by commit_margin (odometry was trusted until then; a false alarm ends by committing back to it).
+// like one elsewhere is aliasing). `kidnap_disagreements` of them among the last `kidnap_window`
+// recognitions (a look-alike within the budget, accepted now and then, does not hide the rest)
+// start localising with the tracked pose as one of the hypotheses, ahead by commit_margin
+// (odometry was trusted until then; a false alarm ends by committing back to it).
 #pragma once
 
 #include "whiskeye/common/params.h"
 #include "whiskeye/common/se2.h"
 
 #include <cstdint>
+#include <deque>
 #include <limits>
 #include <optional>
 #include <vector>
@@ -35,7 +37,10 @@ namespace whiskeye::slam {
 class ExperienceMap;
 
 struct LocaliserParams {
-  int kidnap_disagreements = 4;  // consecutive gate-refused recognitions that start localising; 0: never
+  // Gate-refused recognitions among the last kidnap_window recognitions (where the map knows the
+  // place) that start localising; 0: never.
+  int kidnap_disagreements = 4;
+  int kidnap_window = 8;
   double radius = 0.3;           // m: an experience this near a hypothesis supports it
   double heading = 0.5;          // rad: ... and turned at most this much from it
   int commit_score = 3;          // supports minus misses the best needs
@@ -115,8 +120,13 @@ class Localiser {
   LocaliserParams params_;
   LocalisationState state_ = LocalisationState::Tracking;
   std::vector<Hypothesis> hyps_;
-  int disagreements_ = 0;      // consecutive refused recognitions while tracking
-  int streak_from_ = 0;        // the first experience made since the first of them
+  // The last kidnap_window recognitions while tracking: refused or not, and the first experience
+  // made at or after each.
+  struct Recognition {
+    bool refused = false;
+    int first_new_id = 0;
+  };
+  std::deque<Recognition> recent_;
   int evidence_below_ = std::numeric_limits<int>::max();  // experiences from this id on are no evidence
   double localising_m_ = 0.0;  // travelled since localising started
   int64_t kidnaps_detected_ = 0;

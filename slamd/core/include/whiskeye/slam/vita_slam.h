@@ -25,8 +25,8 @@
 //   experience map: u64 n, n × (f64 x, y, cos θ, sin θ, pc_x, pc_y, pc_θ, i64 utime, i32 template,
 //     visual, tactile id, u8 dense, i32 view shift (version ≥ 2), u8 retired (version ≥ 4)) | u64 links, each (i32 from, to, f64 dx, dy, dθ, i64 utime) |
 //     i32 current | f64 offset x, y, θ | f64 distance travelled since the last re-localisation (version ≥ 3)
-//   localiser: u8 state | i32 disagreements | i32 first experience of the disagreements | i32 first experience
-//     not evidence | f64 m localising | i64 kidnaps detected | i64 localisations |
+//   localiser: u8 state | u32 n, n × (u8 refused, i32 first experience made since) of the last recognitions |
+//     i32 first experience not evidence | f64 m localising | i64 kidnaps detected | i64 localisations |
 //     u64 n, n × (f64 correction x, y, θ, i32 anchor, i32 score, u8 prior)
 #pragma once
 
