@@ -137,8 +137,8 @@ def vita_world(i, arr=0.85, arcr=1.0, lem=0.05, enm=0.001, fc=0, visual=VISUAL, 
     return world_record(i, (arr, arcr, lem, enm, fc), visual, tactile, **kw)
 
 
-class TargetCheck(unittest.TestCase):
-    """--check on scripted records: every target with its figure, met or missed, the exit status."""
+class RecordsCheck(unittest.TestCase):
+    """Scripted world records in a folder, aggregated with --check."""
     def setUp(self):
         self.tmp = tempfile.mkdtemp(prefix="suite_check_")
 
@@ -167,6 +167,10 @@ class TargetCheck(unittest.TestCase):
         self.assertEqual(len(found), 1, [t["target"] for t in self.doc()["targets"]])
         return found[0]
 
+
+
+class TargetCheck(RecordsCheck):
+    """--check on scripted records: every target with its figure, met or missed, the exit status."""
     def good(self, n=24):
         return [vita_world(i) for i in range(1, n + 1)]
 
@@ -338,6 +342,109 @@ def bin_dir(d, **before):
             f.write(f"#!/bin/sh\n{before[tool.replace('-', '_')]}\nexec {os.path.join(BIN, tool)} \"$@\"\n")
         os.chmod(path, stat.S_IRWXU)
     return bins
+
+
+def instant(laps=0.3, false=0, lem=0.04, t=100.0, session=None, localised=True):
+    """One kidnap or session start as run_world records it."""
+    return {"kind": "kidnap" if session is None else "session_start", "t_s": t, "session": session,
+            "localised": localised, "laps": laps if localised else None, "distance_m": None, "time_s": None,
+            "false_localisations": false, "localising_s": 5.0, "lem_after_m": lem if localised else None}
+
+
+def kidnap_world(i, vita, visual=None, tactile=None):
+    """A world of the kidnap scenario: `vita` (and the senses') instants."""
+    w = vita_world(i)
+    w["localisation"] = {"vita": vita, "visual": visual or [instant(false=3) for _ in vita],
+                         "tactile": tactile or [instant(localised=False, false=40) for _ in vita]}
+    return w
+
+
+class LocalisationTargetCheck(RecordsCheck):
+    """--scenario kidnap/restart --check on scripted records: the global-localisation targets."""
+    def good_kidnaps(self, n=24):
+        return [kidnap_world(i, [instant(), instant(t=200.0), instant(t=300.0)]) for i in range(1, n + 1)]
+
+    def test_every_localisation_target_met_and_the_distributions_per_mode(self):
+        self.write(self.good_kidnaps())
+        r = self.check(24, "--scenario", "kidnap")
+        self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
+        for line in ("| ViTa: correctly localised within one lap after >= 95% of kidnaps | 72 of 72 | met |",
+                     "| ViTa: correctly localised within 2 laps after every one of them | 0 of 72 not; slowest 0.30 laps | met |",
+                     "| ViTa: no false localisation after >= 95% of kidnaps | 72 of 72 | met |",
+                     "| ViTa: at most 1 false localisation after any | most 0 | met |",
+                     "| ViTa: error after the localisation <= 0.10 m (mean position error of its events) | worst 0.040 m | met |",
+                     "Visual alone took a false localisation where ViTa took none after 72 instant(s)",
+                     "| tactile | 72 | 0 | 0 | 0 | n/a | n/a | n/a | 72 | 0 | 2880 | 40 |"):
+            self.assertIn(line, r.stdout)
+        loc = self.doc()["summary"]["localisation"]["vita"]
+        self.assertEqual((loc["instants"], loc["within_one_lap"], loc["false_localisations_total"]), (72, 72, 0))
+        self.assertEqual(len(self.doc()["targets"]), 5)  # the normal scenario's targets do not apply
+
+    def test_a_slow_or_false_localisation_is_a_miss_once_beyond_the_share(self):
+        records = self.good_kidnaps()
+        records[2] = kidnap_world(3, [instant(laps=1.5), instant(false=1), instant(t=300.0)])
+        self.write(records)
+        r = self.check(24, "--scenario", "kidnap")
+        self.assertEqual(r.returncode, 0, r.stdout)  # 71 of 72 within a lap and without a false one: >= 95 %
+        records[4] = kidnap_world(5, [instant(laps=2.5), instant(false=2), instant(localised=False, t=300.0)])
+        records[6] = kidnap_world(7, [instant(laps=1.2), instant(false=1), instant(t=300.0)])
+        records[8] = kidnap_world(9, [instant(false=1), instant(), instant(t=300.0)])
+        self.write(records)
+        r = self.check(24, "--scenario", "kidnap")
+        self.assertEqual(r.returncode, 1, r.stdout)
+        self.assertIn("| ViTa: correctly localised within one lap after >= 95% of kidnaps | 68 of 72 | **MISSED** |", r.stdout)
+        self.assertIn("- ViTa: correctly localised within 2 laps after every one of them: 2 of 72 not; slowest 2.50 laps "
+                      "(world 5 (seed 5005) at 100 s, world 5 (seed 5005) at 300 s)", r.stdout)
+        self.assertIn("- ViTa: at most 1 false localisation after any: most 2 (world 5 (seed 5005) at 100 s)", r.stdout)
+        self.assertIn("| ViTa: no false localisation after >= 95% of kidnaps | 68 of 72 | **MISSED** |", r.stdout)
+
+    def test_a_restart_suite_reports_its_session_starts(self):
+        self.write([kidnap_world(i, [instant(t=0.0, session=k) for k in range(1, 5)]) for i in range(1, 25)])
+        r = self.check(24, "--scenario", "restart")
+        self.assertEqual(r.returncode, 0, r.stdout)
+        self.assertIn("## Localisation after each session start", r.stdout)
+        self.assertIn("| ViTa: correctly localised within one lap after >= 95% of session starts | 96 of 96 | met |", r.stdout)
+        self.assertIn("| 1 | 5001 | 0 (session 4) |", read(os.path.join(self.tmp, "suite.md")))
+
+
+class QuickScenarios(unittest.TestCase):
+    """--quick --scenario kidnap and restart through the real programs: one world, one kidnap (one
+    session), every mode's localisation recorded and summarised."""
+    @classmethod
+    def setUpClass(cls):
+        cls.tmp = tempfile.mkdtemp(prefix="suite_scenario_")
+        cls.runs = {s: suite("--quick", "--scenario", s, "--no-plots", "--bin", BIN, "--results", os.path.join(cls.tmp, s))
+                    for s in ("kidnap", "restart")}
+
+    @classmethod
+    def tearDownClass(cls):
+        shutil.rmtree(cls.tmp)
+
+    def test_each_scenario_records_every_modes_localisation(self):
+        for scenario, kind in (("kidnap", "kidnap"), ("restart", "session_start")):
+            r = self.runs[scenario]
+            self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
+            with open(os.path.join(self.tmp, scenario, "suite.json")) as f:
+                doc = json.load(f)
+            self.assertEqual(doc["scenario"], scenario)
+            [w] = doc["worlds"]
+            for mode in ("visual", "tactile", "vita"):
+                [i] = w["localisation"][mode]
+                self.assertEqual(i["kind"], kind)
+                self.assertEqual(doc["summary"]["localisation"][mode]["instants"], 1)
+            self.assertEqual(len(doc["targets"]), 5)
+            self.assertIn(f"scenario {scenario}", r.stdout)
+        # No log, map or state directory is left behind.
+        left = [f for _, _, files in os.walk(self.tmp) for f in files if f.endswith((".lcmlog", ".vslam"))]
+        self.assertEqual(left, [])
+
+    def test_a_kidnap_scenario_with_laps_is_refused(self):
+        r = suite("--quick", "--scenario", "kidnap", "--laps", "2", "--bin", BIN, "--results", self.tmp)
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("--laps: a kidnap scenario runs each world's own laps", r.stderr)
+        r = suite("--scenario", "wander", "--bin", BIN, "--results", self.tmp)
+        self.assertEqual(r.returncode, 2)
+        self.assertIn("--scenario: unknown scenario 'wander'", r.stderr)
 
 
 class BadInput(unittest.TestCase):
