@@ -41,10 +41,15 @@ void check_no_duplicate_keys(const YAML::Node& node, const std::string& path, co
   }
 }
 
-// A config is written out in full: an anchor (&name) would let an alias (*name) stand for a copy of
-// it, and nested aliases expand exponentially (a few hundred bytes, billions of nodes) in every walk
-// of the tree. Refused before the tree is built, at the first anchor or alias, naming its line;
-// yaml-cpp's event parser reads the text once without expanding anything.
+// Values (scalars, lists, maps) a config may hold. yaml-cpp's tree costs ~100 times the text it
+// holds, so the bound is on the text's values before any tree is built: the largest file of the
+// stack (a world with a long lighting.changes list) holds a few hundred.
+constexpr long kMaxYamlValues = 100'000;
+
+// What every config is refused for before its tree is built, by yaml-cpp's event parser, which reads
+// the text once and expands nothing: an anchor (&name) or an alias (*name), naming its line (an
+// alias stands for a copy of its anchor, and nested aliases expand exponentially: a few hundred
+// bytes, billions of values in every walk of the tree); more than kMaxYamlValues values.
 class NoAnchors final : public YAML::EventHandler {
  public:
   explicit NoAnchors(const std::string& source) : source_(source) {}
@@ -69,7 +74,12 @@ class NoAnchors final : public YAML::EventHandler {
  private:
   void check(const YAML::Mark& mark, YAML::anchor_t anchor) {
     if (anchor != YAML::NullAnchor) refuse(mark, "an anchor");
+    if (++values_ > kMaxYamlValues) {
+      throw ParamError(source_ + ": line " + std::to_string(mark.line + 1) + ": more than " +
+                       std::to_string(kMaxYamlValues) + " values in one file (no config of the stack needs so many)");
+    }
   }
+  long values_ = 0;
   [[noreturn]] void refuse(const YAML::Mark& mark, const std::string& what) {
     throw ParamError(source_ + ": line " + std::to_string(mark.line + 1) + ": " + what +
                      ": YAML anchors and aliases are not accepted (write each value out where it is used)");

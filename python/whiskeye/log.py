@@ -25,6 +25,7 @@ does not).
 import importlib
 import mmap
 import os
+import re
 import stat
 import struct
 import warnings
@@ -36,6 +37,10 @@ _SYNC_BYTES = struct.pack(">I", SYNC)
 _HEADER = struct.Struct(">Iqqii")  # sync, event number, timestamp (us), channel length, data length
 HEADER_SIZE = _HEADER.size  # 28
 MAX_CHANNEL_LENGTH = 1000  # what LCM's reader accepts (and common/src/bus.cpp)
+# Where a plausible event may start: the sync word, 16 bytes, a channel length below 1024 and a data
+# length that is not negative. Searched for in C, so that garbage of sync words (every 4 bytes a
+# candidate) is skipped at the speed of the regex engine; each hit is then checked by _check.
+_CANDIDATE = re.compile(re.escape(_SYNC_BYTES) + rb".{16}\x00\x00[\x00-\x03].[\x00-\x7f]", re.DOTALL)
 
 __all__ = ["read", "Reader", "Event", "LogDamage", "LogError", "LogDamageWarning", "UnknownChannelError",
            "DecodeError", "type_for_channel", "SYNC", "HEADER_SIZE"]
@@ -193,11 +198,12 @@ class Reader:
                 self.damage.places += 1
                 at = pos + 1
                 while True:
-                    at = buf.find(_SYNC_BYTES, at)
-                    if at < 0:
+                    hit = _CANDIDATE.search(buf, at)
+                    if hit is None:
                         self.damage.skipped_bytes += size - pos
                         self.damage.truncated_tail = truncated
                         return
+                    at = hit.start()
                     total, _ = self._check(buf, size, at)
                     if total:
                         break

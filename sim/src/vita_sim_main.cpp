@@ -204,7 +204,13 @@ int generate(GeneratorOptions options, const std::vector<RangeOption>& ranges, c
     check.visual = slam.visual;
     check.match = slam.match;
   }
-  const GeneratedWorld g = generate_world(options, robot, check);
+  GeneratedWorld g;
+  try {
+    g = generate_world(options, robot, check);
+  } catch (const GeneratorOptionError& e) {  // a request no world can meet, said before any draw
+    std::cerr << "vita-sim: " << e.what() << "\n";
+    return 2;
+  }
   std::ofstream out(output_world, std::ios::binary | std::ios::trunc);
   out << g.yaml;
   out.flush();

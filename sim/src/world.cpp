@@ -177,6 +177,18 @@ void refuse_overlaps(const std::vector<ParamNode>& nodes, const std::vector<Inte
   }
 }
 
+// The list `key` of `n`, refused beyond `max` items: every list of a world is short (a generated
+// world's longest, lighting.changes, holds tens), and a longer one is a mistake that would cost
+// the loader and the renderer in proportion (fault intervals are checked pairwise).
+std::vector<ParamNode> bounded_list(const ParamNode& n, const std::string& key, std::size_t max) {
+  std::vector<ParamNode> items = n.list(key);
+  if (items.size() > max) {
+    bad(n, key, "has " + std::to_string(items.size()) + " items, at most " + std::to_string(max));
+  }
+  return items;
+}
+constexpr std::size_t kMaxFaults = 1000;  // per kind
+
 Faults load_faults(const ParamNode& node) {
   Faults f;
   node.get("dead_whiskers", f.dead_whiskers);
@@ -187,7 +199,7 @@ Faults load_faults(const ParamNode& node) {
       if (f.dead_whiskers[j] == w) bad(node, "dead_whiskers", "repeats whisker " + std::to_string(w));
     }
   }
-  const std::vector<ParamNode> boards = node.list("board_offline");
+  const std::vector<ParamNode> boards = bounded_list(node, "board_offline", kMaxFaults);
   for (const ParamNode& n : boards) {
     BoardOffline b = load_interval<BoardOffline>(n);
     n.require("board", b.board);
@@ -197,13 +209,13 @@ Faults load_faults(const ParamNode& node) {
   refuse_overlaps(boards, f.board_offline, "board_offline",
                   [](const BoardOffline& a, const BoardOffline& b) { return a.board == b.board; });
   const auto any = [](const auto&, const auto&) { return true; };
-  const std::vector<ParamNode> blackouts = node.list("camera_blackout");
+  const std::vector<ParamNode> blackouts = bounded_list(node, "camera_blackout", kMaxFaults);
   for (const ParamNode& n : blackouts) f.camera_blackout.push_back(load_interval<FaultInterval>(n));
   refuse_overlaps(blackouts, f.camera_blackout, "camera_blackout", any);
-  const std::vector<ParamNode> freezes = node.list("camera_freeze");
+  const std::vector<ParamNode> freezes = bounded_list(node, "camera_freeze", kMaxFaults);
   for (const ParamNode& n : freezes) f.camera_freeze.push_back(load_interval<FaultInterval>(n));
   refuse_overlaps(freezes, f.camera_freeze, "camera_freeze", any);
-  const std::vector<ParamNode> slips = node.list("odometry_slip");
+  const std::vector<ParamNode> slips = bounded_list(node, "odometry_slip", kMaxFaults);
   for (const ParamNode& n : slips) {
     OdometrySlip s = load_interval<OdometrySlip>(n);
     n.require("scale", s.scale);
@@ -211,7 +223,7 @@ Faults load_faults(const ParamNode& node) {
     f.odometry_slip.push_back(s);
   }
   refuse_overlaps(slips, f.odometry_slip, "odometry_slip", any);
-  const std::vector<ParamNode> kidnaps = node.list("kidnap");
+  const std::vector<ParamNode> kidnaps = bounded_list(node, "kidnap", kMaxFaults);
   for (std::size_t i = 0; i < kidnaps.size(); ++i) {
     const ParamNode& n = kidnaps[i];
     Kidnap k;
@@ -298,22 +310,31 @@ void load(const ParamNode& node, World& world) {
   node.get("name", w.name);
   node.get("floor_value", w.floor_value, 0.0, 1.0);
   node.get("sky_value", w.sky_value, 0.0, 1.0);
-  for (const ParamNode& n : node.list("patterns")) {
+  for (const ParamNode& n : bounded_list(node, "patterns", 256)) {
     Pattern p = load_pattern(n);
     if (w.pattern_index(p.name) >= 0) bad(n, "name", "repeats the pattern name '" + p.name + "'");
     w.patterns.push_back(std::move(p));
   }
   double wall_height = 1.0;
   node.get("wall_height", wall_height, 0.01, 100.0);
-  for (const ParamNode& n : node.list("walls")) w.walls.push_back(load_panel(n, w, wall_height));
-  for (const ParamNode& n : node.list("visual_landmarks")) w.landmarks.push_back(load_panel(n, w, wall_height));
-  for (const ParamNode& n : node.list("tactile_landmarks")) w.solids.push_back(load_solid(n, w));
+  for (const ParamNode& n : bounded_list(node, "walls", 1000)) w.walls.push_back(load_panel(n, w, wall_height));
+  for (const ParamNode& n : bounded_list(node, "visual_landmarks", 1000)) {
+    w.landmarks.push_back(load_panel(n, w, wall_height));
+  }
+  for (const ParamNode& n : bounded_list(node, "tactile_landmarks", 1000)) {
+    Solid s = load_solid(n, w);
+    // A name stands for one landmark (the summary counts contacts by name): never two.
+    for (const Solid& other : w.solids) {
+      if (!s.name.empty() && other.name == s.name) bad(n, "name", "repeats the tactile landmark name '" + s.name + "'");
+    }
+    w.solids.push_back(std::move(s));
+  }
 
   const ParamNode light = node.section("lighting");
   light.get("brightness", w.lighting.brightness, 0.0, 10.0);
   light.get("ambient", w.lighting.ambient, 0.0, 1.0);
   light.get("attenuation", w.lighting.attenuation, 0.0, 10.0);
-  for (const ParamNode& n : light.list("changes")) {
+  for (const ParamNode& n : bounded_list(light, "changes", 10000)) {
     LightChange c;
     n.require("start", c.start);
     n.get("duration", c.duration, 0.0, 1e6);

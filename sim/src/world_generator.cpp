@@ -98,6 +98,8 @@ const std::vector<ObjectShape>& object_library() {
 constexpr double kObjectHalfLength = 0.15;
 // Whiskers reach at most this far from the head (robot.yaml's longest is 0.17 m).
 constexpr double kReach = 0.20;
+// The near face of a tactile landmark is drawn 0.08-0.10 m outside the head's path.
+constexpr double kMinGap = 0.08, kMaxGap = 0.10;
 
 struct PatternSpec {
   std::string name;
@@ -639,7 +641,7 @@ void draw_layout(Rng& rng, const GeneratorOptions& o, Draft& d) {
   d.sigma_v = 0.005 * noise;
   d.sigma_omega = 0.003 * noise;
   d.camera_noise = rng.uniform(o.camera_noise);
-  d.gap = rng.uniform(0.08, 0.10);
+  d.gap = rng.uniform(kMinGap, kMaxGap);
   const double duration = d.laps * 2.0 * kPi * d.radius / d.speed;
   if (rng.chance(o.lighting_change_probability)) {
     if (rng.chance(0.5)) {
@@ -912,8 +914,33 @@ std::string header(const GeneratorOptions& o, const GeneratedWorld& g, const Dra
 
 }  // namespace
 
+namespace {
+
+// Throws GeneratorOptionError if no draw of `o` can fit: its best case, the smallest trajectory in
+// the largest arena, must hold the head's path and outside it the tactile landmarks (the gap, the
+// deepest shape) and the whiskers' reach inside the walls. Each draw renders and matches a lap of
+// views (seconds): an impossible request is said at once, not after every draw has failed.
+void check_fits(const GeneratorOptions& o, const RobotGeometry& robot) {
+  double deepest = 0.0;  // radially, of any tactile landmark
+  for (const ObjectShape& s : object_library()) {
+    if (s.circle) deepest = std::max(deepest, 2.0 * s.radius);
+    for (const auto& [x, y] : s.points) deepest = std::max(deepest, x);
+  }
+  const double head_r = head_path_radius(o.radius.min, robot);
+  const double needs = head_r + std::max(kMinGap + deepest, kReach);
+  if (needs >= o.side.max / 2.0) {
+    throw GeneratorOptionError("--radius " + num(o.radius.min, 3) + ".." + num(o.radius.max, 3) + " in --arena-side " +
+                               num(o.side.min, 3) + ".." + num(o.side.max, 3) + ": no world fits (the head's path at " +
+                               num(head_r, 3) + " m and what stands outside it need " + num(needs, 3) +
+                               " m from the centre, the largest arena has " + num(o.side.max / 2.0, 3) + " m to its walls)");
+  }
+}
+
+}  // namespace
+
 GeneratedWorld generate_world(const GeneratorOptions& o, const RobotGeometry& robot, const AliasCheckParams& check) {
   validate(o);
+  check_fits(o, robot);
   // One stream per seed; each draw continues it, so a seed's world does not depend on the machine.
   Rng rng(o.world_seed * 0x2545F4914F6CDD1Dull + 0x5851F42D4C957F2Dull);
   GeneratedWorld g;

@@ -154,6 +154,19 @@ class Unit(unittest.TestCase):
         self.assertEqual(checked_in, generated, "python/whiskeye/channels.py is out of date with channels.h: "
                          "copy build/python/whiskeye/channels.py over it")
 
+    def test_garbage_of_sync_words_is_skipped_to_the_next_event(self):
+        write_log(self.path("whole.lcmlog"), self.sample_events())
+        data = open(self.path("whole.lcmlog"), "rb").read()
+        at = data.find(struct.pack(">I", 0xEDA1DA01), len(data) // 2)
+        # Every 4 bytes a candidate, each failing; a header's worth of zeros so none reads the next one.
+        garbage = struct.pack(">I", 0xEDA1DA01) * 16384 + bytes(28)
+        open(self.path("sync.lcmlog"), "wb").write(data[:at] + garbage + data[at:])
+        reader = whiskeye.log.read(self.path("sync.lcmlog"))
+        with self.assertWarns(whiskeye.log.LogDamageWarning):
+            events = list(reader)
+        self.assertEqual(len(events), 10)
+        self.assertEqual((reader.damage.skipped_bytes, reader.damage.places), (len(garbage), 1))
+
     def test_decoding_says_what_is_wrong(self):
         pose = whiskeye.vita_pose_t().encode()
         write_log(self.path("odd.lcmlog"), [(1, "NOT_OURS", pose), (2, "VITA_MAP", pose), (3, "VITA_POSE", pose[:-3])])

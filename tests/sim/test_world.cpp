@@ -69,6 +69,40 @@ TEST(World, RejectsADegeneratePolygon) {
                ParamError);
 }
 
+// The ParamError message of loading `yaml` (a world's body), or "" if it loads.
+std::string world_error(const std::string& yaml) {
+  try {
+    world_from_yaml(yaml);
+    return "";
+  } catch (const ParamError& e) {
+    return e.what();
+  }
+}
+
+TEST(World, ATactileLandmarkNameGivenTwiceIsRefusedNamingIt) {
+  const std::string box = "{name: box_east, shape: circle, pose: [0, 0, 0], radius: 0.1, z: [0, 0.3], pattern: p}";
+  const std::string error = world_error("  patterns: [{name: p}]\n  tactile_landmarks:\n    - " + box + "\n    - " + box + "\n");
+  EXPECT_NE(error.find("'world.tactile_landmarks[1].name' repeats the tactile landmark name 'box_east'"), std::string::npos)
+      << error;
+}
+
+TEST(World, AListLongerThanAWorldNeedsIsRefusedNamingItsLength) {
+  std::string changes = "  lighting:\n    changes:\n";
+  for (int i = 0; i <= 10000; ++i) changes += "      - {start: " + std::to_string(i) + "}\n";
+  const std::string error = world_error(changes);
+  EXPECT_NE(error.find("'world.lighting.changes' has 10001 items, at most 10000"), std::string::npos) << error;
+  std::string slips = "  faults:\n    odometry_slip:\n";
+  for (int i = 0; i <= 1000; ++i) slips += "      - {start: " + std::to_string(2 * i) + ", duration: 1, scale: 1.2}\n";
+  EXPECT_NE(world_error(slips).find("'world.faults.odometry_slip' has 1001 items, at most 1000"), std::string::npos)
+      << world_error(slips);
+}
+
+TEST(World, AFileOfMoreValuesThanAnyWorldHoldsIsRefusedBeforeItIsBuilt) {
+  std::string changes = "  lighting:\n    changes:\n";
+  for (int i = 0; i < 40000; ++i) changes += "      - {start: 1}\n";  // 3 values each
+  EXPECT_NE(world_error(changes).find("more than 100000 values in one file"), std::string::npos);
+}
+
 TEST(World, RayThroughACircleEntersAndLeavesAtTheRightDistances) {
   const World w = world_from_yaml("  patterns: [{name: p}]\n  tactile_landmarks:\n"
                                   "    - {shape: circle, pose: [2, 0, 0], radius: 0.5, z: [0, 1], pattern: p}\n");

@@ -171,6 +171,22 @@ TEST(WorldGenerator, RefusesBadOptionsNamingThem) {
   }
 }
 
+TEST(WorldGenerator, ARequestNoWorldCanFitIsRefusedBeforeTheFirstDraw) {
+  GeneratorOptions o;
+  o.side = {4.0, 4.0};
+  o.radius = {2.0, 2.0};  // the head's path alone is past the walls
+  o.max_attempts = 2;     // without the check: two draws (seconds each), then a runtime_error
+  try {
+    generate_world(o, default_robot_geometry(), check_params());
+    ADD_FAILURE() << "generated a world";
+  } catch (const GeneratorOptionError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("--radius 2.000..2.000 in --arena-side 4.000..4.000: no world fits (the head's path at ", 0), 0u)
+        << e.what();
+  }
+  o.radius = {0.8, 1.3};  // the defaults fit
+  EXPECT_NO_THROW(validate(o));
+}
+
 // ---- the executable ----
 
 std::string temp_path(const std::string& name) {
@@ -212,6 +228,9 @@ TEST(VitaSimGenerate, BadGeneratorOptionsExitTwoNamingTheOption) {
   EXPECT_EQ(vita_sim("--generate-world --speed fast" + out, err), 2);
   EXPECT_NE(slurp(err).find("--speed"), std::string::npos) << slurp(err);
   EXPECT_EQ(vita_sim("--generate-world", err), 2);  // no --output-world
+  EXPECT_EQ(vita_sim("--generate-world --arena-side 4 --radius 2" + out, err), 2);
+  EXPECT_NE(slurp(err).find("vita-sim: --radius 2.000..2.000 in --arena-side 4.000..4.000: no world fits"), std::string::npos)
+      << slurp(err);
   EXPECT_FALSE(fs::exists(temp_path("never.yaml")));
   fs::remove(err);
 }
