@@ -30,6 +30,7 @@ struct Event {
   int64_t took_us = 100'000;
   uint32_t sequence = 0;
   v4l2::FrameCheck skip = v4l2::FrameCheck::kUsable;
+  bool torn = false;  // a frame the driver writes again while it is read (v4l2loopback's ring)
 };
 
 class FakeSession final : public CaptureSession {
@@ -52,6 +53,7 @@ class FakeSession final : public CaptureSession {
       frame.pixelformat = v4l2::kGREY;
       frame.utime = time_.now_us + kEpochOffsetUs - 1000;  // captured 1 ms ago
       frame.sequence = e.sequence;
+      lent_torn_ = e.torn;
     } else if (e.result == Capture::Result::kSkipped) {
       ++corrupt_;
       last_skip_ = e.skip;
@@ -70,6 +72,14 @@ class FakeSession final : public CaptureSession {
   int64_t corrupt_frames() const override { return corrupt_; }
   v4l2::FrameCheck last_skip() const override { return last_skip_; }
   int64_t requeue_failures() const override { return 0; }
+  bool lent_frame_overwritten() override {
+    if (!lent_torn_) return false;
+    ++corrupt_;
+    ++overwritten_;
+    last_skip_ = v4l2::FrameCheck::kOverwritten;
+    return true;
+  }
+  int64_t overwritten_frames() const override { return overwritten_; }
 
  private:
   FakeTime& time_;
@@ -77,7 +87,8 @@ class FakeSession final : public CaptureSession {
   std::vector<uint8_t> pixels_{10, 20, 30, 40};
   std::string device_ = "/dev/video0";
   std::string last_error_;
-  int64_t corrupt_ = 0;
+  int64_t corrupt_ = 0, overwritten_ = 0;
+  bool lent_torn_ = false;
   v4l2::FrameCheck last_skip_ = v4l2::FrameCheck::kUsable;
 };
 
@@ -290,6 +301,23 @@ TEST_F(CameraNodeTest, DamagedFrameIsCountedLoggedOnceAndNotPublished) {
   ASSERT_EQ(statuses_.size(), 1u);
   EXPECT_EQ(counter(statuses_[0], "corrupt_frames"), 2) << "a closed session's count is kept";
   EXPECT_EQ(counter(statuses_[0], "device_lost"), 1);
+}
+
+TEST_F(CameraNodeTest, AFrameOverwrittenWhileItWasReadIsCountedApartAndNotPublished) {
+  std::deque<Event> s = frames(4);
+  s[1].torn = true;
+  s[2].torn = true;
+  s.push_back(gone());
+  add_session(std::move(s));
+  add_session(frames(20, 10));
+  run_until(1'000'000);
+  ASSERT_GE(images_.size(), 2u);
+  EXPECT_EQ(images_[0].seq, 0);
+  EXPECT_EQ(images_[1].seq, 3) << "torn frames 1 and 2 are not published";
+  EXPECT_EQ(log_lines_containing("skipping a frame overwritten by the driver while it was read (torn)"), 1);
+  ASSERT_EQ(statuses_.size(), 1u);
+  EXPECT_EQ(counter(statuses_[0], "corrupt_frames"), 2);
+  EXPECT_EQ(counter(statuses_[0], "overwritten_frames"), 2) << "a closed session's count is kept";
 }
 
 TEST_F(CameraNodeTest, OnlyDamagedFramesIsDegradedAndReopened) {
