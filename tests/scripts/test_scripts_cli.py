@@ -13,9 +13,10 @@ SCRIPTS = os.path.join(sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.pat
 # lcm-spy itself, so only its --help is ours.
 BAD = {
     "demo": [["--bogus"], ["--seed"], ["--seed", "2", "--laps"]],
+    "demo-kidnap": [["--bogus"], ["--seed"], ["--at"], ["--seed", "2", "--to-angle"]],
     "seeds": [["--bogus"], ["--world"]],
     "fuzz": [["--bogus"], ["--minutes"], ["--seconds", "x"], ["no_such_target"]],
-    "suite": [["--bogus"], ["--worlds"], ["--worlds", "x"]],
+    "suite": [["--bogus"], ["--worlds"], ["--worlds", "x"], ["--scenario", "wander"]],
     "install-deps": [["--bogus"]],
     "netns-run": [[]],
     "test": [["--no-such-stage"]],

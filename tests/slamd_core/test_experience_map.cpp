@@ -397,6 +397,39 @@ TEST(ExperienceMap, ARetiredExperienceIsNeverACandidateAndStaysRetiredInACheckpo
   EXPECT_EQ(m.experiences_of(1), std::vector<int>{2});
 }
 
+// gate_refused (a suspected kidnap's evidence, localiser.h) is set only when the gate alone refused:
+// no experience of the template within the budget, whatever its view shift, and one beyond it that
+// the view-shift rule would have taken.
+TEST(ExperienceMap, ARecognitionIsGateRefusedOnlyWhenTheGateAloneRefusedIt) {
+  const PoseCells cells{PoseCellParams{}};
+  ExperienceMapParams p;
+  p.drift_base = 0.25;
+  p.drift_per_m = 0.15;
+  ExperienceMap m(p);
+  m.on_cycle(0, 0, -1, false, 0, 0, 0, cells, 1000);  // experience 0 of template 0 at the origin, shift 0
+  m.integrate(1.0, 0.0, 0.0, 1.0);
+  m.on_cycle(1, 1, -1, false, 0, 0, 0, cells, 2000);  // experience 1 of template 1 at 1 m
+  // Template 0 again 1 m from its only experience (budget 0.25 + 0.15 · 1 m): refused by the gate.
+  m.integrate(0.05, 0.0, 0.0, 1.0);
+  Event e = m.on_cycle(0, 0, -1, false, 0, 0, 0, cells, 3000);
+  EXPECT_EQ(e.type, EventType::NewExperience);
+  EXPECT_TRUE(e.gate_refused);
+  // Template 1 here, its experience 5 cm away but seen 10 columns turned: the same place from another
+  // pose (a new experience by the view-shift rule), not a disagreement.
+  m.integrate(0.05, 0.0, 0.0, 1.0);
+  e = m.on_cycle(1, 1, -1, false, 0, 0, 0, cells, 4000, 10);
+  EXPECT_EQ(e.type, EventType::NewExperience);
+  EXPECT_FALSE(e.gate_refused);
+  // Template 0 1 m from its only experience but seen 10 columns turned from it: set aside by the
+  // view-shift rule as well, so not the gate's refusal alone.
+  ExperienceMap far(p);
+  far.on_cycle(0, 0, -1, false, 0, 0, 0, cells, 1000);
+  far.integrate(1.0, 0.0, 0.0, 1.0);
+  e = far.on_cycle(0, 0, -1, false, 0, 0, 0, cells, 2000, 10);
+  EXPECT_EQ(e.type, EventType::NewExperience);
+  EXPECT_FALSE(e.gate_refused);
+}
+
 TEST(ExperienceMap, SerialisationRoundTripsExactly) {
   const PoseCells cells{PoseCellParams{}};
   ExperienceMap m;

@@ -259,14 +259,18 @@ Event ExperienceMap::on_cycle(int template_id, int visual_template_id, int tacti
     const bool by_map = gate && travel_ > params_.packet_trust_m;
     const Pose2 here = gate ? current_pose() : Pose2{};  // the map's distances only matter with the gate
     const double budget = drift_budget();
-    bool beyond_budget = false;
+    // Refused by the gate alone: no experience of the template within the budget, whatever its view
+    // shift (one within it seen from another pose is the same place), and one beyond it that the
+    // view-shift rule would take (the view is that place's, seen as it was then).
+    bool within_budget = !gate, refused_beyond = false;
     for (int id : *candidates) {
       const Experience& e = meta_[static_cast<size_t>(id)];
-      if (!frozen_ && std::abs(view_shift - e.view_shift) > max_shift) continue;
       const auto i = static_cast<size_t>(id);
       const double dm = gate ? std::hypot(x_[i] - here.x, y_[i] - here.y) : 0.0;
+      within_budget = within_budget || dm <= budget;
+      if (!frozen_ && std::abs(view_shift - e.view_shift) > max_shift) continue;
       if (gate && dm > budget) {
-        beyond_budget = true;
+        refused_beyond = true;
         continue;
       }
       const double d = by_map ? dm : cells.distance(e.pc_x, e.pc_y, e.pc_theta, pc_x, pc_y, pc_theta);
@@ -279,7 +283,7 @@ Event ExperienceMap::on_cycle(int template_id, int visual_template_id, int tacti
     // No candidate left by the view-shift rule (never when frozen, which ignores it), or none near.
     if (nearest < 0 || (dmin > limit && !frozen_)) {
       if (!degraded && !frozen_) create();
-      ev.gate_refused = nearest < 0 && beyond_budget;
+      ev.gate_refused = !within_budget && refused_beyond;
     } else if (nearest != current_) {
       const int from = current_;
       if (from >= 0 && !frozen_) {

@@ -105,8 +105,10 @@ struct Event {
   EventType type = EventType::SameExperience;
   int from_id = -1;
   int to_id = -1;
-  // A template was recognised whose every experience (that the view-shift rule allows) lies beyond
-  // the odometry-consistency gate's budget: what the robot sees disagrees with where it thinks it is.
+  // A template was recognised whose every experience lies beyond the odometry-consistency gate's
+  // budget (one within it, even if the view-shift rule set it aside, is the same place seen from
+  // another pose), and one of them would have been taken but for the gate: what the robot sees
+  // disagrees with where it thinks it is.
   bool gate_refused = false;
 };
 
