@@ -313,6 +313,7 @@ TEST(VitaSlam, AKidnapIsDetectedAndTheRobotLocalisesWhereItReallyIs) {
     SCOPED_TRACE(to_string(mode));
     SlamParams p;
     p.mode = mode;
+    p.localisation.kidnap_disagreements = 4;  // off as shipped
     VitaSlam slam(p, w.geometry);
     const double omega = kTwoPi / 12.0;
     int c = 1;
@@ -382,29 +383,59 @@ TEST(VitaSlam, OnASavedMapItLocalisesBeforeItLearnsAnything) {
   EXPECT_FALSE(empty.localiser().localising());
 }
 
+// `blob` resumed by a daemon: localising first if odometry comes back more than 30 s after its last.
+VitaSlam resumed_from(const std::vector<uint8_t>& blob, const SlamParams& p, const World& w) {
+  VitaSlam s = VitaSlam::deserialise(blob, p, w.geometry);
+  s.localise_if_moved_for(30.0);
+  return s;
+}
+
+// One cycle of the 12-place loop at `place`, cycle (and second) `c`.
+CycleResult loop_cycle(VitaSlam& s, World& w, int place, int c) {
+  const double omega = kTwoPi / 12.0;
+  return s.process_cycle(input(w.place(place), c, odometry(c, 0.0, omega, omega)));
+}
+
 // A resumed checkpoint goes on tracking after a quick restart and localises after a long one (the
 // robot may have been moved while slamd was down), judged by the odometry's gap.
 TEST(VitaSlam, AResumedMapLocalisesFirstOnlyWhenOdometryResumesLongAfterItsLast) {
   World w;
   SlamParams p;
   p.mode = Mode::Visual;
-  const double omega = kTwoPi / 12.0;
   const std::vector<uint8_t> blob = two_laps_mapped(w, p);
-  VitaSlam quick = VitaSlam::deserialise(blob, p, w.geometry);
-  quick.localise_if_moved_for(30.0);
-  const CycleResult a = quick.process_cycle(input(w.place(0), 25, odometry(25, 0.0, omega, omega)));  // 1 s on
-  EXPECT_FALSE(a.localising);
+  VitaSlam quick = resumed_from(blob, p, w);
+  EXPECT_FALSE(loop_cycle(quick, w, 0, 25).localising);  // odometry 1 s on
   EXPECT_EQ(quick.localiser().localisations(), 0);
-  VitaSlam later = VitaSlam::deserialise(blob, p, w.geometry);
-  later.localise_if_moved_for(30.0);
-  const CycleResult b = later.process_cycle(input(w.place(0), 100, odometry(100, 0.0, omega, omega)));  // 76 s on
+  VitaSlam later = resumed_from(blob, p, w);
+  const CycleResult b = loop_cycle(later, w, 0, 100);  // 76 s on
   EXPECT_TRUE(b.localising || later.localiser().localisations() == 1);
   // Armed once: later cycles are not restarts.
-  VitaSlam once = VitaSlam::deserialise(blob, p, w.geometry);
-  once.localise_if_moved_for(30.0);
-  once.process_cycle(input(w.place(0), 25, odometry(25, 0.0, omega, omega)));
-  const CycleResult c = once.process_cycle(input(w.place(1), 100, odometry(100, 0.0, omega, omega)));
-  EXPECT_FALSE(c.localising);
+  VitaSlam once = resumed_from(blob, p, w);
+  loop_cycle(once, w, 0, 25);
+  EXPECT_FALSE(loop_cycle(once, w, 1, 100).localising);
+}
+
+// While localising with where odometry says as a candidate (a resume after a long gap, a suspected
+// kidnap), a place the map never had is mapped on tentatively; on a saved map (no such candidate)
+// nothing is learnt.
+TEST(VitaSlam, WhileLocalisingWithAPriorANewPlaceIsMappedTentatively) {
+  World w;
+  SlamParams p;
+  p.mode = Mode::Visual;
+  const std::vector<uint8_t> blob = two_laps_mapped(w, p);
+  VitaSlam resumed = resumed_from(blob, p, w);
+  const int experiences = resumed.map().size(), templates = resumed.templates().size();
+  const CycleResult r = loop_cycle(resumed, w, 50, 100);  // a place never seen, 76 s on
+  ASSERT_TRUE(r.localising);
+  EXPECT_TRUE(r.match.is_new);
+  EXPECT_EQ(resumed.templates().size(), templates + 1);
+  EXPECT_EQ(resumed.map().size(), experiences + 1);
+  EXPECT_EQ(r.event.type, EventType::NewExperience);
+  VitaSlam saved = VitaSlam::deserialise(blob, p, w.geometry);
+  saved.start_localising(false);
+  ASSERT_TRUE(loop_cycle(saved, w, 50, 100).localising);
+  EXPECT_EQ(saved.map().size(), experiences);
+  EXPECT_EQ(saved.templates().size(), templates);
 }
 
 TEST(VitaSlam, ARestoredCheckpointProducesByteIdenticalResults) {

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <unordered_map>
 #include <stdexcept>
 #include <string>
 
@@ -31,13 +32,17 @@ void load(const ParamNode& n, LocaliserParams& p) {
 
 Localiser::Localiser(const LocaliserParams& params) : params_(params) {}
 
-void Localiser::start(bool with_prior, int prior_score) {
+void Localiser::start(bool with_prior, int prior_score, int evidence_below) {
   state_ = LocalisationState::Localising;
   hyps_.clear();
   recent_.clear();
-  evidence_below_ = std::numeric_limits<int>::max();
+  evidence_below_ = evidence_below;
   localising_m_ = 0.0;
   if (with_prior) hyps_.push_back({Pose2{}, -1, prior_score, true});
+}
+
+bool Localiser::has_prior() const {
+  return std::any_of(hyps_.begin(), hyps_.end(), [](const Hypothesis& h) { return h.prior; });
 }
 
 bool Localiser::on_tracking_recognition(bool refused, int recognised_template, int first_new_id,
@@ -62,12 +67,12 @@ bool Localiser::on_tracking_recognition(bool refused, int recognised_template, i
                              })->first_new_id;
   ++kidnaps_detected_;
   // Odometry was trusted until now: where it says the robot is starts as far ahead as a commit must be.
-  start(true, params_.commit_margin);
-  evidence_below_ = evidence_below;
+  start(true, params_.commit_margin, evidence_below);
   return true;
 }
 
-std::optional<Commit> Localiser::on_localising_cycle(int template_id, double travelled_m, const ExperienceMap& map) {
+std::optional<Commit> Localiser::on_localising_cycle(int template_id, double travelled_m, const ExperienceMap& map,
+                                                    const std::function<bool(int)>& recognises) {
   if (!localising()) return std::nullopt;
   localising_m_ += travelled_m;
   const Pose2 dr = map.current_pose();
@@ -75,6 +80,33 @@ std::optional<Commit> Localiser::on_localising_cycle(int template_id, double tra
     const std::vector<Experience>& exps = map.experiences();
     const std::vector<int>& candidates = map.experiences_of(template_id);
     std::vector<bool> used(candidates.size(), false);
+    std::unordered_map<int, bool> recognised;  // by template, this cycle
+    const auto is_recognised = [&](int tid) {
+      if (tid == template_id) return true;
+      if (!recognises || tid < 0) return false;
+      const auto [it, fresh] = recognised.try_emplace(tid, false);
+      if (fresh) it->second = recognises(tid);
+      return it->second;
+    };
+    // Around a candidate place, the nearest experience whose template the view is recognised as
+    // (-1: none), and whether the map has any experience there at all.
+    const auto around = [&](const Pose2& p, bool& mapped) {
+      mapped = false;
+      int best = -1;
+      double dbest = params_.radius;
+      const size_t n = std::min(exps.size(), static_cast<size_t>(std::max(evidence_below_, 0)));
+      for (size_t i = 0; i < n; ++i) {
+        const Experience& e = exps[i];
+        const double d = std::hypot(e.pose.x - p.x, e.pose.y - p.y);
+        if (e.retired || d > params_.radius || std::abs(angle_diff(e.pose.theta, p.theta)) > params_.heading) continue;
+        mapped = true;
+        if (d <= dbest && is_recognised(e.template_id)) {
+          best = static_cast<int>(i);
+          dbest = d;
+        }
+      }
+      return best;
+    };
     for (Hypothesis& h : hyps_) {
       const Pose2 p = pose_of(h, dr);
       int best = -1;
@@ -88,16 +120,23 @@ std::optional<Commit> Localiser::on_localising_cycle(int template_id, double tra
           dbest = d;
         }
       }
-      if (best < 0) {
-        // The map knows this place and what it holds here is not what is seen: evidence against.
-        // A place never mapped says nothing either way.
-        if (map.mapped_near(p, params_.radius, params_.heading, evidence_below_)) --h.score;
-        continue;
+      int anchor = best >= 0 ? candidates[static_cast<size_t>(best)] : -1;
+      if (best >= 0) {
+        used[static_cast<size_t>(best)] = true;
+      } else {
+        // Not the best template's place; another template the view is recognised as (a look-alike
+        // learnt at another pass) is as good. The map knowing the place and holding nothing the view
+        // is recognised as is evidence against; a place never mapped says nothing either way.
+        bool mapped = false;
+        anchor = around(p, mapped);
+        if (anchor < 0) {
+          if (mapped) --h.score;
+          continue;
+        }
       }
-      used[static_cast<size_t>(best)] = true;
       ++h.score;
       // Re-anchored: from here the hypothesis is that experience (its drift so far removed).
-      h.anchor = candidates[static_cast<size_t>(best)];
+      h.anchor = anchor;
       h.correction = compose(exps[static_cast<size_t>(h.anchor)].pose, inverse(dr));
     }
     // Two hypotheses re-anchored on one experience are one: the better stays.

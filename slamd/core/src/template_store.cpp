@@ -421,6 +421,42 @@ BestMatch TemplateStore::match(const Query& q, const Terms& terms, const MatchPa
   return felt.id >= 0 && (seen.id < 0 || felt.error < seen.error) ? felt : seen;
 }
 
+TemplateStore::Recogniser::Recogniser(const TemplateStore& store, const Query& q, const Terms& terms,
+                                     const MatchParams& p, double tau)
+    : store_(store), q_(q), terms_(terms), p_(p), tau_(tau) {
+  if (terms_.visual && q_.visual != nullptr && q_.visual->width == store.width_ && q_.visual->height == store.height_ &&
+      q_.visual->pixels.size() == store.pixels()) {
+    cur_.resize(store.pixels());
+    to_column_major(q_.visual->pixels.data(), store.width_, store.height_, cur_.data());
+  }
+}
+
+bool TemplateStore::Recogniser::operator()(int id) const {
+  if (id < 0 || id >= store_.size() || (!terms_.visual && !terms_.tactile)) return false;
+  const auto iu = static_cast<size_t>(id);
+  if (terms_.visual && (cur_.empty() || store_.has_visual_[iu] == 0 ||
+                        std::abs(static_cast<double>(store_.visual_mean_[iu]) - q_.visual->mean) > p_.prefilter_mean_diff)) {
+    return false;
+  }
+  if (terms_.tactile && (q_.tactile == nullptr || store_.has_tactile_[iu] == 0)) return false;
+  double ev = 0.0, ep = 0.0, es = 0.0;
+  if (terms_.visual) {
+    ev = visual_distance(cur_.data(), store_.visual_.row(iu), store_.width_, store_.height_, p_.shift_max, p_.shift_step,
+                         nullptr) /
+         p_.sigma_visual;
+  }
+  bool both_shapes = false;
+  if (terms_.tactile) {
+    ep = l1_u16(q_.tactile->pfh.data(), store_.pfh_.row(iu), kPfhBins) * (1.0 / (65535.0 * p_.sigma_pfh));
+    es = sda_distance(*q_.tactile, store_.sda_.row(iu)) * (1.0 / p_.sigma_sda);
+    both_shapes = q_.tactile->has_shape() && store_.num_contacts_[iu] >= kMinPfhPoints;
+  }
+  const auto within = [&](Rule r) { return rule_error(r, ev, ep, es, both_shapes, p_) <= tau_; };
+  if (!(terms_.fused && terms_.visual && terms_.tactile)) return within(Rule::kSum);
+  if (p_.tactile_veto <= 0.0) return within(q_.tactile->has_contact() ? Rule::kSum : Rule::kVision);
+  return within(Rule::kVision) || within(Rule::kEvidence);
+}
+
 void TemplateStore::restore_decay(double restore, double floor) {
   for (double& d : decay_) d = std::max(floor, d - restore);
 }

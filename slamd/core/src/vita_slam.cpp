@@ -39,7 +39,7 @@ VitaSlam::VitaSlam(const SlamParams& params, const RobotGeometry& geometry)
 
 void VitaSlam::start_localising(bool with_prior) {
   if (map_.size() == 0) return;
-  localiser_.start(with_prior && map_.current_id() >= 0, params_.localisation.commit_margin);
+  localiser_.start(with_prior && map_.current_id() >= 0, params_.localisation.commit_margin, map_.size());
 }
 
 // The match threshold for the terms in use: a visual-only ε and a three-term ε differ in scale.
@@ -61,7 +61,7 @@ CycleResult VitaSlam::process_cycle(const CycleInput& in) {
   integrate_odometry(in.odometry);                           // 1. path integration
   const CycleTemplates templates = make_templates(in, out);  // 2. templates of this cycle
   PoseCellBest pc = match_or_create(templates, out);         // 3. match or create
-  update_map(in.utime, pc, out);                             // 4. experience map
+  update_map(in.utime, templates, pc, out);                  // 4. experience map
   return out;
 }
 
@@ -194,7 +194,7 @@ VitaSlam::PoseCellBest VitaSlam::match_or_create(const CycleTemplates& t, CycleR
         for (int i = 0; i < params_.pose_cells.settle_steps; ++i) cells_.settle();
         cells_.best(pc.x, pc.y, pc.theta);
       }
-    } else if (!localise_only_ && !out.degraded && !localiser_.localising()) {
+    } else if (!localise_only_ && !out.degraded && (!localiser_.localising() || localiser_.learning())) {
       m.template_id = store_.add(q, pc.x, pc.y, pc.theta);
       m.is_new = true;
     }
@@ -203,12 +203,12 @@ VitaSlam::PoseCellBest VitaSlam::match_or_create(const CycleTemplates& t, CycleR
 }
 
 // 4. The experience map's action rule and relaxation, and the cycle's outputs.
-void VitaSlam::update_map(int64_t utime, PoseCellBest& pc, CycleResult& out) {
+void VitaSlam::update_map(int64_t utime, const CycleTemplates& templates, PoseCellBest& pc, CycleResult& out) {
   const MatchResult& m = out.match;
   const int tid = m.template_id;
   const int recognised = tid >= 0 && !m.is_new ? tid : -1;
   if (localiser_.localising()) {
-    localise(recognised, pc, out);
+    localise(utime, recognised, templates, pc, out);
   } else {
     const int size_before = map_.size();
     out.event = map_.on_cycle(tid, tid >= 0 && store_.has_visual(tid) ? tid : -1,
@@ -220,7 +220,7 @@ void VitaSlam::update_map(int64_t utime, PoseCellBest& pc, CycleResult& out) {
     // What the robot sees stopped agreeing with where it thinks it is: localise, this recognition
     // the first evidence.
     if (localiser_.on_tracking_recognition(out.event.gate_refused, recognised, size_before, map_)) {
-      localise(recognised, pc, out);
+      localise(utime, recognised, templates, pc, out);
     }
   }
   out.localising = localiser_.localising();
@@ -236,14 +236,27 @@ void VitaSlam::update_map(int64_t utime, PoseCellBest& pc, CycleResult& out) {
 // One cycle while localising: the recognition weighs the hypotheses; a commit moves the map's
 // current experience (no link: the odometry since the last one says nothing about the way there)
 // and the packet there. Until then the map stays where it was.
-void VitaSlam::localise(int recognised, PoseCellBest& pc, CycleResult& out) {
+void VitaSlam::localise(int64_t utime, int recognised, const CycleTemplates& t, PoseCellBest& pc, CycleResult& out) {
+  // With where odometry says as a candidate, a new place is mapped on from there tentatively (a
+  // false alarm loses nothing; a kidnap's are retired when another place wins).
   const int from = map_.current_id();
   out.event = {EventType::SameExperience, from, from};
-  const std::optional<Commit> c = localiser_.on_localising_cycle(recognised, cycle_travel_m_, map_);
+  if (localiser_.learning() && out.match.is_new && !localise_only_) {
+    const int tid = out.match.template_id;
+    out.event = map_.on_cycle(tid, store_.has_visual(tid) ? tid : -1, store_.has_tactile(tid) ? tid : -1, out.dense,
+                              pc.x, pc.y, pc.theta, cells_, utime, 0, false);
+  }
+  // The view may be recognised as several templates (look-alikes learnt at other passes): any of
+  // them is evidence for a place that holds it.
+  const TemplateStore::Recogniser recognises(store_, Query{t.visual ? &*t.visual : nullptr, t.tactile ? &*t.tactile : nullptr},
+                                             t.terms, params_.match, tau_of(t.terms));
+  const std::optional<Commit> c =
+      localiser_.on_localising_cycle(recognised, cycle_travel_m_, map_, [&](int id) { return recognises(id); });
   if (!c) return;
+  const int before = map_.current_id();
   map_.jump_to(c->experience, c->offset);
   map_.retire(c->retire_from, c->retire_to);
-  if (c->experience != from) out.event = {EventType::Relocalise, from, c->experience};
+  if (c->experience != before) out.event = {EventType::Relocalise, before, c->experience};
   if (c->experience >= 0) move_packet_to(c->experience, pc);
 }
 

@@ -7,10 +7,11 @@
 // dead-reckoned pose (hypothesis = C ∘ map.current_pose()): while localising the map's current
 // experience stays put and its offset integrates the odometry, so every hypothesis moves with the
 // odometry without integrating it again. Each cycle that recognises a template is evidence: a
-// hypothesis with an experience of that template within `radius` (and `heading` of its own
-// heading) is supported (+1, and re-anchored on that experience, which removes its drift); one
-// where the map has other experiences but none of that template loses 1 (the place is known and
-// looks otherwise); one in a place never mapped keeps its score. Every experience of the template that supports no hypothesis starts one. The
+// hypothesis with an experience within `radius` (and `heading` of its own heading) of that
+// template, or of any template the view would be recognised as too, is supported (+1, and
+// re-anchored on that experience, which removes its drift); one where the map has experiences but
+// none the view is recognised as loses 1 (the place is known and looks otherwise); one in a place
+// never mapped keeps its score. Every experience of the template that supports no hypothesis starts one. The
 // best commits when its score reaches `commit_score` and leads every hypothesis elsewhere by
 // `commit_margin`. Pure: no I/O, time passed in.
 //
@@ -28,6 +29,7 @@
 
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <limits>
 #include <optional>
 #include <vector>
@@ -39,7 +41,7 @@ class ExperienceMap;
 struct LocaliserParams {
   // Gate-refused recognitions among the last kidnap_window recognitions (where the map knows the
   // place) that start localising; 0: never.
-  int kidnap_disagreements = 4;
+  int kidnap_disagreements = 0;
   int kidnap_window = 8;
   double radius = 0.3;           // m: an experience this near a hypothesis supports it
   double heading = 0.5;          // rad: ... and turned at most this much from it
@@ -85,7 +87,12 @@ class Localiser {
 
   // Starts localising. with_prior: the map's current pose is one hypothesis (a resumed checkpoint,
   // a suspected kidnap), with `prior_score`; without, every place is open (a saved map).
-  void start(bool with_prior, int prior_score = 0);
+  // Experiences from `evidence_below` on are no evidence (made where the robot only thought it was).
+  void start(bool with_prior, int prior_score = 0, int evidence_below = std::numeric_limits<int>::max());
+  // Whether the map may go on growing while localising: with where odometry says as a candidate,
+  // tentatively (what is made meanwhile is no evidence, and is retired if another place wins).
+  bool learning() const { return localising() && has_prior(); }
+  bool has_prior() const;
 
   // While tracking: the outcome of one recognition by the map's action rule (accepted: the gate let
   // the template's experience be joined or stayed on; refused: every experience of the template lay
@@ -96,9 +103,11 @@ class Localiser {
   bool on_tracking_recognition(bool refused, int recognised_template, int first_new_id, const ExperienceMap& map);
 
   // While localising: one cycle. template_id: the template recognised this cycle, or -1.
-  // travelled_m: distance travelled by odometry since the previous cycle. Returns the commit that
-  // ends localising, if this cycle brings one.
-  std::optional<Commit> on_localising_cycle(int template_id, double travelled_m, const ExperienceMap& map);
+  // travelled_m: distance travelled by odometry since the previous cycle. recognises(t): whether
+  // the cycle's view would be recognised as template t too (TemplateStore::Recogniser; empty: only
+  // template_id counts). Returns the commit that ends localising, if this cycle brings one.
+  std::optional<Commit> on_localising_cycle(int template_id, double travelled_m, const ExperienceMap& map,
+                                            const std::function<bool(int)>& recognises = {});
 
   // The best hypothesis' pose (map frame), or the dead-reckoned pose when there is none.
   Pose2 best_pose(const ExperienceMap& map) const;

@@ -116,6 +116,24 @@ class TemplateStore {
   // skipped. Neither changes the result.
   BestMatch match(const Query& q, const Terms& terms, const MatchParams& p) const;
 
+  // Whether stored template `id` is one `q` would be recognised as by match()'s rules (the same
+  // terms, rules and prefilter) within `tau`: not only the best template but any that passes. The
+  // localiser asks it of the templates around each candidate place. One per cycle: the query is
+  // prepared once.
+  class Recogniser {
+   public:
+    Recogniser(const TemplateStore& store, const Query& q, const Terms& terms, const MatchParams& p, double tau);
+    bool operator()(int id) const;
+
+   private:
+    const TemplateStore& store_;
+    Query q_;
+    Terms terms_;
+    MatchParams p_;
+    double tau_;
+    std::vector<uint8_t> cur_;  // the query's visual template, column-major
+  };
+
   bool has_visual(int id) const { return has_visual_[static_cast<size_t>(id)] != 0; }
   bool has_tactile(int id) const { return has_tactile_[static_cast<size_t>(id)] != 0; }
   int num_contacts(int id) const { return num_contacts_[static_cast<size_t>(id)]; }

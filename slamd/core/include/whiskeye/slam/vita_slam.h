@@ -138,8 +138,8 @@ class VitaSlam {
   void integrate_odometry(const std::vector<OdometrySample>& odometry);
   CycleTemplates make_templates(const CycleInput& in, CycleResult& out);
   PoseCellBest match_or_create(const CycleTemplates& templates, CycleResult& out);
-  void update_map(int64_t utime, PoseCellBest& pc, CycleResult& out);
-  void localise(int recognised, PoseCellBest& pc, CycleResult& out);
+  void update_map(int64_t utime, const CycleTemplates& templates, PoseCellBest& pc, CycleResult& out);
+  void localise(int64_t utime, int recognised, const CycleTemplates& templates, PoseCellBest& pc, CycleResult& out);
   void move_packet_to(int experience, PoseCellBest& pc);
   double tau_of(const Terms& terms) const;
 
