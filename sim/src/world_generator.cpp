@@ -410,6 +410,11 @@ void validate(const GeneratorOptions& o) {
     throw GeneratorOptionError("--kidnaps: must be in 0.." + std::to_string(kMaxKidnaps));
   }
   if (o.kidnaps > 0 && o.laps.min < 2) throw GeneratorOptionError("--kidnaps: needs at least 2 laps (--gen-laps)");
+  // The aliased family's premise needs a feel-alike pair and a shape that differs from it.
+  if (o.family == "aliased" && o.tactile_landmarks.max < 3) {
+    throw GeneratorOptionError("--tactile-landmarks: the aliased family needs at least 3 (a pair that feels alike and "
+                               "another shape), the range allows at most " + num(o.tactile_landmarks.max, 0));
+  }
 }
 
 AliasReport check_aliasing(const World& world, const RobotGeometry& robot, const AliasCheckParams& p) {

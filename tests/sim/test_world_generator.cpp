@@ -231,6 +231,10 @@ TEST(VitaSimGenerate, BadGeneratorOptionsExitTwoNamingTheOption) {
   EXPECT_EQ(vita_sim("--generate-world --arena-side 4 --radius 2" + out, err), 2);
   EXPECT_NE(slurp(err).find("vita-sim: --radius 2.000..2.000 in --arena-side 4.000..4.000: no world fits"), std::string::npos)
       << slurp(err);
+  // No aliased world has fewer than 3 tactile landmarks: said at once (it drew for over 100 s).
+  EXPECT_EQ(vita_sim("--generate-world --tactile-landmarks 2" + out, err), 2);
+  EXPECT_NE(slurp(err).find("vita-sim: --tactile-landmarks: the aliased family needs at least 3"), std::string::npos)
+      << slurp(err);
   EXPECT_FALSE(fs::exists(temp_path("never.yaml")));
   fs::remove(err);
 }
