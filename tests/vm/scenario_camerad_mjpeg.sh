@@ -74,6 +74,16 @@ grew() {
        "(overwritten_frames $(counter "$2" overwritten_frames))"
   return 1
 }
+# grew_at_most PROBE_BEFORE PROBE_AFTER N: ... went up by at most N (frames torn at a seam of the
+# stream, which the writer did not damage).
+grew_at_most() {
+  local before after
+  before=$(damaged "$1") after=$(damaged "$2")
+  [ $((after - before)) -ge 0 ] && [ $((after - before)) -le "$3" ] && return 0
+  echo "damaged frames (corrupt_frames - overwritten_frames) went from $before to $after, expected +0..$3" \
+       "(overwritten_frames $(counter "$2" overwritten_frames))"
+  return 1
+}
 
 sleep 3
 probe streaming
@@ -148,9 +158,13 @@ probe back
 check camerad_is_ok_on_the_recreated_device has back 'state=1'
 check camerad_status_counts_the_loss_and_the_reopen \
   bash -c "[ $(counter back device_lost) -ge 1 ] && [ $(counter back reopens) -ge 1 ] && [ $(counter back open_failures) -ge 1 ]"
-# The six the writer damaged, none more across the removal and re-creation: damaged frames, not
-# corrupt_frames, which also counts any frame torn by the loopback ring (overwritten_frames).
-check camerad_counts_no_more_damaged_frames_than_were_written grew streaming back 6
+# Across the writer's stop, the removal and the re-creation the writer damaged nothing, but a seam
+# may deliver one torn frame: v4l2loopback 0.12.7 hands a reader a buffer the new writer is still
+# filling (its JPEG header already there, the rest not: "damaged JPEG data after its header", seen
+# in 1 of 3 runs; the sequence number re-check cannot see it, the sequence moving only once the
+# write is done). camerad counts it, rightly: a frame it could not use. One per seam (the writer
+# stopping, the new one starting) at most; the six the writer damaged were counted exactly above.
+check camerad_counts_no_more_damaged_frames_than_the_seams_can_tear grew_at_most garbage back 2
 
 kill -TERM $check_pid
 check_rc=0
