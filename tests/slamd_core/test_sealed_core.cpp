@@ -17,6 +17,7 @@
 #include <whiskeye/rcp/rcp.h>
 #include <whiskeye/rcp/types.h>
 #include <whiskeye/slam/experience_map.h>
+#include <whiskeye/slam/localiser.h>
 #include <whiskeye/slam/pose_cells.h>
 #include <whiskeye/slam/row_store.h>
 #include <whiskeye/slam/tactile_template.h>
