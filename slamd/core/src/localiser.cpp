@@ -88,19 +88,16 @@ std::optional<Commit> Localiser::on_localising_cycle(int template_id, double tra
       if (fresh) it->second = recognises(tid);
       return it->second;
     };
-    // Around a candidate place, the nearest experience whose template the view is recognised as
-    // (-1: none), and whether the map has any experience there at all.
-    const auto around = [&](const Pose2& p, bool& mapped) {
-      mapped = false;
+    // Around a candidate place, the nearest experience whose template the view is recognised as (-1: none).
+    const auto nearest_recognised = [&](const Pose2& p) {
       int best = -1;
       double dbest = params_.radius;
       const size_t n = std::min(exps.size(), static_cast<size_t>(std::max(evidence_below_, 0)));
       for (size_t i = 0; i < n; ++i) {
         const Experience& e = exps[i];
         const double d = std::hypot(e.pose.x - p.x, e.pose.y - p.y);
-        if (e.retired || d > params_.radius || std::abs(angle_diff(e.pose.theta, p.theta)) > params_.heading) continue;
-        mapped = true;
-        if (d <= dbest && is_recognised(e.template_id)) {
+        if (e.retired || d > dbest || std::abs(angle_diff(e.pose.theta, p.theta)) > params_.heading) continue;
+        if (is_recognised(e.template_id)) {
           best = static_cast<int>(i);
           dbest = d;
         }
@@ -127,10 +124,9 @@ std::optional<Commit> Localiser::on_localising_cycle(int template_id, double tra
         // Not the best template's place; another template the view is recognised as (a look-alike
         // learnt at another pass) is as good. The map knowing the place and holding nothing the view
         // is recognised as is evidence against; a place never mapped says nothing either way.
-        bool mapped = false;
-        anchor = around(p, mapped);
+        anchor = nearest_recognised(p);
         if (anchor < 0) {
-          if (mapped) --h.score;
+          if (map.mapped_near(p, params_.radius, params_.heading, evidence_below_)) --h.score;
           continue;
         }
       }
@@ -210,11 +206,6 @@ Commit Localiser::commit(const Hypothesis& h, const ExperienceMap& map, bool gav
   localising_m_ = 0.0;
   ++localisations_;
   return c;
-}
-
-Pose2 Localiser::best_pose(const ExperienceMap& map) const {
-  const Pose2 dr = map.current_pose();
-  return hyps_.empty() ? dr : pose_of(hyps_.front(), dr);
 }
 
 void Localiser::serialise(std::vector<uint8_t>& out) const {

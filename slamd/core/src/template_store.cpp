@@ -11,7 +11,6 @@
 #include <array>
 #include <cmath>
 #include <cstdlib>
-#include <initializer_list>
 #include <limits>
 #include <optional>
 
@@ -244,6 +243,19 @@ double rule_error(Rule rule, double visual, double pfh, double sda, bool both_sh
   return kNever;
 }
 
+// The rules a query is decided by: the paper's sum, except with Terms::fused (ViTa with both
+// senses), where tactile_veto 0 is the sum or, for a cycle that touched nothing, vision's rule, and
+// otherwise vision's choice then the evidence of both senses (match() combines the two).
+struct Rules {
+  std::array<Rule, 2> rules{};
+  size_t count = 0;
+};
+Rules rules_for(const Query& q, const Terms& terms, const MatchParams& p) {
+  if (!(terms.fused && terms.visual && terms.tactile)) return {{Rule::kSum}, 1};
+  if (p.tactile_veto <= 0.0) return {{q.tactile->has_contact() ? Rule::kSum : Rule::kVision}, 1};
+  return {{Rule::kVision, Rule::kEvidence}, 2};
+}
+
 }  // namespace
 
 TemplateStore::TemplateStore(int visual_width, int visual_height)
@@ -345,9 +357,10 @@ BestMatch TemplateStore::match(const Query& q, const Terms& terms, const MatchPa
     std::array<BestMatch, 2> best{};
     size_t count = 0;
   };
-  const auto scan = [&](std::initializer_list<Rule> rules) {
+  const auto scan = [&](const Rules& rules) {
     Scan out;
-    for (const Rule r : rules) out.rules[out.count++] = r;
+    out.rules = rules.rules;
+    out.count = rules.count;
     BoundProbe probe;
     const int n = size();
     for (int i = 0; i < n; ++i) {
@@ -408,13 +421,13 @@ BestMatch TemplateStore::match(const Query& q, const Terms& terms, const MatchPa
     }
     return out;
   };
-  if (!(terms.fused && terms.visual && terms.tactile)) return scan({Rule::kSum}).best[0];
-  // tactile_veto 0: the paper's sum, but for a cycle that touched nothing, which vision decides
-  // among the templates that touched nothing either.
-  if (p.tactile_veto <= 0.0) return scan({q.tactile->has_contact() ? Rule::kSum : Rule::kVision}).best[0];
+  // One rule: its argmin (tactile_veto 0: the paper's sum, but for a cycle that touched nothing,
+  // which vision decides among the templates that touched nothing either).
+  const Rules rules = rules_for(q, terms, p);
+  if (rules.count == 1) return scan(rules).best[0];
   // The fusion: vision's choice among the templates touch does not object to; only where vision
   // recognises nothing, the evidence of both senses.
-  const Scan both_rules = scan({Rule::kVision, Rule::kEvidence});
+  const Scan both_rules = scan(rules);
   const BestMatch& seen = both_rules.best[0];
   const BestMatch& felt = both_rules.best[1];
   if (seen.id >= 0 && seen.error <= p.threshold_vita) return seen;
@@ -451,10 +464,12 @@ bool TemplateStore::Recogniser::operator()(int id) const {
     es = sda_distance(*q_.tactile, store_.sda_.row(iu)) * (1.0 / p_.sigma_sda);
     both_shapes = q_.tactile->has_shape() && store_.num_contacts_[iu] >= kMinPfhPoints;
   }
-  const auto within = [&](Rule r) { return rule_error(r, ev, ep, es, both_shapes, p_) <= tau_; };
-  if (!(terms_.fused && terms_.visual && terms_.tactile)) return within(Rule::kSum);
-  if (p_.tactile_veto <= 0.0) return within(q_.tactile->has_contact() ? Rule::kSum : Rule::kVision);
-  return within(Rule::kVision) || within(Rule::kEvidence);
+  // Recognised if any of match()'s rules for this query takes it within τ.
+  const Rules rules = rules_for(q_, terms_, p_);
+  for (size_t j = 0; j < rules.count; ++j) {
+    if (rule_error(rules.rules[j], ev, ep, es, both_shapes, p_) <= tau_) return true;
+  }
+  return false;
 }
 
 void TemplateStore::restore_decay(double restore, double floor) {

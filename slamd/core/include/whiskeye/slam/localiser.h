@@ -109,9 +109,6 @@ class Localiser {
   std::optional<Commit> on_localising_cycle(int template_id, double travelled_m, const ExperienceMap& map,
                                             const std::function<bool(int)>& recognises = {});
 
-  // The best hypothesis' pose (map frame), or the dead-reckoned pose when there is none.
-  Pose2 best_pose(const ExperienceMap& map) const;
-
   void serialise(std::vector<uint8_t>& out) const;
   void deserialise(const std::vector<uint8_t>& in, size_t& pos, int num_experiences);
 
