@@ -5,7 +5,7 @@
 // not crash, hang or throw anything else. camerad's loader is not here: it lives in camerad's main.
 // Seeds: fuzz/corpus/params, the files of config/ with their selector byte.
 #include "whiskeye/slamd/slam_node.h"
-#include "whiskeye/whiskerd/whiskerd_core.h"
+#include "whiskeye/whiskerd/config.h"
 
 #include "whiskeye/based/params.h"
 #include "whiskeye/common/params.h"

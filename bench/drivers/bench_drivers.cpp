@@ -10,6 +10,8 @@
 #include <array>
 #include <vector>
 
+#include "whiskeye/whiskerd/config.h"
+#include "whiskeye/whiskerd/lcm.h"
 #include "whiskeye/whiskerd/whiskerd_core.h"
 #include "whiskeye/whisker_protocol/whisker_protocol.h"
 

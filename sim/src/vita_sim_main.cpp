@@ -12,7 +12,7 @@
 #include "whiskeye/sim/simulator.h"
 #include "whiskeye/sim/world_generator.h"
 #include "whiskeye/slam/vita_slam.h"
-#include "whiskeye/whiskerd/whiskerd_core.h"
+#include "whiskeye/whiskerd/config.h"
 
 #include <whiskeye/rcp/params.h>
 

@@ -1,12 +1,14 @@
-// whiskerd's configuration (Params / load, whiskerd_core.h): unknown keys, rates, CAN id ranges, the
-// shipped config.
+// whiskerd's configuration (Params / load, config.h): unknown keys, rates, CAN id ranges, the
+// shipped config, calibration drop-ins.
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
 #include <string>
 
 #include "whiskeye/common/params.h"
-#include "whiskeye/whiskerd/whiskerd_core.h"
+#include "whiskeye/whiskerd/config.h"
 
 using namespace whiskeye;
 using namespace whiskeye::whiskerd;
@@ -62,4 +64,103 @@ TEST(WhiskerdConfig, ShippedConfigLoads) {
   load(ParamNode::from_file(WHISKEYE_SOURCE_DIR "/config/whiskerd.yaml"), p);
   EXPECT_EQ(p.interface, "can0");
   EXPECT_EQ(p.ids.command_base, 0x200u);
+}
+
+// Calibration drop-ins: whiskerd.d/*.yaml beside whiskerd.yaml, in file-name order, calibration keys only.
+class WhiskerdDropins : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = std::filesystem::path(::testing::TempDir()) /
+           ("whiskerd_dropins_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    std::filesystem::remove_all(dir_);
+    std::filesystem::create_directories(dir_ / "whiskerd.d");
+    write("whiskerd.yaml", "calibration:\n  default: {offset_x: 1.0}\n  whiskers:\n    - {index: 3, offset_y: 5.0}\n");
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+  void write(const std::string& name, const std::string& text) { std::ofstream(dir_ / name) << text; }
+  std::string config() const { return (dir_ / "whiskerd.yaml").string(); }
+  // The whole configuration as whiskerd loads it; "" or the ParamError's text.
+  std::string load_all(Params& p) const {
+    try {
+      printed_ = load_with_dropins(ParamNode::from_file(config()), config(), p);
+      return "";
+    } catch (const ParamError& e) {
+      return e.what();
+    }
+  }
+  std::filesystem::path dir_;
+  mutable std::string printed_;
+};
+
+TEST_F(WhiskerdDropins, TheDirectoryIsTheConfigsNameWithDotD) {
+  EXPECT_EQ(dropin_dir("/etc/whiskeye/whiskerd.yaml"), std::filesystem::path("/etc/whiskeye/whiskerd.d"));
+}
+
+TEST_F(WhiskerdDropins, ADropinReplacesOnlyTheKeysItGives) {
+  write("whiskerd.d/20-rest.yaml", "calibration:\n  whiskers:\n    - {index: 3, offset_x: 12.5}\n    - {index: 7, gain_y: -0.0005}\n");
+  Params p;
+  ASSERT_EQ(load_all(p), "");
+  EXPECT_EQ(p.calibration[3].offset_x, 12.5);
+  EXPECT_EQ(p.calibration[3].offset_y, 5.0);  // from whiskerd.yaml
+  EXPECT_EQ(p.calibration[4].offset_x, 1.0);  // whiskerd.yaml's default
+  EXPECT_EQ(p.calibration[7].gain_y, -0.0005);
+  EXPECT_EQ(p.calibration[7].gain_x, wp::WhiskerCalibration{}.gain_x);
+  EXPECT_NE(printed_.find("# drop-in " + (dir_ / "whiskerd.d/20-rest.yaml").string()), std::string::npos) << printed_;
+}
+
+TEST_F(WhiskerdDropins, LaterFilesWinInFileNameOrder) {
+  // Written in the other order: the directory's listing order must not matter.
+  write("whiskerd.d/40-theta.yaml", "calibration:\n  whiskers:\n    - {index: 0, theta_offset: 40}\n");
+  write("whiskerd.d/10-map.yaml", "calibration:\n  default: {theta_offset: 10}\n  whiskers:\n    - {index: 1, theta_offset: 11}\n");
+  write("whiskerd.d/README", "not a drop-in: only *.yaml are read\n");
+  Params p;
+  ASSERT_EQ(load_all(p), "");
+  EXPECT_EQ(p.calibration[0].theta_offset, 40);
+  EXPECT_EQ(p.calibration[1].theta_offset, 11);
+  EXPECT_EQ(p.calibration[2].theta_offset, 10);
+}
+
+TEST_F(WhiskerdDropins, ATypoIsOneLineNamingTheFileAndTheKey) {
+  write("whiskerd.d/20-rest.yaml", "calibration:\n  whiskers:\n    - {index: 3, ofset_x: 12.5}\n");
+  Params p;
+  const std::string error = load_all(p);
+  EXPECT_NE(error.find((dir_ / "whiskerd.d/20-rest.yaml").string()), std::string::npos) << error;
+  EXPECT_NE(error.find("calibration.whiskers[0].ofset_x"), std::string::npos) << error;
+  EXPECT_EQ(error.find('\n'), std::string::npos) << error;
+}
+
+TEST_F(WhiskerdDropins, AKeyOutsideCalibrationIsRefused) {
+  write("whiskerd.d/50-bus.yaml", "can: {interface: can1}\n");
+  Params p;
+  const std::string error = load_all(p);
+  EXPECT_NE(error.find("50-bus.yaml: 'can' is not allowed in a drop-in"), std::string::npos) << error;
+}
+
+TEST_F(WhiskerdDropins, AnOutOfRangeValueNamesTheFileAndTheKey) {
+  write("whiskerd.d/30-gain.yaml", "calibration:\n  whiskers:\n    - {index: 2, gain_x: 3.0}\n");
+  Params p;
+  const std::string error = load_all(p);
+  EXPECT_NE(error.find("30-gain.yaml"), std::string::npos) << error;
+  EXPECT_NE(error.find("calibration.whiskers[0].gain_x"), std::string::npos) << error;
+}
+
+TEST_F(WhiskerdDropins, SwappedChannelsAreTakenAndAChannelWiredTwiceIsRefused) {
+  write("whiskerd.d/10-map.yaml", "calibration:\n  whiskers:\n    - {index: 5, channel: 6}\n    - {index: 6, channel: 5}\n");
+  Params p;
+  ASSERT_EQ(load_all(p), "");
+  EXPECT_EQ(p.channel[5], 6);
+  EXPECT_EQ(p.channel[6], 5);
+  EXPECT_EQ(p.channel[7], 7);
+  write("whiskerd.d/20-bad.yaml", "calibration:\n  whiskers:\n    - {index: 7, channel: 5}\n");
+  Params q;
+  const std::string error = load_all(q);
+  EXPECT_NE(error.find("20-bad.yaml: 'calibration.whiskers' wires channel 5 to whiskers 6 and 7"), std::string::npos)
+      << error;
+}
+
+TEST_F(WhiskerdDropins, NoConfigFileMeansNoDropins) {
+  write("whiskerd.d/20-rest.yaml", "calibration:\n  whiskers:\n    - {index: 3, offset_x: 12.5}\n");
+  Params p;
+  load_with_dropins(ParamNode::empty(), "", p);
+  EXPECT_EQ(p.calibration[3].offset_x, 0.0);
 }

@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "whiskeye/whiskerd/config.h"
+#include "whiskeye/whiskerd/lcm.h"
 #include "whiskeye/whiskerd/whiskerd_core.h"
 #include "whiskerd_rig.h"
 
@@ -46,6 +48,31 @@ TEST(WhiskerdCore, CalibratesDecodedValuesIntoThePeriodOutput) {
   EXPECT_NEAR(rig.out.deflection_y[9], -9.0 / 2047, 1e-6);
   EXPECT_NEAR(rig.out.deflection_x[7], 0.0, 1e-6);
   EXPECT_EQ(rig.out.status[9], 0);
+}
+
+TEST(WhiskerdCore, AWhiskerWiredToAnotherChannelReadsAndDrivesThatChannel) {
+  // Whiskers 5 and 6 swapped at board 1: whisker 5's sensor and motor are on channel 6 and back.
+  Params p = test_params();
+  p.channel[5] = 6;
+  p.channel[6] = 5;
+  p.calibration[5].theta_offset = 100;  // tells the two whiskers' targets apart
+  Rig rig(p);
+  rig.run(5, 33);  // channel 5 reads x = 33, channel 6 reads x = 6
+  EXPECT_EQ(rig.out.raw_x[6], 33);
+  EXPECT_EQ(rig.out.raw_x[5], 6);
+  EXPECT_NEAR(rig.out.deflection_x[6], 33.0 / 2047, 1e-6);
+  EXPECT_EQ(rig.out.raw_theta[5], 60);
+  // Targets go out by channel: whisker 5's (offset 100 counts) on channel 6.
+  EXPECT_EQ(rig.out.command.theta_target[6], wp::theta_to_counts(rig.out.theta_command[5], p.calibration[5]));
+  EXPECT_EQ(rig.out.command.theta_target[5], wp::theta_to_counts(rig.out.theta_command[6], p.calibration[6]));
+  EXPECT_NE(rig.out.command.theta_target[6], rig.out.command.theta_target[5]);
+  EXPECT_EQ(rig.out.command.enable_mask, 0xFFFFFFu);
+}
+
+TEST(WhiskerdCore, RefusesChannelsThatAreNotAPermutation) {
+  Params p = test_params();
+  p.channel[5] = 6;
+  EXPECT_THROW(WhiskerCore core(p), std::invalid_argument);
 }
 
 TEST(WhiskerdCore, RepeatedSampleIsMarkedStale) {

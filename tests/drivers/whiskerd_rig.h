@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 
+#include "whiskeye/whiskerd/config.h"
 #include "whiskeye/whiskerd/whiskerd_core.h"
 
 namespace whiskeye::whiskerd::test {

@@ -5,7 +5,7 @@
 #include "whiskeye/common/bus.h"
 #include "whiskeye/sim/can_log.h"
 #include "whiskeye/sim/simulator.h"
-#include "whiskeye/whiskerd/whiskerd_core.h"
+#include "whiskeye/whiskerd/config.h"
 
 #include <whiskeye/contact_truth_t.hpp>
 #include <whiskeye/image_t.hpp>

@@ -4,7 +4,7 @@
 // channel"). Through the bus seam: whiskerd's conversion publishes on its configured channel, the
 // slamd node reads its own, on one in-memory bus.
 #include "whiskeye/slamd/slam_node.h"
-#include "whiskeye/whiskerd/whiskerd_core.h"
+#include "whiskeye/whiskerd/config.h"
 
 #include <whiskeye/odometry_t.hpp>
 #include <whiskeye/vita_event_t.hpp>

@@ -20,7 +20,7 @@
 #include <whiskeye/driver_status_t.hpp>
 #include <whiskeye/whisker_sample_t.hpp>
 
-#include "whiskeye/whiskerd/whiskerd_core.h"
+#include "whiskeye/whiskerd/config.h"
 
 #include "vm_report.h"
 

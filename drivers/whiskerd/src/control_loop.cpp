@@ -1,5 +1,6 @@
 // whiskerd's control thread (ControlLoop) and publisher thread (publish_loop); see control_loop.h.
 #include "whiskeye/whiskerd/control_loop.h"
+#include "whiskeye/whiskerd/lcm.h"
 
 #include "whiskeye/common/clock.h"
 

@@ -19,7 +19,7 @@
 
 #include "whiskeye/can/can_socket.h"
 #include "whiskeye/whiskerd/control_loop.h"
-#include "whiskeye/whiskerd/whiskerd_core.h"
+#include "whiskeye/whiskerd/config.h"
 
 namespace {
 
@@ -87,7 +87,7 @@ int main(int argc, char** argv) {
   std::string lcm_url;
   bool no_gpio = false;
   bool print_config = false;
-  program.add_config(config_path, "whiskerd YAML (config/whiskerd.yaml); defaults without it");
+  program.add_config(config_path, "whiskerd YAML (config/whiskerd.yaml), then the calibration drop-ins whiskerd.d/*.yaml beside it; defaults without it");
   app.add_option("-i,--interface", interface, "CAN interface, overrides can.interface");
   app.add_flag("--no-gpio", no_gpio,
                "run without motor enable / fault lines (rigs without GPIO), overrides gpio.enabled");
@@ -100,12 +100,13 @@ int main(int argc, char** argv) {
     if (no_gpio) root.set_override("gpio.enabled", "false", "--no-gpio");
     if (!lcm_url.empty()) root.set_override("lcm.url", lcm_url, "--lcm-url");
     Params params;
-    load(root, params);  // a ParamError: exit 2
+    // The file, then its calibration drop-ins (whiskerd.d/*.yaml beside it); a ParamError: exit 2.
+    const std::string printed = load_with_dropins(root, config_path, params);
     if (print_config) {
-      std::cout << root.dump();
+      std::cout << printed;
       return 0;
     }
-    std::cerr << root.dump();
+    std::cerr << printed;
     return run(params);
   });
 }

@@ -1,11 +1,10 @@
 // whiskerd's control core (see whiskerd_core.h).
 #include "whiskeye/whiskerd/whiskerd_core.h"
 
-#include <whiskeye/driver_status_t.hpp>
-
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <stdexcept>
 #include <utility>
 
 namespace whiskeye::whiskerd {
@@ -57,106 +56,21 @@ void shift_times(rcp::WhiskCycle& c, int64_t offset_us) {
   for (rcp::WhiskCycle::Sample& s : c.samples) s.utime += offset_us;
 }
 
-void load_calibration(const ParamNode& n, wp::WhiskerCalibration& c) {
-  n.get("offset_x", c.offset_x, -4096.0, 4096.0);
-  n.get("offset_y", c.offset_y, -4096.0, 4096.0);
-  n.get("gain_x", c.gain_x, -1.0, 1.0);
-  n.get("gain_y", c.gain_y, -1.0, 1.0);
-  n.get("rotation", c.rotation, -7.0, 7.0);
-  n.get("theta_offset", c.theta_offset, -1024.0, 1024.0);
-  n.get("theta_gain", c.theta_gain, -0.01, 0.01);
-  if (c.theta_gain == 0.0) throw ParamError(n.path_of("theta_gain") + " must not be 0");
-}
-
 }  // namespace
-
-void load(const ParamNode& root, Params& p) {
-  const ParamNode can = root.section("can");
-  can.get("interface", p.interface);
-  std::string mode = p.mode == wp::BusMode::kFd ? "fd" : "classic";
-  can.get("mode", mode);
-  if (mode == "fd") {
-    p.mode = wp::BusMode::kFd;
-  } else if (mode == "classic") {
-    p.mode = wp::BusMode::kClassic;
-  } else {
-    throw ParamError(can.path_of("mode") + " = \"" + mode + "\" is not fd or classic");
-  }
-  if (p.mode == wp::BusMode::kClassic && !can.has("rate_hz")) p.rate_hz = 100.0;
-  can.get("rate_hz", p.rate_hz, 10.0, 1000.0);
-  if (p.mode == wp::BusMode::kClassic && p.rate_hz > 200.0) {
-    throw ParamError(can.path_of("rate_hz") + " = " + std::to_string(p.rate_hz) +
-                     " exceeds the classic-CAN bus capacity (max 200 Hz, see docs/can-protocol.md)");
-  }
-  can.get("stale_timeout_s", p.stale_timeout_s, 0.005, 10.0);
-  const ParamNode ids = can.section("ids");
-  int sample = static_cast<int>(p.ids.sample_base), command = static_cast<int>(p.ids.command_base),
-      heartbeat = static_cast<int>(p.ids.heartbeat_base);
-  ids.get("sample_base", sample, 0, 0x7ff - wp::kNumBoards);
-  ids.get("command_base", command, 0, 0x7ff - wp::kNumBoards);
-  ids.get("heartbeat_base", heartbeat, 0, 0x7ff - wp::kNumBoards);
-  // whiskerd receives samples and heartbeats through kernel filters on the aligned 8-id block
-  // (mask 0x7f8, see main.cpp, `run`): node ids 1..6 must fall in base's own block.
-  static_assert(wp::kNumBoards < 8, "node ids 1..kNumBoards fit one block of 8 ids");
-  for (const auto& [key, base] : {std::pair<const char*, int>{"sample_base", sample}, {"heartbeat_base", heartbeat}}) {
-    if (base % 8 != 0) {
-      char hex[8];
-      std::snprintf(hex, sizeof hex, "0x%03x", base);
-      throw ParamError(ids.source() + ": '" + ids.path_of(key) + "' = " + hex +
-                       " must be a multiple of 8 (0x...0 or 0x...8): the CAN filter covers the aligned block "
-                       "base..base+7");
-    }
-  }
-  auto overlap = [](int a, int b) { return std::abs(a - b) <= wp::kNumBoards; };
-  if (overlap(sample, command) || overlap(sample, heartbeat) || overlap(command, heartbeat)) {
-    throw ParamError(ids.path_of("sample_base") + ", command_base, heartbeat_base: id ranges overlap");
-  }
-  p.ids = {static_cast<uint32_t>(sample), static_cast<uint32_t>(command), static_cast<uint32_t>(heartbeat)};
-
-  const ParamNode safety = root.section("safety");
-  safety.get("retract_time_s", p.retract_time_s, 0.0, 10.0);
-  safety.get("whisk_on_start", p.whisk_on_start);
-
-  const ParamNode cal = root.section("calibration");
-  wp::WhiskerCalibration def;
-  load_calibration(cal.section("default"), def);
-  p.calibration.fill(def);
-  for (const ParamNode& w : cal.list("whiskers")) {
-    int index = -1;
-    w.require("index", index);
-    if (index < 0 || index >= kN) throw ParamError(w.path_of("index") + " must be 0..23");
-    load_calibration(w, p.calibration[index]);
-  }
-
-  const ParamNode gpio = root.section("gpio");
-  gpio.get("enabled", p.gpio);
-  gpio.get("enable_line", p.lines.enable);
-  gpio.get("fault_line", p.lines.fault);
-  gpio.get("estop_line", p.lines.estop);
-  gpio.get("fault_active_low", p.lines.fault_active_low);
-  gpio.get("estop_active_low", p.lines.estop_active_low);
-
-  const ParamNode rt = root.section("realtime");
-  rt.get("priority", p.rt_priority, 1, 99);
-  rt.get("cpu", p.rt_cpu, -1, 1023);
-  rt.get("lock_memory", p.lock_memory);
-
-  const ParamNode lcm = root.section("lcm");
-  lcm.get("url", p.lcm_url);
-  lcm.get("channel_sample", p.channel_sample);
-  lcm.get("channel_state", p.channel_state);
-  lcm.get("channel_cycle", p.channel_cycle);
-  lcm.get("channel_status", p.channel_status);
-  lcm.get("status_period_s", p.status_period_s, 0.1, 60.0);
-
-  rcp::load(root.section("rcp"), p.controller);
-  root.check_no_unknown_keys();
-}
 
 WhiskerCore::WhiskerCore(const CoreParams& params)
     : params_(params), controller_(params.controller, params.rate_hz), assembler_(params.mode) {
   last_sample_mono_.fill(-1);
   for (; pooled_cycles_ < 2; ++pooled_cycles_) cycle_pool_[pooled_cycles_] = std::make_unique<rcp::WhiskCycle>();
+  std::array<bool, kN> wired{};
+  for (int w = 0; w < kN; ++w) {
+    const int ch = params_.channel[w];
+    if (ch < 0 || ch >= kN || wired[ch]) {
+      throw std::invalid_argument("whiskerd: calibration channels are not a permutation of 0..23");
+    }
+    wired[ch] = true;
+    whisker_of_channel_[ch] = w;
+  }
   for (int w = 0; w < kN; ++w) {
     cos_r_[w] = std::cos(params_.calibration[w].rotation);
     sin_r_[w] = std::sin(params_.calibration[w].rotation);
@@ -282,16 +196,16 @@ void WhiskerCore::step(int64_t utime, int64_t mono_us, PeriodOutput& out) {
     const bool overtemp = have && (s.status & wp::kBoardOvertemp);
     if (fresh && overtemp) ++counters_[Counters::kOvertempBoardPeriods];
     for (int k = 0; k < wp::kWhiskersPerBoard; ++k) {
-      const int w = b * wp::kWhiskersPerBoard + k;
+      const int w = whisker_of_channel_[b * wp::kWhiskersPerBoard + k];
       const wp::WhiskerRaw& raw = s.whiskers[k];
       int8_t status = 0;
-      if (!fresh) status |= whisker_sample_t::STATUS_STALE;
+      if (!fresh) status |= kStatusStale;
       if (have && (std::abs(raw.x) >= wp::kHallLimit || std::abs(raw.y) >= wp::kHallLimit)) {
-        status |= whisker_sample_t::STATUS_SATURATED;
+        status |= kStatusSaturated;
       }
       const bool faulty = have && (raw.fault || (s.status & wp::kBoardFault));
-      if (faulty) status |= whisker_sample_t::STATUS_FAULT;
-      if (overtemp) status |= whisker_sample_t::STATUS_OVERTEMP;
+      if (faulty) status |= kStatusFault;
+      if (overtemp) status |= kStatusOvertemp;
       out.status[w] = status;
       out.raw_x[w] = raw.x;
       out.raw_y[w] = raw.y;
@@ -373,9 +287,11 @@ void WhiskerCore::step(int64_t utime, int64_t mono_us, PeriodOutput& out) {
     out.contact[w] = static_cast<float>(c.contact[w]);
     out.theta_ceiling[w] = static_cast<float>(c.theta_ceiling[w]);
     out.theta_command[w] = static_cast<float>(c.theta_command[w]);
-    out.command.theta_target[w] = wp::theta_to_counts(c.theta_command[w], params_.calibration[w]);
-    constexpr int8_t kMotorOff = whisker_sample_t::STATUS_FAULT | whisker_sample_t::STATUS_OVERTEMP;
-    if (motors_enabled_ && !(out.status[w] & kMotorOff)) mask |= 1u << w;
+    // The boards take targets by channel: whisker w's motor is on channel[w].
+    const int ch = params_.channel[w];
+    out.command.theta_target[ch] = wp::theta_to_counts(c.theta_command[w], params_.calibration[w]);
+    constexpr int8_t kMotorOff = kStatusFault | kStatusOvertemp;
+    if (motors_enabled_ && !(out.status[w] & kMotorOff)) mask |= 1u << ch;
   }
   out.command.enable_mask = mask;
   out.command.seq = ++command_seq_;
@@ -405,62 +321,6 @@ void LineGuard::update(const WhiskerCore& core) {
     on_ = core.motors_enabled();
     lines_.set_enable(on_);
   }
-}
-
-void to_lcm(const PeriodOutput& in, whisker_sample_t& s, rcp_state_t& r) {
-  rcp::fill_whisker_sample(in.utime, in.seq, in.theta, in.deflection_x, in.deflection_y, in.raw_x, in.raw_y,
-                           in.raw_theta, in.status, s);
-  rcp::fill_rcp_state(in.utime, in.cycle, in.phase, in.cycle_phase, in.enabled, in.contact, in.theta_ceiling,
-                      in.theta_command, r);
-}
-
-void to_lcm(const StatusSnapshot& in, driver_status_t& out) {
-  out.utime = in.utime;
-  out.driver = "whiskerd";
-  switch (in.safety) {
-    case Safety::kWaiting: out.state = driver_status_t::STATE_STARTING; break;
-    case Safety::kRunning: out.state = driver_status_t::STATE_OK; break;
-    case Safety::kRetracting:
-    case Safety::kDisabled:
-    case Safety::kStopped: out.state = driver_status_t::STATE_DEGRADED; break;
-    case Safety::kFault: out.state = driver_status_t::STATE_FAULT; break;
-  }
-  out.message = std::string(safety_name(in.safety)) + (in.reason[0] ? std::string(": ") + in.reason : "") +
-                "; bus " + in.bus_state;
-  if (in.safety == Safety::kRunning && std::string(in.bus_state) != "error-active") {
-    out.state = driver_status_t::STATE_DEGRADED;
-  }
-  out.counter_names.assign(Counters::kNames, Counters::kNames + Counters::kCount);
-  out.counter_values.assign(in.counters.begin(), in.counters.end());
-  const std::pair<const char*, int64_t> can[] = {{"can_rx_frames", in.can_rx},
-                                                 {"can_error_frames", in.can_error_frames},
-                                                 {"can_bus_off", in.can_bus_off},
-                                                 {"can_error_passive", in.can_error_passive},
-                                                 {"can_reopens", in.can_reopens},
-                                                 {"can_rx_overflow", in.can_rx_overflow}};
-  for (const auto& [name, value] : can) {
-    out.counter_names.push_back(name);
-    out.counter_values.push_back(value);
-  }
-  out.num_counters = static_cast<int32_t>(out.counter_names.size());
-  out.stat_names.clear();
-  out.stat_values.clear();
-  auto add = [&](const std::string& prefix, const LatencySummary& s) {
-    out.stat_names.push_back(prefix + "_p50_us");
-    out.stat_values.push_back(s.p50_us);
-    out.stat_names.push_back(prefix + "_p99_us");
-    out.stat_values.push_back(s.p99_us);
-    out.stat_names.push_back(prefix + "_max_us");
-    out.stat_values.push_back(s.max_us);
-  };
-  add("wake_latency", in.wake_latency);
-  add("loop_time", in.loop_time);
-  add("period_jitter", in.period_jitter);
-  out.stat_names.push_back("rt_scheduling");
-  out.stat_values.push_back(in.rt_scheduling ? 1.0 : 0.0);
-  out.stat_names.push_back("periods");
-  out.stat_values.push_back(static_cast<double>(in.loop_time.count));
-  out.num_stats = static_cast<int32_t>(out.stat_names.size());
 }
 
 }  // namespace whiskeye::whiskerd

@@ -15,6 +15,7 @@
 #include "whiskeye/common/socket_custody.h"
 #include "whiskeye/common/spsc_ring.h"
 #include "whiskeye/can/can_socket.h"
+#include "whiskeye/whiskerd/config.h"
 #include "whiskeye/whiskerd/whiskerd_core.h"
 
 #include <time.h>

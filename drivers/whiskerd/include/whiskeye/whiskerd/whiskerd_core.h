@@ -3,13 +3,11 @@
 // -> calibration -> rcp_whisking controller -> motor command -> the messages to publish — plus the
 // safety state machine (GPIO fault: motors off at once and latched; stop request, stale bus or a
 // silent board: retract, then drop enable). The daemon (ControlLoop,
-// control_loop.h, and src/main.cpp) is the thin wiring around it.
+// control_loop.h, and src/main.cpp) is the thin wiring around it; whiskerd.yaml and its drop-ins are
+// loaded by config.h, the outputs converted to LCM messages by lcm.h.
 #pragma once
 
-#include <whiskeye/common/channels.h>
-#include <whiskeye/common/params.h>
 #include <whiskeye/rcp/controller.h>
-#include <whiskeye/rcp/lcm.h>  // WHISK_CYCLE: rcp::to_lcm(const rcp::WhiskCycle&, whisk_cycle_t&)
 
 #include <array>
 #include <cstdint>
@@ -22,13 +20,22 @@
 #include "whiskeye/gpio/motor_lines.h"
 #include "whiskeye/whisker_protocol/whisker_protocol.h"
 
-namespace whiskeye {
-struct driver_status_t;
-}  // namespace whiskeye
-
 namespace whiskeye::whiskerd {
 
 constexpr int kN = kNumWhiskers;
+
+constexpr std::array<int, kN> identity_wiring() {
+  std::array<int, kN> a{};
+  for (int w = 0; w < kN; ++w) a[w] = w;
+  return a;
+}
+
+// Per-whisker status bits of a period (PeriodOutput::status), the values of whisker_sample_t's
+// STATUS_* (checked where the LCM conversion lives, lcm.cpp).
+inline constexpr int8_t kStatusStale = 1;      // no fresh sample from the whisker's board this period
+inline constexpr int8_t kStatusSaturated = 2;  // Hall reading at the ADC limit
+inline constexpr int8_t kStatusFault = 4;      // the board reports a fault: reading invalid, motor off
+inline constexpr int8_t kStatusOvertemp = 8;   // board over temperature: motor off, reading valid
 
 // What the control core needs (WhiskerCore): the bus's frame format and rate, the safety timings,
 // the calibration and the whisking controller.
@@ -43,34 +50,12 @@ struct CoreParams {
   bool whisk_on_start = true;     // start whisking as soon as every board is streaming
   // calibration, per whisker
   std::array<wp::WhiskerCalibration, kN> calibration{};
+  // wiring: channel[w] is the board channel (board * 4 + k) whose Hall sensor, encoder and motor are
+  // whisker w's; a permutation of 0..23 (the identity as the boards are meant to be wired).
+  std::array<int, kN> channel = identity_wiring();
   // the whisking controller (section `rcp`: pattern, detector, rcp)
   rcp::ControllerParams controller;
 };
-
-// The whole of whiskerd.yaml: the core's part and the daemon's (the CAN interface, the motor lines,
-// real-time scheduling, LCM).
-struct Params : CoreParams {
-  // can
-  std::string interface = "can0";
-  // gpio
-  bool gpio = true;
-  gpio::LineNames lines;
-  // real time
-  int rt_priority = 80;  // SCHED_FIFO priority of the control thread
-  int rt_cpu = -1;       // pin the control thread to this CPU; -1 = no pinning
-  bool lock_memory = true;
-  // lcm
-  std::string lcm_url;
-  std::string channel_sample = channels::kWhiskerSample;
-  std::string channel_state = channels::kRcpState;
-  std::string channel_cycle = channels::kWhiskCycle;
-  std::string channel_status = channels::kDriverStatus;
-  double status_period_s = 1.0;
-};
-
-// Loads a whole whiskerd.yaml (every section optional); unknown keys and bad values throw ParamError
-// naming the key.
-void load(const ParamNode& root, Params& p);
 
 // Everything one control period produces, as plain data. A completed cycle comes from the core's
 // pool; hand it back with WhiskerCore::recycle() once published so that step() never allocates.
@@ -109,6 +94,7 @@ struct Counters {
 
 class WhiskerCore {
  public:
+  // Throws std::invalid_argument if params.channel is not a permutation (load() never gives one).
   explicit WhiskerCore(const CoreParams& params);
 
   // One received frame; mono_us is the receive time on the monotonic clock.
@@ -162,6 +148,7 @@ class WhiskerCore {
   int pooled_cycles_ = 0;
   wp::SampleAssembler assembler_;
   std::array<double, kN> cos_r_{}, sin_r_{};
+  std::array<int, kN> whisker_of_channel_{};  // inverse of params_.channel
   std::array<int64_t, wp::kNumBoards> used_samples_{};  // board sample count consumed last period
   std::array<int64_t, wp::kNumBoards> last_sample_mono_;  // per board, time of its last fresh sample; -1 = none
   int64_t seq_ = 0;
@@ -208,10 +195,5 @@ struct StatusSnapshot {
   LatencySummary period_jitter; // |actual period - nominal|
   bool rt_scheduling = false;
 };
-
-// LCM conversions (daemon side): the period's WHISKER_SAMPLE and RCP_STATE, and DRIVER_STATUS. A
-// completed cycle goes out through rcp::to_lcm (whiskeye/rcp/lcm.h), as vita-sim's do.
-void to_lcm(const PeriodOutput& in, whisker_sample_t& sample, rcp_state_t& state);
-void to_lcm(const StatusSnapshot& in, driver_status_t& out);
 
 }  // namespace whiskeye::whiskerd

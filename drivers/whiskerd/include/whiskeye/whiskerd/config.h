@@ -1,0 +1,61 @@
+// whiskerd's configuration: whiskerd.yaml (Params: the core's CoreParams plus the CAN interface, the
+// motor lines, real-time scheduling and LCM) and the calibration drop-ins of its directory
+// (docs/deployment.md, "Calibration drop-ins"): whiskerd.yaml's drop-ins are whiskerd.d/*.yaml beside
+// it, read in file-name order after it, each a whiskerd.yaml holding only `calibration` keys; a key a
+// drop-in gives replaces the value the files before it gave. whiskeye-calibrate writes them, so the
+// operator's file is never rewritten.
+#pragma once
+
+#include <whiskeye/common/channels.h>
+#include <whiskeye/common/params.h>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "whiskeye/gpio/motor_lines.h"
+#include "whiskeye/whiskerd/whiskerd_core.h"
+
+namespace whiskeye::whiskerd {
+
+// The whole of whiskerd.yaml: the core's part and the daemon's.
+struct Params : CoreParams {
+  // can
+  std::string interface = "can0";
+  // gpio
+  bool gpio = true;
+  gpio::LineNames lines;
+  // real time
+  int rt_priority = 80;  // SCHED_FIFO priority of the control thread
+  int rt_cpu = -1;       // pin the control thread to this CPU; -1 = no pinning
+  bool lock_memory = true;
+  // lcm
+  std::string lcm_url;
+  std::string channel_sample = channels::kWhiskerSample;
+  std::string channel_state = channels::kRcpState;
+  std::string channel_cycle = channels::kWhiskCycle;
+  std::string channel_status = channels::kDriverStatus;
+  double status_period_s = 1.0;
+};
+
+// Loads a whole whiskerd.yaml (every section optional); unknown keys and bad values throw ParamError
+// naming the key.
+void load(const ParamNode& root, Params& p);
+
+// Applies one drop-in over `p`: its `calibration.default` keys to every whisker, then its
+// `calibration.whiskers` entries to theirs (keys absent keep their value). Any key outside
+// `calibration` is a ParamError naming the file and the key; so is a typo.
+void load_dropin(const ParamNode& dropin, CoreParams& p);
+
+// The drop-in directory of a config file: /etc/whiskeye/whiskerd.yaml -> /etc/whiskeye/whiskerd.d.
+std::filesystem::path dropin_dir(const std::filesystem::path& config);
+// Its *.yaml files in file-name order (the order they apply in, later files win); none if the
+// directory does not exist. A path there that is not a regular file is a ParamError.
+std::vector<std::filesystem::path> dropin_files(const std::filesystem::path& dir);
+
+// whiskerd's whole configuration: `root` (the config file with the command line's overrides, or
+// empty), then, when `config_path` is not empty, the drop-ins beside it. Returns what
+// --print-config prints: the file's parameters, then each drop-in's under a "# drop-in <path>" line.
+std::string load_with_dropins(const ParamNode& root, const std::string& config_path, Params& p);
+
+}  // namespace whiskeye::whiskerd
