@@ -704,7 +704,7 @@ TEST_F(Localising, ACorrectLocalisationFollowedByAFalseOneIsNotTheRecovery) {
   EXPECT_FALSE(never.worst_laps.has_value()) << "never localised: no worst figure";
   EXPECT_FALSE(never.lem_after_m.has_value());
   ev(31, EventType::kRelocalise, 7, 1);      // at 31 s the robot is where 1 was made
-  const Localisation& l = run().instants.at(0);
+  const Localisation l = run().instants.at(0);
   ASSERT_TRUE(l.localised);
   EXPECT_EQ(l.localised_utime, 31 * kSecond);
   EXPECT_EQ(l.false_localisations, 1u);
@@ -713,7 +713,7 @@ TEST_F(Localising, ACorrectLocalisationFollowedByAFalseOneIsNotTheRecovery) {
 TEST_F(Localising, ANewExperienceOrAnEventReportingLocalisingIsNoClaim) {
   ev(29, EventType::kSameExperience, 101, 7, true);  // a hypothesis while LOCALISING: no claim
   ev(30, EventType::kNewExperience, 101, 102);
-  const Localisation& l = run().instants.at(0);
+  const Localisation l = run().instants.at(0);
   EXPECT_FALSE(l.localised) << "a new experience is made where the robot is: it recognises nothing";
   EXPECT_EQ(l.false_localisations, 0u);
 }
@@ -764,7 +764,7 @@ TEST(LocalisingSession, ASessionOnASavedMapIsJudgedByTheFirstSessionsTruth) {
   // Without the first session's truth the map's experiences cannot be judged: never localised.
   EvalInput blind = in;
   blind.map_ground_truth.clear();
-  const Localisation& b = evaluate(blind, EvalParams{}).localisation->instants.at(0);
+  const Localisation b = evaluate(blind, EvalParams{}).localisation->instants.at(0);
   EXPECT_FALSE(b.localised);
   EXPECT_EQ(b.unjudged_events, 2u);
   // The first session's truth judges the rest of the metrics too, and nothing lies between the sessions.
