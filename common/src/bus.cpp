@@ -1,4 +1,5 @@
 #include "whiskeye/common/bus.h"
+#include "whiskeye/common/big_endian.h"
 #include "whiskeye/common/log.h"
 
 #include <lcm/lcm-cpp.hpp>

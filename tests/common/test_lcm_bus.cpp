@@ -1,5 +1,6 @@
 // LcmBus over udpm:// (in a private network namespace, scripts/netns-run): what LCM's receive queue
 // does with a burst of messages that arrived before the loop handled any of them.
+#include "whiskeye/common/big_endian.h"
 #include "whiskeye/common/bus.h"
 
 #include <gtest/gtest.h>

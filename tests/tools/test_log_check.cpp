@@ -33,25 +33,6 @@ std::vector<uint8_t> sample(int64_t seq) {
   return bytes(m);
 }
 
-TEST(LogCheck, ReadsTheSequenceNumberOfEveryTypeThatCarriesOne) {
-  image_t im{};
-  im.utime = 5;
-  im.seq = 41;
-  odometry_t odo{};
-  odo.utime = 5;
-  odo.seq = 42;
-  whisk_cycle_t wc{};
-  wc.utime = 5;
-  wc.cycle = 44;
-  EXPECT_EQ(sequence_number(bytes(im)), 41);
-  EXPECT_EQ(sequence_number(bytes(odo)), 42);
-  EXPECT_EQ(sequence_number(sample(43)), 43);
-  EXPECT_EQ(sequence_number(bytes(wc)), 44);
-  pose2d_t pose{};
-  EXPECT_EQ(sequence_number(bytes(pose)), std::nullopt) << "no sequence number";
-  EXPECT_EQ(sequence_number(std::vector<uint8_t>(10, 0)), std::nullopt) << "too short";
-}
-
 TEST(LogCheck, CountsMessagesMissingFromTheSequenceAndWhereTheyWent) {
   LogCheck check;
   for (int64_t seq : {1, 2, 3, 7, 8, 9, 10, 12}) check.add("WHISKER_SAMPLE", 1'000'000 + seq * 2000, sample(seq));

@@ -1,6 +1,5 @@
 #include "whiskeye/slamd/cycle_sync.h"
 
-#include "whiskeye/common/bus.h"
 #include "whiskeye/common/utime.h"
 
 #include <algorithm>
@@ -10,48 +9,6 @@
 #include <utility>
 
 namespace whiskeye::slamd {
-
-bool decode_camera_frame(std::span<const uint8_t> bytes, CameraFrame& out, std::string* reason) {
-  // LCM encoding of image_t: fingerprint (8), utime (8), seq (8), width, height, row_stride,
-  // pixelformat, size (4 each), then `size` bytes; all big-endian.
-  constexpr std::size_t kHeader = 8 + 8 + 8 + 5 * 4;
-  const auto fail = [&](const char* why) {
-    if (reason) {
-      *reason = "cannot decode " + std::to_string(bytes.size()) + " bytes as whiskeye." + image_t::getTypeName() + why;
-    }
-    return false;
-  };
-  if (bytes.size() < kHeader || read_be_i64(bytes.data()) != image_t::getHash()) {
-    return fail(" (wrong type fingerprint or truncated)");
-  }
-  const uint8_t* p = bytes.data() + 8;
-  const auto size = read_be_i32(p + 32);
-  if (size < 0 || bytes.size() - kHeader < static_cast<std::size_t>(size)) {
-    return fail(" (wrong type fingerprint or truncated)");
-  }
-  if (bytes.size() - kHeader != static_cast<std::size_t>(size)) return fail(" (trailing bytes)");
-  out.utime = read_be_i64(p);
-  out.seq = read_be_i64(p + 8);
-  out.width = read_be_i32(p + 16);
-  out.height = read_be_i32(p + 20);
-  out.row_stride = read_be_i32(p + 24);
-  out.pixelformat = read_be_i32(p + 28);
-  out.data = bytes.subspan(kHeader);
-  return true;
-}
-
-void own_pixels(CameraFrame& frame) {
-  auto copy = std::make_shared<const std::vector<uint8_t>>(frame.data.begin(), frame.data.end());
-  frame.data = std::span<const uint8_t>(copy->data(), copy->size());
-  frame.owner = std::move(copy);
-}
-
-CameraFrame camera_frame(const image_t& image) {
-  CameraFrame f{image.utime, image.seq, image.width, image.height, image.row_stride, image.pixelformat,
-                std::span<const uint8_t>(image.data.data(), image.data.size()), nullptr};
-  own_pixels(f);
-  return f;
-}
 
 CycleSynchroniser::CycleSynchroniser(const SyncParams& params) : params_(params) {}
 

@@ -38,8 +38,7 @@ void load(const ParamNode& node, NodeParams& p) {
 
 namespace {
 
-constexpr int kMaxSamplesPerCycle = 20000;  // 40 s at 500 Hz: far beyond any whisk cycle
-constexpr int64_t kMaxCycleUs = 60'000'000;  // likewise for its duration
+constexpr int64_t kMaxCycleUs = 60'000'000;  // a whisk cycle's duration: far beyond any
 // Plausible readings (docs/lcm-channels.md): whisker angles are within a turn either way, calibrated
 // deflections within -1..1 (half again for calibration slack); odometry positions within 100 km.
 constexpr double kMaxWhiskerAngle = kPi;
@@ -70,21 +69,10 @@ int8_t localisation_code(bool localising) {
 
 bool finite(double v) { return std::isfinite(v); }
 
-// "" for a sample time that can be one (after 1970, before 2100), else why not: one corrupt time
-// (INT64_MAX, a negative one) would otherwise become data time and hold every later message back.
-std::string check_time(const char* name, int64_t utime) {
-  constexpr int64_t kYear2100 = 4'102'444'800'000'000;
-  if (utime > 0 && utime < kYear2100) return "";
-  return std::string(name) + ": sample time " + std::to_string(utime) + " us is not a plausible epoch time";
-}
-
 std::string check_whisk_cycle(const whisk_cycle_t& m) {
-  if (std::string bad = check_time("WHISK_CYCLE", m.utime_start); !bad.empty()) return bad;
-  if (std::string bad = check_time("WHISK_CYCLE", m.utime_end); !bad.empty()) return bad;
-  if (m.num_whiskers != kNumWhiskers) return "WHISK_CYCLE: num_whiskers " + std::to_string(m.num_whiskers) + " (expected 24)";
-  if (m.num_samples <= 0 || m.num_samples > kMaxSamplesPerCycle) {
-    return "WHISK_CYCLE: num_samples " + std::to_string(m.num_samples) + " out of range";
-  }
+  if (std::string bad = sample_time_error("WHISK_CYCLE", m.utime_start); !bad.empty()) return bad;
+  if (std::string bad = sample_time_error("WHISK_CYCLE", m.utime_end); !bad.empty()) return bad;
+  if (std::string bad = whisk_cycle_counts_error(m.num_whiskers, m.num_samples); !bad.empty()) return bad;
   if (m.utime_end < m.utime_start) return "WHISK_CYCLE: utime_end before utime_start";
   if (m.utime_end - m.utime_start > kMaxCycleUs) {
     return "WHISK_CYCLE: lasts " + std::to_string((m.utime_end - m.utime_start) / 1000) + " ms (more than 60 s)";
@@ -128,7 +116,7 @@ std::string check_whisk_cycle(const whisk_cycle_t& m) {
 }
 
 std::string check_odometry(const odometry_t& m) {
-  if (std::string bad = check_time("ODOMETRY", m.utime); !bad.empty()) return bad;
+  if (std::string bad = sample_time_error("ODOMETRY", m.utime); !bad.empty()) return bad;
   for (double v : {m.x, m.y, m.theta, m.vx, m.vy, m.omega}) {
     if (!finite(v)) return "ODOMETRY: non-finite value";
   }
@@ -157,71 +145,6 @@ bool has_contact(const whisk_cycle_t& m) {
 }
 
 }  // namespace
-
-namespace {
-
-// Bytes per pixel of the uncompressed formats we accept; 0 for compressed, -1 for unknown.
-int bytes_per_pixel(int32_t fourcc) {
-  if (fourcc == image_t::PIXEL_FORMAT_GREY) return 1;
-  if (fourcc == image_t::PIXEL_FORMAT_YUYV) return 2;
-  if (fourcc == image_t::PIXEL_FORMAT_RGB24 || fourcc == image_t::PIXEL_FORMAT_BGR24) return 3;
-  if (fourcc == image_t::PIXEL_FORMAT_MJPEG) return 0;
-  return -1;
-}
-
-}  // namespace
-
-std::string camera_frame_error(const CameraFrame& m) {
-  if (std::string bad = check_time("CAMERA", m.utime); !bad.empty()) return bad;
-  if (m.width <= 0 || m.height <= 0 || m.width > 10000 || m.height > 10000) {
-    return "CAMERA: bad size " + std::to_string(m.width) + "x" + std::to_string(m.height);
-  }
-  const int bpp = bytes_per_pixel(m.pixelformat);
-  if (bpp < 0) return "CAMERA: unsupported pixel format " + std::to_string(m.pixelformat);
-  if (bpp == 0) return !m.data.empty() ? "" : "CAMERA: empty compressed frame";
-  if (m.row_stride < m.width * bpp) return "CAMERA: row_stride " + std::to_string(m.row_stride) + " < width × bytes per pixel";
-  if (static_cast<int64_t>(m.data.size()) < static_cast<int64_t>(m.row_stride) * m.height) {
-    return "CAMERA: " + std::to_string(m.data.size()) + " bytes < row_stride × height";
-  }
-  return "";
-}
-
-std::string whisk_cycle_size_error(std::span<const uint8_t> data) {
-  // Fingerprint, then utime, cycle, utime_start, utime_end; then num_whiskers, num_samples, num_missing.
-  constexpr std::size_t kCountsAt = 8 + 4 * 8;
-  constexpr std::size_t kFixed = kCountsAt + 3 * 4;
-  const std::string what = "cannot decode " + std::to_string(data.size()) + " bytes as whiskeye.whisk_cycle_t: ";
-  if (data.size() < kFixed) return what + "shorter than its fixed fields";
-  const int64_t whiskers = read_be_i32(data.data() + kCountsAt);
-  const int64_t samples = read_be_i32(data.data() + kCountsAt + 4);
-  if (whiskers < 0 || samples < 0) {
-    return what + "negative num_whiskers (" + std::to_string(whiskers) + ") or num_samples (" +
-           std::to_string(samples) + ")";
-  }
-  // Per sample: utime (8), valid (1), phase (1); per sample and whisker: three floats and a byte.
-  // Compared by division: samples · whiskers · 13 overflows int64 for counts near INT32_MAX.
-  const int64_t per_sample = 10 + 13 * whiskers;
-  const int64_t rest = static_cast<int64_t>(data.size() - kFixed);
-  if (rest % per_sample != 0 || rest / per_sample != samples) {
-    return what + "num_samples " + std::to_string(samples) + " and num_whiskers " + std::to_string(whiskers) +
-           " need " + std::to_string(per_sample) + " bytes per sample, the message has " + std::to_string(rest) +
-           " after its fixed fields";
-  }
-  return {};
-}
-
-std::string whisk_cycle_contract_error(std::span<const uint8_t> data) {
-  constexpr std::size_t kCountsAt = 8 + 4 * 8;
-  if (data.size() < kCountsAt + 8) return "WHISK_CYCLE: shorter than its fixed fields";
-  const int32_t whiskers = read_be_i32(data.data() + kCountsAt);
-  const int32_t samples = read_be_i32(data.data() + kCountsAt + 4);
-  // The same words as check_whisk_cycle(), which sees the decoded message.
-  if (whiskers != kNumWhiskers) return "WHISK_CYCLE: num_whiskers " + std::to_string(whiskers) + " (expected 24)";
-  if (samples <= 0 || samples > kMaxSamplesPerCycle) {
-    return "WHISK_CYCLE: num_samples " + std::to_string(samples) + " out of range";
-  }
-  return "";
-}
 
 slam::WhiskCycleInput to_core(const whisk_cycle_t& m) {
   slam::WhiskCycleInput in;

@@ -1,21 +1,13 @@
 #include "whiskeye/logcheck/log_check.h"
 
-#include <whiskeye/image_t.hpp>
-#include <whiskeye/odometry_t.hpp>
-#include <whiskeye/whisk_cycle_t.hpp>
-#include <whiskeye/whisker_sample_t.hpp>
+#include "whiskeye/common/message_layout.h"
 
 #include <algorithm>
 #include <limits>
+#include <optional>
 
 namespace whiskeye::logcheck {
 namespace {
-
-int64_t big_endian_i64(std::span<const uint8_t> bytes) {
-  uint64_t v = 0;
-  for (int i = 0; i < 8; ++i) v = (v << 8) | bytes[static_cast<std::size_t>(i)];
-  return static_cast<int64_t>(v);
-}
 
 // b − a, or int64's end in its direction where that does not fit (times on both sides of the range).
 int64_t minus_saturating(int64_t b, int64_t a) {
@@ -27,19 +19,6 @@ int64_t minus_saturating(int64_t b, int64_t a) {
 }
 
 }  // namespace
-
-std::optional<int64_t> sequence_number(std::span<const uint8_t> encoded) {
-  // Each of these types starts with `int64_t utime` and then its sequence number, after LCM's 8-byte
-  // fingerprint (test_log_check checks that against the generated encoders).
-  constexpr std::size_t kSeqAt = 16;
-  if (encoded.size() < kSeqAt + 8) return std::nullopt;
-  const int64_t fingerprint = big_endian_i64(encoded.first(8));
-  for (const int64_t hash : {image_t::getHash(), odometry_t::getHash(), whisker_sample_t::getHash(),
-                             whisk_cycle_t::getHash()}) {
-    if (fingerprint == hash) return big_endian_i64(encoded.subspan(kSeqAt, 8));
-  }
-  return std::nullopt;
-}
 
 double ChannelStats::rate_hz() const {
   if (count < 2 || max_utime <= min_utime) return 0.0;

@@ -1,8 +1,8 @@
 // Camera frame → small JPEG for the page (camera_jpeg.h).
 #include "whiskeye/viewer/camera_jpeg.h"
 
+#include "whiskeye/common/message_layout.h"
 #include "whiskeye/slamd/mjpeg_decode.h"
-#include "whiskeye/slamd/slam_node.h"
 
 #include <whiskeye/image_t.hpp>
 
@@ -16,7 +16,7 @@
 namespace whiskeye::viewer {
 
 std::shared_ptr<const std::string> frame_to_jpeg(const Frame& f, int max_width, int quality, std::string* reason) {
-  if (std::string bad = slamd::camera_frame_error(f); !bad.empty()) {
+  if (std::string bad = camera_frame_error(f); !bad.empty()) {
     if (reason) *reason = bad;
     return nullptr;
   }

@@ -1,6 +1,7 @@
 // A recorded log as a timeline (log_timeline.h).
 #include "whiskeye/viewer/log_timeline.h"
 
+#include "whiskeye/common/big_endian.h"
 #include "whiskeye/common/bus.h"
 #include "whiskeye/common/channels.h"
 

@@ -1,8 +1,8 @@
 // The viewer's aggregated state and its JSON (viewer_state.h).
 #include "whiskeye/viewer/viewer_state.h"
 
-#include "whiskeye/slamd/slam_node.h"  // slamd's checks of WHISK_CYCLE and CAMERA messages, applied before showing them
 #include "whiskeye/common/channels.h"
+#include "whiskeye/common/message_layout.h"  // the checks of WHISK_CYCLE and CAMERA messages slamd applies too
 #include "whiskeye/common/robot_geometry.h"
 #include "whiskeye/common/wire_names.h"
 
@@ -101,8 +101,8 @@ bool ViewerState::apply(std::string_view channel, int64_t recv_utime, std::span<
   if (channel == channels::kWhiskCycle) {
     // slamd's checks, in its order: the counts against the length, then against the contract, before
     // the generated decoder allocates what the counts claim.
-    reason = slamd::whisk_cycle_size_error(data);
-    if (reason.empty()) reason = slamd::whisk_cycle_contract_error(data);
+    reason = whisk_cycle_size_error(data);
+    if (reason.empty()) reason = whisk_cycle_contract_error(data);
     if (!reason.empty()) {
       decode_error(channel, reason);
       return false;
@@ -111,11 +111,11 @@ bool ViewerState::apply(std::string_view channel, int64_t recv_utime, std::span<
   }
   if (channel == channels::kCamera) {
     Frame f;
-    if (!slamd::decode_camera_frame(data, f, &reason)) {
+    if (!decode_camera_frame(data, f, &reason)) {
       decode_error(channel, reason);
       return false;
     }
-    if (std::string bad = slamd::camera_frame_error(f); !bad.empty()) {
+    if (std::string bad = camera_frame_error(f); !bad.empty()) {
       decode_error(channel, bad);
       return false;
     }
@@ -123,7 +123,7 @@ bool ViewerState::apply(std::string_view channel, int64_t recv_utime, std::span<
     if (owner) {
       f.owner = std::move(owner);  // the bytes outlive this call: keep a view
     } else {
-      slamd::own_pixels(f);
+      own_pixels(f);
     }
     on_camera(std::move(f));
     return true;

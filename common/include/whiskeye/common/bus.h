@@ -2,9 +2,11 @@
 //   - on the robot over LCM (LcmBus, udpm://),
 //   - on a recorded log (LogReader feeding handlers, LogWriterBus collecting output),
 //   - in a unit test (MemoryBus, synchronous, in-process).
-// Typed helpers encode/decode LCM types; a message that fails to decode is counted and reported to
-// DecodeErrors, never thrown at the node.
+// Typed helpers encode/decode LCM types (message_layout.h); a message that fails to decode is
+// counted and reported to DecodeErrors, never thrown at the node.
 #pragma once
+
+#include "whiskeye/common/message_layout.h"  // encode_message, decode_message
 
 #include <atomic>
 #include <cstdint>
@@ -61,51 +63,6 @@ class DecodeErrors {
   std::map<std::string, int64_t> per_channel_;
   Callback callback_;
 };
-
-// LCM's wire format and its log files are big-endian: a signed integer read from there.
-inline int64_t read_be_i64(const uint8_t* p) {
-  uint64_t v = 0;
-  for (int i = 0; i < 8; ++i) v = (v << 8) | p[i];
-  return static_cast<int64_t>(v);
-}
-inline int32_t read_be_i32(const uint8_t* p) {
-  return static_cast<int32_t>((uint32_t{p[0]} << 24) | (uint32_t{p[1]} << 16) | (uint32_t{p[2]} << 8) | p[3]);
-}
-
-// Encodes an LCM message. The caller keeps every array as long as its length field says: LCM's
-// generated encoders index arrays by those fields without checking.
-template <typename T>
-std::vector<uint8_t> encode_message(const T& msg) {
-  const int size = msg.getEncodedSize();
-  std::vector<uint8_t> buf(static_cast<std::size_t>(size));
-  if (size < 0 || msg.encode(buf.data(), 0, size) != size) {
-    throw std::runtime_error(std::string("cannot encode ") + T::getTypeName());
-  }
-  return buf;
-}
-
-// Decodes an LCM message; false with a reason on a fingerprint mismatch, truncation, trailing bytes
-// or a negative array count (the generated decoders size arrays from the message's counts before
-// checking them against its length, and throw on a negative one; a huge count is the caller's to
-// rule out first, see slamd's whisk_cycle_size_error).
-template <typename T>
-bool decode_message(std::span<const uint8_t> data, T& out, std::string* reason = nullptr) {
-  int n = -1;
-  std::string why = " (wrong type fingerprint or truncated)";
-  try {
-    n = out.decode(data.data(), 0, static_cast<int>(data.size()));
-  } catch (const std::exception& e) {
-    why = std::string(" (") + e.what() + ": an array count is negative or too large)";
-  }
-  if (n < 0 || static_cast<std::size_t>(n) != data.size()) {
-    if (reason) {
-      *reason = std::string("cannot decode ") + std::to_string(data.size()) + " bytes as whiskeye." +
-                T::getTypeName() + (n < 0 ? why : " (trailing bytes)");
-    }
-    return false;
-  }
-  return true;
-}
 
 template <typename T>
 void publish(Bus& bus, const std::string& channel, const T& msg) {

@@ -26,6 +26,8 @@
 // on from its new samples.
 #pragma once
 
+#include "whiskeye/common/message_layout.h"  // CameraFrame: a frame as the synchroniser keeps it
+
 #include <whiskeye/image_t.hpp>
 #include <whiskeye/odometry_t.hpp>
 #include <whiskeye/whisk_cycle_t.hpp>
@@ -39,29 +41,6 @@
 #include <vector>
 
 namespace whiskeye::slamd {
-
-// A camera frame as the synchroniser keeps it: image_t's fields, with the pixels as a view kept
-// valid by `owner` (a replayed log's mapping, or one copy of a live message), so buffering and
-// handing out frames never copies pixels.
-struct CameraFrame {
-  int64_t utime = 0;
-  int64_t seq = 0;  // the driver's frame number
-  int32_t width = 0;
-  int32_t height = 0;
-  int32_t row_stride = 0;
-  int32_t pixelformat = 0;
-  std::span<const uint8_t> data;  // image_t::data (its `size` bytes)
-  std::shared_ptr<const void> owner;
-};
-
-// Decodes an encoded image_t without copying the pixels: out.data views `bytes` (out.owner is left
-// alone). False with a reason, as decode_message() would give, on a fingerprint mismatch,
-// truncation, a negative size or trailing bytes.
-bool decode_camera_frame(std::span<const uint8_t> bytes, CameraFrame& out, std::string* reason = nullptr);
-// Makes `frame` own a copy of the pixels it views (for bytes that do not outlive the caller).
-void own_pixels(CameraFrame& frame);
-// A frame owning a copy of `image`'s pixels.
-CameraFrame camera_frame(const image_t& image);
 
 struct SyncParams {
   double camera_tolerance_s = 0.15;  // a frame farther than this from the cycle's end is not used

@@ -54,21 +54,6 @@ struct NodeParams {
 };
 void load(const ParamNode& node, NodeParams& params);
 
-// Why the bytes of a WHISK_CYCLE message cannot be decoded safely (counts negative, or not matching
-// the message's length), or "" when they can.
-std::string whisk_cycle_size_error(std::span<const uint8_t> data);
-
-// Why the counts of a WHISK_CYCLE message (whose size whisk_cycle_size_error() accepted) break the
-// contract (num_whiskers 24, num_samples 1..20000), or "". Checked before the generated decoder runs:
-// it allocates a vector per sample, so a message of 0 whiskers and 20 M samples (200 MB) took 2.3 GB
-// before it was rejected. Within the contract the decoded message is about 1.3× its wire size.
-std::string whisk_cycle_contract_error(std::span<const uint8_t> data);
-
-// Why a CAMERA frame breaks the contract (a sample time that is no epoch time, a size out of range,
-// a pixel format outside docs/lcm-channels.md, pixels that do not fit width, height and row_stride),
-// or "". slamd rejects such a frame; whiskeye-viewer does not show it.
-std::string camera_frame_error(const CameraFrame& m);
-
 // A WHISK_CYCLE message as the core's input (the message is assumed already validated).
 slam::WhiskCycleInput to_core(const whisk_cycle_t& m);
 

@@ -1,12 +1,11 @@
 // What a recording lost: per channel, how many messages, at what rate, and — on every channel whose
-// messages carry a sequence number — how many never reached the log (the stock lcm-logger drops
-// under load and says nothing). Pure: events in, statistics out; whiskeye-logcheck reads the file.
+// messages carry a sequence number (whiskeye::sequence_number, message_layout.h) — how many never
+// reached the log (the stock lcm-logger drops under load and says nothing). Pure: events in, statistics out; whiskeye-logcheck reads the file.
 #pragma once
 
 #include "whiskeye/common/sequence_gaps.h"
 
 #include <cstdint>
-#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -14,11 +13,6 @@
 #include <vector>
 
 namespace whiskeye::logcheck {
-
-// The sequence number of an encoded message whose type carries one (told by its fingerprint, so a
-// renamed channel is still checked): image_t.seq (CAMERA), odometry_t.seq (ODOMETRY),
-// whisker_sample_t.seq (WHISKER_SAMPLE), whisk_cycle_t.cycle (WHISK_CYCLE). nullopt otherwise.
-std::optional<int64_t> sequence_number(std::span<const uint8_t> encoded);
 
 struct ChannelStats {
   std::string channel;
