@@ -7,8 +7,12 @@
 #include <whiskeye/odometry_t.hpp>
 #include <whiskeye/pose2d_t.hpp>
 
+#include <turbojpeg.h>
+
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 namespace whiskeye::sim {
 
@@ -52,8 +56,19 @@ sim_fault_t to_lcm(const FaultEvent& e) {
   return m;
 }
 
-LcmSink::LcmSink(Bus& bus, std::function<void(int64_t)> set_time, bool yuyv, double saturation)
-    : bus_(bus), set_time_(std::move(set_time)), yuyv_(yuyv), saturation_(saturation) {}
+LcmSink::LcmSink(Bus& bus, std::function<void(int64_t)> set_time, const CameraNoise& camera, double saturation)
+    : bus_(bus),
+      set_time_(std::move(set_time)),
+      format_(camera.format),
+      jpeg_quality_(camera.jpeg_quality),
+      saturation_(saturation) {
+  if (format_ != CameraFormat::Mjpeg) return;
+  if (!(jpeg_quality_ >= 1 && jpeg_quality_ <= 100)) {
+    throw std::invalid_argument("JPEG quality " + std::to_string(jpeg_quality_) + " is out of range [1, 100]");
+  }
+  jpeg_ = {tjInitCompress(), tjDestroy};
+  if (!jpeg_) throw std::runtime_error(std::string("libturbojpeg: cannot create a compressor: ") + tjGetErrorStr());
+}
 
 template <typename T>
 void LcmSink::put(const std::string& channel, int64_t utime, const T& msg) {
@@ -112,14 +127,39 @@ void LcmSink::camera(int64_t utime, int64_t seq, const std::vector<uint8_t>& gre
   image_.seq = seq;
   image_.width = width;
   image_.height = height;
-  if (yuyv_) {
-    grey_to_yuyv(grey, width, height, image_.data);
-    image_.row_stride = 2 * width;
-    image_.pixelformat = image_t::PIXEL_FORMAT_YUYV;
-  } else {
-    image_.data = grey;
-    image_.row_stride = width;
-    image_.pixelformat = image_t::PIXEL_FORMAT_GREY;
+  switch (format_) {
+    case CameraFormat::Yuyv:
+      grey_to_yuyv(grey, width, height, image_.data);
+      image_.row_stride = 2 * width;
+      image_.pixelformat = image_t::PIXEL_FORMAT_YUYV;
+      break;
+    case CameraFormat::Grey:
+      image_.data = grey;
+      image_.row_stride = width;
+      image_.pixelformat = image_t::PIXEL_FORMAT_GREY;
+      break;
+    case CameraFormat::Mjpeg: {
+      // What a UVC camera sends: baseline JPEG, YCbCr 4:2:2 (the grey image is the luma, the
+      // chroma neutral). Compressed from planes, so no RGB image is made; libjpeg's default
+      // integer DCT, so the same frame gives the same bytes.
+      const auto chroma = static_cast<std::size_t>(tjPlaneSizeYUV(1, width, 0, height, TJSAMP_422));
+      if (neutral_chroma_.size() < chroma) neutral_chroma_.assign(chroma, 128);
+      const auto capacity = static_cast<std::size_t>(tjBufSize(width, height, TJSAMP_422));
+      if (jpeg_buffer_.size() < capacity) jpeg_buffer_.resize(capacity);
+      const unsigned char* planes[3] = {grey.data(), neutral_chroma_.data(), neutral_chroma_.data()};
+      const int strides[3] = {width, 0, 0};  // 0: the plane's own width
+      unsigned char* out = jpeg_buffer_.data();
+      unsigned long size = capacity;
+      if (tjCompressFromYUVPlanes(jpeg_.get(), planes, width, strides, height, TJSAMP_422, &out, &size, jpeg_quality_,
+                                  TJFLAG_NOREALLOC) != 0) {
+        throw std::runtime_error(std::string("libturbojpeg: cannot encode a camera frame: ") +
+                                 tjGetErrorStr2(jpeg_.get()));
+      }
+      image_.data.assign(out, out + size);
+      image_.row_stride = 0;  // as camerad publishes a compressed frame
+      image_.pixelformat = image_t::PIXEL_FORMAT_MJPEG;
+      break;
+    }
   }
   image_.size = static_cast<int32_t>(image_.data.size());
   put(channels::kCamera, utime, image_);

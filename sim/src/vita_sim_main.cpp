@@ -361,6 +361,15 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--frames-dir", frames_dir, "Also save camera frames as PNG in this directory");
   app.add_option("--frames-every", frames_every, "Save every N-th camera frame")->check(CLI::PositiveNumber);
+  std::string camera_format;
+  int jpeg_quality = 0;
+  app.add_option("--camera-format", camera_format,
+                 "CAMERA frames as yuyv, grey or mjpeg (JPEG as a UVC camera sends it, about a twentieth of YUYV's bytes); "
+                 "overrides the world's camera.format")
+      ->transform(CLI::IsMember({"yuyv", "grey", "mjpeg"}, CLI::ignore_case));
+  app.add_option("--jpeg-quality", jpeg_quality,
+                 "Quality 1..100 of --camera-format mjpeg's JPEGs; overrides the world's camera.jpeg_quality (default 85)")
+      ->check(CLI::Range(1, 100));
   app.add_flag("--quiet,-q", quiet, "No progress output");
   // A ParamError (a config or world that is missing or wrong): exit 2; any other failure: exit 1.
   return program.run(argc, argv, [&] {
@@ -392,6 +401,12 @@ int main(int argc, char** argv) {
       return 2;
     }
     if (laps > 0) world.trajectory.laps = static_cast<int>(laps);
+    if (!camera_format.empty()) {
+      world.camera.format = camera_format == "yuyv"   ? CameraFormat::Yuyv
+                            : camera_format == "grey" ? CameraFormat::Grey
+                                                      : CameraFormat::Mjpeg;
+    }
+    if (jpeg_quality > 0) world.camera.jpeg_quality = jpeg_quality;
     if (app.count("--start-phase") > 0) {
       if (!(std::abs(start_phase) <= kTwoPi)) {
         std::cerr << "vita-sim: --start-phase " << start_phase << " is out of range [-2pi, 2pi] rad\n";
@@ -458,7 +473,7 @@ int main(int argc, char** argv) {
     std::unique_ptr<LcmSink> lcm;
     if (!output.empty()) {
       bus = std::make_unique<LogWriterBus>(output);
-      lcm = std::make_unique<LcmSink>(*bus, [b = bus.get()](int64_t t) { b->set_time(t); }, world.camera.yuyv,
+      lcm = std::make_unique<LcmSink>(*bus, [b = bus.get()](int64_t t) { b->set_time(t); }, world.camera,
                                       plant.saturation);
     }
     std::ofstream candump_file;

@@ -367,8 +367,11 @@ void load(const ParamNode& node, World& world) {
   cam.get("noise_sigma", w.camera.sigma, 0.0, 100.0);
   std::string format = "YUYV";
   cam.get("format", format);
-  if (format != "YUYV" && format != "GREY") bad(cam, "format", "must be YUYV or GREY, got '" + format + "'");
-  w.camera.yuyv = format == "YUYV";
+  if (format != "YUYV" && format != "GREY" && format != "MJPEG") {
+    bad(cam, "format", "must be YUYV, GREY or MJPEG, got '" + format + "'");
+  }
+  w.camera.format = format == "YUYV" ? CameraFormat::Yuyv : format == "GREY" ? CameraFormat::Grey : CameraFormat::Mjpeg;
+  cam.get("jpeg_quality", w.camera.jpeg_quality, 1, 100);
 
   const ParamNode odo = node.section("odometry");
   odo.get("sigma_v", w.odometry.sigma_v, 0.0, 10.0);

@@ -16,14 +16,15 @@ BAD = {
     "demo-kidnap": [["--bogus"], ["--seed"], ["--at"], ["--seed", "2", "--to-angle"]],
     "seeds": [["--bogus"], ["--world"]],
     "fuzz": [["--bogus"], ["--minutes"], ["--seconds", "x"], ["no_such_target"]],
-    "suite": [["--bogus"], ["--worlds"], ["--worlds", "x"], ["--scenario", "wander"]],
+    "suite": [["--bogus"], ["--worlds"], ["--worlds", "x"], ["--scenario", "wander"], ["--camera-format", "png"]],
     "install-deps": [["--bogus"]],
     "netns-run": [[]],
     "test": [["--no-such-stage"]],
     "lcm-spy": [],
     "bench": [["--bogus"], ["--filter"], ["--repetitions", "x"], ["--only", "no-such-bench"], ["--table"],
               ["--table", "/no/such.json"], ["--table", "/etc/hostname"]],
-    "replay-speed": [["--bogus"], ["--runs", "0"], ["--mode", "x"], ["--log", "/no/such/log"]],
+    "replay-speed": [["--bogus"], ["--runs", "0"], ["--mode", "x"], ["--log", "/no/such/log"],
+                     ["--camera-format", "png"], ["--camera-format", "mjpeg", "--log", "/etc/hostname"]],
 }
 
 

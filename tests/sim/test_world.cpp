@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <tuple>
 
 namespace whiskeye::sim {
 namespace {
@@ -42,6 +43,26 @@ TEST(World, DefaultArenaIsAliasedForEachSenseAlone) {
   EXPECT_NEAR(box1.radius, box2.radius, 1e-9);
   EXPECT_NEAR(std::hypot(box1.centre.x, box1.centre.y), std::hypot(box2.centre.x, box2.centre.y), 1e-9);
   EXPECT_NE(w.solids[2].shape, box1.shape);
+}
+
+TEST(World, CameraFormatIsYuyvUnlessTheWorldSaysGreyOrMjpegWithItsQuality) {
+  const World yuyv = test::arena_with("", "");
+  EXPECT_EQ(yuyv.camera.format, CameraFormat::Yuyv);
+  EXPECT_EQ(yuyv.camera.jpeg_quality, 85);
+  EXPECT_EQ(test::arena_with("format: YUYV", "format: GREY").camera.format, CameraFormat::Grey);
+  const World mjpeg = test::arena_with("format: YUYV", "format: MJPEG\n    jpeg_quality: 60");
+  EXPECT_EQ(mjpeg.camera.format, CameraFormat::Mjpeg);
+  EXPECT_EQ(mjpeg.camera.jpeg_quality, 60);
+  for (const auto& [from, to, named] : {std::tuple{"format: YUYV", "format: MJPG", "format"},
+                                        std::tuple{"format: YUYV", "format: MJPEG\n    jpeg_quality: 0", "jpeg_quality"},
+                                        std::tuple{"format: YUYV", "format: MJPEG\n    jpeg_quality: 101", "jpeg_quality"}}) {
+    try {
+      test::arena_with(from, to);
+      ADD_FAILURE() << to << ": expected a ParamError";
+    } catch (const ParamError& e) {
+      EXPECT_NE(std::string(e.what()).find(named), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST(World, RejectsAnUnknownKeyNamingIt) {

@@ -13,7 +13,9 @@
 
 #include <functional>
 #include <map>
+#include <memory>
 #include <string>
+#include <vector>
 
 namespace whiskeye::sim {
 
@@ -29,8 +31,9 @@ sim_fault_t to_lcm(const FaultEvent& e);
 
 class LcmSink : public SimSink {
  public:
-  // `set_time` stamps the following publications (LogWriterBus::set_time; may be empty).
-  LcmSink(Bus& bus, std::function<void(int64_t)> set_time, bool yuyv, double saturation);
+  // `set_time` stamps the following publications (LogWriterBus::set_time; may be empty). CAMERA
+  // frames go out in `camera.format` (MJPEG: JPEG-encoded at `camera.jpeg_quality`).
+  LcmSink(Bus& bus, std::function<void(int64_t)> set_time, const CameraNoise& camera, double saturation);
 
   void whisker_sample(const rcp::WhiskerSample& sample, const WhiskerHealth& health) override;
   void rcp_state(const rcp::ControlOutput& out) override;
@@ -50,10 +53,16 @@ class LcmSink : public SimSink {
 
   Bus& bus_;
   std::function<void(int64_t)> set_time_;
-  bool yuyv_;
+  CameraFormat format_;
+  int jpeg_quality_;
   double saturation_;
   std::map<std::string, int64_t> counts_;
   image_t image_;
+  // MJPEG: libturbojpeg's compressor (a tjhandle, kept out of this header), its output buffer and
+  // the constant chroma planes.
+  std::unique_ptr<void, int (*)(void*)> jpeg_{nullptr, nullptr};
+  std::vector<unsigned char> jpeg_buffer_;
+  std::vector<unsigned char> neutral_chroma_;
 };
 
 }  // namespace whiskeye::sim

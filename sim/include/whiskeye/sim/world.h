@@ -156,9 +156,17 @@ struct Trajectory {
   double lap_time() const;
 };
 
+// The V4L2 format the simulated camera delivers, as camerad would publish it.
+enum class CameraFormat {
+  Yuyv,   // grey as luma, neutral chroma (default)
+  Grey,   // 8-bit grey: half the bytes
+  Mjpeg,  // a baseline JPEG a frame, YCbCr 4:2:2 with neutral chroma, as a UVC camera sends it
+};
+
 struct CameraNoise {
   double sigma = 2.0;     // grey levels (0..255), per-pixel Gaussian-like noise, 1 sigma
-  bool yuyv = true;       // V4L2 format: YUYV (default, neutral chroma) or GREY
+  CameraFormat format = CameraFormat::Yuyv;
+  int jpeg_quality = 85;  // MJPEG only: libjpeg's quality, 1..100
 };
 
 struct OdometryNoise {
