@@ -1,7 +1,6 @@
 // A recorded log as a timeline (log_timeline.h).
 #include "whiskeye/viewer/log_timeline.h"
 
-#include "whiskeye/common/big_endian.h"
 #include "whiskeye/common/bus.h"
 #include "whiskeye/common/channels.h"
 
@@ -28,10 +27,7 @@ std::string_view shown(std::string_view channel) {
   return {};
 }
 
-// An LCM log event's header (lcm/eventlog.c): sync word, event number, time, channel length, data
-// length, big-endian; then the channel name and the data.
-constexpr uint32_t kSync = 0xEDA1DA01u;
-constexpr std::size_t kHeaderBytes = 4 + 8 + 8 + 4 + 4;
+using lcm_log::kEventHeaderBytes;
 
 }  // namespace
 
@@ -72,7 +68,7 @@ std::unique_ptr<LogTimeline> LogTimeline::from_file(const std::string& path, Vie
   while (reader.next(ev)) {
     const uint64_t at = end + (reader.damage().skipped_bytes - skipped);
     skipped = reader.damage().skipped_bytes;
-    end = at + kHeaderBytes + ev.channel.size() + ev.data.size();
+    end = at + kEventHeaderBytes + ev.channel.size() + ev.data.size();
     const std::string_view name = shown(ev.channel);
     if (name.empty()) continue;
     if (!timeline->events_.empty() && ev.utime < timeline->events_.back().utime) timeline->sorted_ = false;
@@ -115,7 +111,7 @@ void LogTimeline::check_unchanged() {
 // Applies one event; an event in the file is read again, and must be the event that was indexed.
 void LogTimeline::apply(const Event& e) {
   if (!e.owner && file_) {
-    const std::size_t total = kHeaderBytes + e.channel.size() + e.size;
+    const std::size_t total = kEventHeaderBytes + e.channel.size() + e.size;
     auto bytes = std::make_shared<std::vector<uint8_t>>(total);
     std::size_t got = 0;
     while (got < total) {
@@ -126,12 +122,12 @@ void LogTimeline::apply(const Event& e) {
       got += static_cast<std::size_t>(n);
     }
     const uint8_t* h = bytes->data();
-    const bool same = static_cast<uint32_t>(read_be_i32(h)) == kSync &&
-                      read_be_i32(h + 20) == static_cast<int32_t>(e.channel.size()) &&
-                      read_be_i32(h + 24) == static_cast<int32_t>(e.size) &&
-                      std::memcmp(h + kHeaderBytes, e.channel.data(), e.channel.size()) == 0;
+    const lcm_log::EventHeader header = lcm_log::read_event_header(h);
+    const bool same = header.sync == lcm_log::kSyncWord && header.channel_bytes == static_cast<int32_t>(e.channel.size()) &&
+                      header.data_bytes == static_cast<int32_t>(e.size) &&
+                      std::memcmp(h + kEventHeaderBytes, e.channel.data(), e.channel.size()) == 0;
     if (!same) fail(file_->path + " changed under the viewer (byte " + std::to_string(e.offset) + " no longer starts the event read there)");
-    state_.apply(e.channel, e.utime, std::span<const uint8_t>(h + kHeaderBytes + e.channel.size(), e.size), bytes);
+    state_.apply(e.channel, e.utime, std::span<const uint8_t>(h + kEventHeaderBytes + e.channel.size(), e.size), bytes);
     return;
   }
   state_.apply(e.channel, e.utime, e.data, e.owner);
