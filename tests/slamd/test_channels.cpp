@@ -5,6 +5,7 @@
 // slamd node reads its own, on one in-memory bus.
 #include "whiskeye/slamd/slam_node.h"
 #include "whiskeye/whiskerd/config.h"
+#include "whiskeye/whiskerd/lcm.h"
 
 #include <whiskeye/odometry_t.hpp>
 #include <whiskeye/vita_event_t.hpp>
