@@ -5,7 +5,7 @@
 // (the true point where each whisker first touched, head frame). Guards the figures quoted in
 // docs/slam-core.md ("Contact points").
 #include "scratch.h"
-#include "whiskeye/slamd/slam_node.h"
+#include "whiskeye/slamd/wire_conversion.h"
 #include "subprocess.h"
 
 #include "whiskeye/common/bus.h"

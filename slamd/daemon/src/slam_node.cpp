@@ -1,170 +1,20 @@
+// The slamd node (slam_node.h): messages in, cycles through the core, messages out.
 #include "whiskeye/slamd/slam_node.h"
 
+#include "message_checks.h"
 #include "whiskeye/slamd/mjpeg_decode.h"
+#include "whiskeye/slamd/wire_conversion.h"
 
 #include "whiskeye/common/clock.h"
-#include "whiskeye/common/robot_geometry.h"
 #include "whiskeye/common/se2.h"
 #include "whiskeye/common/utime.h"
 
-#include <whiskeye/template_match_t.hpp>
-#include <whiskeye/vita_event_t.hpp>
-#include <whiskeye/vita_map_t.hpp>
-#include <whiskeye/vita_pose_t.hpp>
 #include <whiskeye/driver_status_t.hpp>
+#include <whiskeye/vita_pose_t.hpp>
 
 #include <algorithm>
-#include <cmath>
 
 namespace whiskeye::slamd {
-
-void load(const ParamNode& node, NodeParams& p) {
-  node.get("camera_tolerance_s", p.sync.camera_tolerance_s, 0.0, 2.0);
-  node.get("max_wait_s", p.sync.max_wait_s, 0.05, 30.0);
-  node.get("camera_buffer", p.sync.camera_buffer, 1, 1000);
-  node.get("max_jump_s", p.sync.max_jump_s, 1.0, 86400.0);
-  node.get("odometry_buffer", p.sync.odometry_buffer, 100, 10000000);
-  node.get("map_period_s", p.map_period_s, 0.0, 3600.0);
-  // The same key names as whiskerd's lcm.channel_* for the same channel (channel_cycle).
-  node.get("channel_cycle", p.channels.cycle);
-  node.get("channel_camera", p.channels.camera);
-  node.get("channel_odometry", p.channels.odometry);
-  node.get("channel_pose", p.channels.pose);
-  node.get("channel_event", p.channels.event);
-  node.get("channel_match", p.channels.match);
-  node.get("channel_map", p.channels.map);
-  node.get("channel_status", p.channels.status);
-}
-
-namespace {
-
-constexpr int64_t kMaxCycleUs = 60'000'000;  // a whisk cycle's duration: far beyond any
-// Plausible readings (docs/lcm-channels.md): whisker angles are within a turn either way, calibrated
-// deflections within -1..1 (half again for calibration slack); odometry positions within 100 km.
-constexpr double kMaxWhiskerAngle = kPi;
-constexpr double kMaxDeflection = 1.5;
-constexpr double kMaxOdometryPosition = 1e5;
-
-int8_t mode_code(slam::Mode mode) {
-  switch (mode) {
-    case slam::Mode::Visual: return vita_pose_t::MODE_VISUAL;
-    case slam::Mode::Tactile: return vita_pose_t::MODE_TACTILE;
-    case slam::Mode::Vita: return vita_pose_t::MODE_VITA;
-  }
-  return vita_pose_t::MODE_VITA;
-}
-
-int8_t event_code(slam::EventType type) {
-  switch (type) {
-    case slam::EventType::SameExperience: return vita_event_t::SAME_EXPERIENCE;
-    case slam::EventType::NewExperience: return vita_event_t::NEW_EXPERIENCE;
-    case slam::EventType::Relocalise: return vita_event_t::RELOCALISE;
-  }
-  return vita_event_t::SAME_EXPERIENCE;
-}
-
-int8_t localisation_code(bool localising) {
-  return localising ? vita_pose_t::LOCALISATION_LOCALISING : vita_pose_t::LOCALISATION_TRACKING;
-}
-
-bool finite(double v) { return std::isfinite(v); }
-
-std::string check_whisk_cycle(const whisk_cycle_t& m) {
-  if (std::string bad = sample_time_error("WHISK_CYCLE", m.utime_start); !bad.empty()) return bad;
-  if (std::string bad = sample_time_error("WHISK_CYCLE", m.utime_end); !bad.empty()) return bad;
-  if (std::string bad = whisk_cycle_counts_error(m.num_whiskers, m.num_samples); !bad.empty()) return bad;
-  if (m.utime_end < m.utime_start) return "WHISK_CYCLE: utime_end before utime_start";
-  if (m.utime_end - m.utime_start > kMaxCycleUs) {
-    return "WHISK_CYCLE: lasts " + std::to_string((m.utime_end - m.utime_start) / 1000) + " ms (more than 60 s)";
-  }
-  int missing_samples = 0;
-  for (int s = 0; s < m.num_samples; ++s) {
-    // The words of an error are built only for an error (a valid cycle is ~5,000 samples × 24).
-    const auto at = [s] { return " at sample " + std::to_string(s); };
-    // Within the cycle (so no difference of sample times can overflow), in order.
-    if (m.sample_utime[s] < m.utime_start || m.sample_utime[s] > m.utime_end) {
-      return "WHISK_CYCLE: sample time " + std::to_string(m.sample_utime[s]) + at() + " is outside the cycle";
-    }
-    if (s > 0 && m.sample_utime[s] < m.sample_utime[s - 1]) return "WHISK_CYCLE: sample times go backwards" + at();
-    if (m.sample_valid[s] != 0 && m.sample_valid[s] != 1) {
-      return "WHISK_CYCLE: sample_valid " + std::to_string(m.sample_valid[s]) + at() + " (0 or 1)";
-    }
-    if (!m.sample_valid[s]) {
-      ++missing_samples;
-      continue;
-    }
-    for (int w = 0; w < kNumWhiskers; ++w) {
-      const double theta = m.theta[s][w], dx = m.deflection_x[s][w], dy = m.deflection_y[s][w];
-      // A whisker not measured in a sample is NaN in all three values (docs/lcm-channels.md).
-      if (std::isnan(theta) && std::isnan(dx) && std::isnan(dy)) continue;
-      const auto whisker = [&at, w] { return at() + ", whisker " + std::to_string(w); };
-      if (!finite(theta) || !finite(dx) || !finite(dy)) return "WHISK_CYCLE: non-finite value" + whisker();
-      if (std::abs(theta) > kMaxWhiskerAngle) {
-        return "WHISK_CYCLE: theta " + std::to_string(theta) + " rad" + whisker() + " (beyond ±pi)";
-      }
-      if (std::abs(dx) > kMaxDeflection || std::abs(dy) > kMaxDeflection) {
-        return "WHISK_CYCLE: deflection (" + std::to_string(dx) + ", " + std::to_string(dy) + ")" + whisker() +
-               " (calibrated -1..1)";
-      }
-    }
-  }
-  if (m.num_missing != missing_samples) {
-    return "WHISK_CYCLE: num_missing " + std::to_string(m.num_missing) + " but " + std::to_string(missing_samples) +
-           " samples are marked lost";
-  }
-  return "";
-}
-
-std::string check_odometry(const odometry_t& m) {
-  if (std::string bad = sample_time_error("ODOMETRY", m.utime); !bad.empty()) return bad;
-  for (double v : {m.x, m.y, m.theta, m.vx, m.vy, m.omega}) {
-    if (!finite(v)) return "ODOMETRY: non-finite value";
-  }
-  if (std::abs(m.x) > kMaxOdometryPosition || std::abs(m.y) > kMaxOdometryPosition) {
-    return "ODOMETRY: position (" + std::to_string(m.x) + ", " + std::to_string(m.y) + ") m is beyond 100 km";
-  }
-  if (std::abs(m.theta) > kPi + 1e-9) {
-    return "ODOMETRY: theta " + std::to_string(m.theta) + " rad is not in (-pi, pi]";
-  }
-  if (std::hypot(m.vx, m.vy) > slam::kMaxSpeed || std::abs(m.omega) > slam::kMaxTurnRate) {
-    return "ODOMETRY: velocity (" + std::to_string(m.vx) + ", " + std::to_string(m.vy) + " m/s, " +
-           std::to_string(m.omega) + " rad/s) beyond any base's";
-  }
-  return "";
-}
-
-// Contact in a measured sample (a lost sample's flags say nothing).
-bool has_contact(const whisk_cycle_t& m) {
-  for (std::size_t s = 0; s < m.contact.size(); ++s) {
-    if (!m.sample_valid[s]) continue;
-    for (int8_t c : m.contact[s]) {
-      if (c) return true;
-    }
-  }
-  return false;
-}
-
-}  // namespace
-
-slam::WhiskCycleInput to_core(const whisk_cycle_t& m) {
-  slam::WhiskCycleInput in;
-  in.cycle = m.cycle;
-  in.utime_start = m.utime_start;
-  in.utime_end = m.utime_end;
-  in.samples.resize(static_cast<std::size_t>(m.num_samples));
-  for (int s = 0; s < m.num_samples; ++s) {
-    slam::WhiskSample& out = in.samples[static_cast<std::size_t>(s)];
-    out.utime = m.sample_utime[s];
-    out.valid = m.sample_valid[s] != 0;
-    for (int w = 0; w < kNumWhiskers; ++w) {
-      out.theta[w] = m.theta[s][w];
-      out.deflection_x[w] = m.deflection_x[s][w];
-      out.deflection_y[w] = m.deflection_y[s][w];
-      out.contact[w] = m.contact[s][w] != 0;
-    }
-  }
-  return in;
-}
 
 SlamNode::SlamNode(Bus& in, Bus& out, std::unique_ptr<slam::VitaSlam> slam, const NodeParams& params,
                    DecodeErrors& decode_errors)
@@ -175,7 +25,7 @@ SlamNode::SlamNode(Bus& in, Bus& out, std::unique_ptr<slam::VitaSlam> slam, cons
       sync_(params.sync),
       log_clock_([] { return monotonic_us(); }) {
   slam_->set_frame_decoder(mjpeg_decoder());  // MJPEG frames are decoded here, at the daemon's edge
-  // 2,000 undecodable messages were 2,000 lines: the first per channel, then one per 10 s with a count.
+  // Undecodable messages through the throttle: the first of a channel, then a line per 10 s with a count.
   decode_errors_.set_callback([this](const std::string& channel, const std::string& reason) {
     warn("decode " + channel, channel + ": " + reason);
   });
@@ -300,17 +150,14 @@ void SlamNode::process_one(const SyncedCycle& cycle) {
   const slam::WhiskCycleInput whisk = to_core(cycle.whisk);
   const bool contact = has_contact(cycle.whisk);
   slam::ImageView view{};
-  if (cycle.image) {
-    const CameraFrame& im = *cycle.image;
-    view = slam::ImageView{im.utime, im.width, im.height, im.row_stride, static_cast<uint32_t>(im.pixelformat), im.data};
-  }
+  if (cycle.image) view = to_core(*cycle.image);
   slam::CycleInput input;
   input.utime = cycle.whisk.utime_end;
   input.cycle = cycle.whisk.cycle;
   input.image = cycle.image ? &view : nullptr;
   input.whisk = &whisk;
   input.odometry.reserve(cycle.odometry.size());
-  for (const auto& o : cycle.odometry) input.odometry.push_back({o.utime, o.vx, o.vy, o.omega});
+  for (const auto& o : cycle.odometry) input.odometry.push_back(to_core(o));
 
   const slam::CycleResult r = slam_->process_cycle(input);
   ++counters_.cycles;
@@ -337,34 +184,9 @@ void SlamNode::process_one(const SyncedCycle& cycle) {
   }
   have_cycle_ = true;
   last_template_id_ = r.match.template_id;
-  const int8_t mode = mode_code(slam_->params().mode);
-
-  vita_event_t ev{};
-  ev.utime = input.utime;
-  ev.cycle = input.cycle;
-  ev.type = event_code(r.event.type);
-  ev.from_id = r.event.from_id;
-  ev.to_id = r.event.to_id;
-  ev.template_id = r.match.template_id;
-  ev.mode = mode;
-  ev.localisation = localisation_code(r.localising);
-  publish(out_, params_.channels.event, ev);
-
-  template_match_t m{};
-  m.utime = input.utime;
-  m.cycle = input.cycle;
-  m.template_id = r.match.template_id;
-  m.is_new = r.match.is_new;
-  m.error = r.match.error;
-  m.visual_error = r.match.visual_error;
-  m.pfh_error = r.match.pfh_error;
-  m.sda_error = r.match.sda_error;
-  m.visual_shift = r.match.visual_shift;
-  m.num_templates = r.num_templates;
-  m.mode = mode;
-  m.visual_used = r.match.visual_used;
-  m.tactile_used = r.match.tactile_used;
-  publish(out_, params_.channels.match, m);
+  const slam::Mode mode = slam_->params().mode;
+  publish(out_, params_.channels.event, event_message(r, input.utime, input.cycle, mode));
+  publish(out_, params_.channels.match, match_message(r, input.utime, input.cycle, mode));
 
   if (r.event.type != slam::EventType::SameExperience || r.match.is_new) map_dirty_ = true;
   // (A cycle before the last map's time: the clock was stepped back and followed; not throttled.)
@@ -380,36 +202,7 @@ void SlamNode::process_one(const SyncedCycle& cycle) {
 }
 
 void SlamNode::publish_map(int64_t utime) {
-  const auto& map = slam_->map();
-  vita_map_t msg{};
-  msg.utime = utime;
-  msg.mode = mode_code(slam_->params().mode);
-  msg.current_experience_id = map.current_id();
-  for (const auto& e : map.experiences()) {
-    experience_t x{};
-    x.id = e.id;
-    x.x = e.pose.x;
-    x.y = e.pose.y;
-    x.theta = e.pose.theta;
-    x.utime_created = e.utime_created;
-    x.visual_template_id = e.visual_template_id;
-    x.tactile_template_id = e.tactile_template_id;
-    x.dense = e.dense;
-    msg.experiences.push_back(x);
-  }
-  msg.num_experiences = static_cast<int32_t>(msg.experiences.size());
-  for (const auto& l : map.links()) {
-    link_t x{};
-    x.from_id = l.from;
-    x.to_id = l.to;
-    x.dx = l.delta.x;
-    x.dy = l.delta.y;
-    x.dtheta = l.delta.theta;
-    x.utime_created = l.utime_created;
-    msg.links.push_back(x);
-  }
-  msg.num_links = static_cast<int32_t>(msg.links.size());
-  publish(out_, params_.channels.map, msg);
+  publish(out_, params_.channels.map, map_message(slam_->map(), utime, slam_->params().mode));
   last_map_utime_ = utime;
   map_dirty_ = false;
 }

@@ -12,11 +12,10 @@
 #pragma once
 
 #include "whiskeye/slamd/cycle_sync.h"
+#include "whiskeye/slamd/node_params.h"
 
 #include "whiskeye/common/bus.h"
-#include "whiskeye/common/channels.h"
 #include "whiskeye/common/log_throttle.h"
-#include "whiskeye/common/params.h"
 #include "whiskeye/common/se2.h"
 #include "whiskeye/common/sequence_gaps.h"
 #include "whiskeye/slam/vita_slam.h"
@@ -31,31 +30,6 @@
 #include <string>
 
 namespace whiskeye::slamd {
-
-// The channels the node reads and writes. A renamed channel must be renamed at both ends: e.g.
-// whiskerd.yaml's lcm.channel_cycle and slam.yaml's slamd.channel_cycle (docs/lcm-channels.md).
-struct NodeChannels {
-  std::string cycle = channels::kWhiskCycle;
-  std::string camera = channels::kCamera;
-  std::string odometry = channels::kOdometry;
-  std::string pose = channels::kVitaPose;
-  std::string event = channels::kVitaEvent;
-  std::string match = channels::kVitaMatch;
-  std::string map = channels::kVitaMap;
-  std::string status = channels::kSlamStatus;
-  bool operator==(const NodeChannels&) const = default;
-};
-
-struct NodeParams {
-  SyncParams sync;
-  double map_period_s = 1.0;  // VITA_MAP throttle, data time
-  NodeChannels channels;
-  bool operator==(const NodeParams&) const = default;
-};
-void load(const ParamNode& node, NodeParams& params);
-
-// A WHISK_CYCLE message as the core's input (the message is assumed already validated).
-slam::WhiskCycleInput to_core(const whisk_cycle_t& m);
 
 struct NodeCounters {
   int64_t cycles = 0;
