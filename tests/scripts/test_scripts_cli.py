@@ -57,6 +57,22 @@ class Scripts(unittest.TestCase):
                     self.assertTrue(r.stderr.startswith(f"{name}: "), r.stderr)
 
 
+class InstallDepsProfiles(unittest.TestCase):
+    def test_the_demo_profile_is_the_build_and_libraries_without_what_only_the_tests_need(self):
+        demo = run("install-deps", ["--demo", "--list"])
+        every = run("install-deps", ["--list"])
+        self.assertEqual((demo.returncode, every.returncode), (0, 0), demo.stderr + every.stderr)
+        demo, every = demo.stdout.split(), every.stdout.split()
+        self.assertEqual(len(set(every)), len(every), "a package listed twice")
+        self.assertLess(set(demo), set(every))
+        for needed in ("build-essential", "cmake", "liblcm-dev", "liblcm-bin", "libopencv-imgcodecs-dev",
+                       "libturbojpeg0-dev"):
+            self.assertIn(needed, demo)
+        for heavy in ("default-jdk-headless", "chromium", "qemu-system-x86", "linux-source", "slurmctld", "clang",
+                      "libgtest-dev"):
+            self.assertNotIn(heavy, demo)
+
+
 class BenchTable(unittest.TestCase):
     def test_a_results_file_becomes_one_markdown_table_per_binary_with_medians_only(self):
         import json
