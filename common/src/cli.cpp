@@ -5,6 +5,7 @@
 #include "whiskeye/common/params.h"
 
 #include <cstdio>
+#include <iostream>
 
 namespace whiskeye::cli {
 
@@ -17,8 +18,21 @@ CLI::Option* Program::add_config(std::string& path, const std::string& what) {
 }
 
 CLI::Option* Program::add_print_config(bool& flag) {
+  print_config_ = &flag;
   return app_.add_flag("--print-config", flag,
                        "print every parameter in use (command-line overrides included) and exit");
+}
+
+bool Program::print_config(const std::string& parameters) const {
+  if (print_config_ == nullptr || !*print_config_) return false;
+  std::cout << parameters;
+  return true;
+}
+
+ParamNode read_config(const std::string& path, const std::vector<Override>& overrides) {
+  ParamNode root = path.empty() ? ParamNode::empty() : ParamNode::from_file(path);
+  for (const Override& o : overrides) root.set_override(o.key, o.value, o.option);
+  return root;
 }
 
 CLI::Option* Program::add_lcm_url(std::string& url) {

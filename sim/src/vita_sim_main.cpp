@@ -9,6 +9,7 @@
 #include "whiskeye/common/config_path.h"
 #include "whiskeye/sim/can_log.h"
 #include "whiskeye/sim/lcm_sink.h"
+#include "whiskeye/sim/bringup_cli.h"
 #include "whiskeye/sim/simulator.h"
 #include "whiskeye/sim/world_generator.h"
 #include "whiskeye/slam/vita_slam.h"
@@ -370,6 +371,8 @@ int main(int argc, char** argv) {
   app.add_option("--jpeg-quality", jpeg_quality,
                  "Quality 1..100 of --camera-format mjpeg's JPEGs; overrides the world's camera.jpeg_quality (default 85)")
       ->check(CLI::Range(1, 100));
+  BringupOptions bringup;
+  add_bringup_options(app, bringup);
   app.add_flag("--quiet,-q", quiet, "No progress output");
   // A ParamError (a config or world that is missing or wrong): exit 2; any other failure: exit 1.
   return program.run(argc, argv, [&] {
@@ -384,6 +387,7 @@ int main(int argc, char** argv) {
       if (slam_config.empty()) slam_config = default_config_path("slam.yaml", "--slam-config");
       return generate(gen, gen_ranges, robot, slam_config, output_world, quiet);
     }
+    if (!bringup.session.empty()) return run_bringup(bringup, candump_path, whiskerd_config, can_interface, seed, start_utime);
     if (world_path.empty()) {
       std::cerr << "vita-sim: --world FILE is required (or --generate-world)\n";
       return 2;

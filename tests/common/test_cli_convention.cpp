@@ -46,6 +46,7 @@ std::vector<Program> programs() {
        {"--robot", kMissing, "--world", WHISKEYE_SOURCE_DIR "/config/worlds/aliased_arena.yaml", "-o", "/dev/null"}},
       {"vita-eval", VITA_EVAL_EXE, {"--input", "/dev/null"}, {}},
       {"whiskeye-logcheck", LOGCHECK_EXE, {"/dev/null"}, {}},
+      {"whiskeye-calibrate", CALIBRATE_EXE, {"bus"}, {"bus", "-c", kMissing}},
       {"whiskeye-viewer", VIEWER_EXE, {}, {}},
   };
 }

@@ -1,4 +1,5 @@
 #include "scratch.h"
+#include "whiskeye/common/cli.h"
 #include "whiskeye/common/params.h"
 
 #include <gtest/gtest.h>
@@ -181,6 +182,25 @@ TEST(Params, AnOverrideIsLoadedAndDumpedWithItsOption) {
   EXPECT_THAT(d, HasSubstr("nested.inner: 0.25  (--inner)\n"));
   EXPECT_THAT(d, HasSubstr("cells: 30\n"));
   EXPECT_THAT(d, Not(HasSubstr("file")));
+}
+
+// What every program runs with (cli::read_config): the file, then the command line's overrides over
+// it in order; no file is every default.
+TEST(Params, AProgramsConfigIsTheFileThenTheCommandLinesOverridesInOrder) {
+  const std::string path = whiskeye::testing::scratch_file("read_config", ".yaml");
+  std::ofstream(path) << "cells: 30\nname: file\n";
+  Example p;
+  ParamNode n = cli::read_config(path, {{"name", "first", "--a"}, {"name", "cli", "--name"}});
+  load(n, p);
+  n.check_no_unknown_keys();
+  EXPECT_EQ(p.cells, 30);
+  EXPECT_EQ(p.name, "cli") << "the last override of a key wins";
+  EXPECT_THAT(n.dump(), HasSubstr("name: \"cli\"  (--name)\n"));
+  Example defaults;
+  ParamNode none = cli::read_config("");
+  load(none, defaults);
+  EXPECT_EQ(defaults.cells, Example{}.cells);
+  EXPECT_THROW(cli::read_config(path + ".missing"), ParamError);
 }
 
 TEST(Params, AnOverrideFailingTheLoadersCheckNamesTheOption) {

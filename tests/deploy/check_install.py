@@ -31,7 +31,7 @@ import sys
 import tempfile
 
 DAEMONS = ["whiskerd", "camerad", "based", "slamd", "whiskeye-viewer"]
-TOOLS = ["rcp-plant", "vita-sim", "vita-eval", "whiskeye-lcm-spy", "whiskeye-logcheck"]
+TOOLS = ["rcp-plant", "vita-sim", "vita-eval", "whiskeye-lcm-spy", "whiskeye-logcheck", "whiskeye-calibrate"]
 UNITS = [d + ".service" for d in DAEMONS] + ["whiskeye-can0.service", "whiskeye.target"]
 CONFIGS = ["whiskerd.yaml", "camerad.yaml", "based.yaml", "slam.yaml", "robot.yaml", "rcp.yaml"]
 PYTHON_MODULES = ["__init__", "log", "channels", "vita_map_t", "vita_pose_t", "image_t"]

@@ -164,3 +164,17 @@ TEST_F(WhiskerdDropins, NoConfigFileMeansNoDropins) {
   load_with_dropins(ParamNode::empty(), "", p);
   EXPECT_EQ(p.calibration[3].offset_x, 0.0);
 }
+
+TEST_F(WhiskerdDropins, AWrittenDropinLoadsBackTheSameValues) {
+  const std::vector<CalibrationEntry> entries = {{3, {{"offset_x", 12.345678901234}, {"gain_y", -0.00051234567}}},
+                                                 {5, {{"channel", 6}, {"rotation", -0.1}}},
+                                                 {6, {{"channel", 5}}}};
+  write("whiskerd.d/20-written.yaml", format_dropin(entries, "written by a test\non two lines"));
+  Params p;
+  ASSERT_EQ(load_all(p), "");
+  EXPECT_EQ(p.calibration[3].offset_x, 12.345678901234);
+  EXPECT_EQ(p.calibration[3].gain_y, -0.00051234567);
+  EXPECT_EQ(p.calibration[5].rotation, -0.1);
+  EXPECT_EQ(p.channel[5], 6);
+  EXPECT_EQ(p.channel[6], 5);
+}

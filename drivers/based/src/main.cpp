@@ -11,8 +11,8 @@
 #include <csignal>
 #include <cstdio>
 #include <functional>
-#include <iostream>
 #include <optional>
+#include <vector>
 
 namespace {
 
@@ -102,15 +102,12 @@ int main(int argc, char** argv) {
   program.add_print_config(print_config);
   app.add_flag("--print-params", print_config)->group("");  // its name before --print-config, kept working
   return program.run(argc, argv, [&] {
-    // The file, then --url over it: what --print-config shows is what runs.
-    ParamNode node = config.empty() ? ParamNode::empty() : ParamNode::from_file(config);
-    if (!url.empty()) node.set_override("url", url, "--url");
+    std::vector<cli::Override> overrides;
+    if (!url.empty()) overrides.push_back({"url", url, "--url"});
+    const ParamNode node = cli::read_config(config, overrides);
     based::BasedParams params;
     based::load(node, params);  // a ParamError: exit 2
-    if (print_config) {
-      std::cout << node.dump();
-      return 0;
-    }
+    if (program.print_config(node.dump())) return 0;
     std::optional<based::CircleSpec> circle;
     if (*circle_opt) {
       circle = based::CircleSpec{radius, speed, laps};

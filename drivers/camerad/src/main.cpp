@@ -9,6 +9,7 @@
 #include <atomic>
 #include <iostream>
 #include <memory>
+#include <vector>
 
 #include <whiskeye/common/bus.h>
 #include <whiskeye/common/channels.h>
@@ -69,19 +70,16 @@ int main(int argc, char** argv) {
   program.add_lcm_url(lcm_url)->description("LCM URL, overrides lcm.url (default: $LCM_DEFAULT_URL, or LCM's default)");
   program.add_print_config(print_config);
   return program.run(argc, argv, [&] {
-    // The file, then the command line's overrides: what is printed is what runs.
-    ParamNode root = config_path.empty() ? ParamNode::empty() : ParamNode::from_file(config_path);
+    std::vector<cli::Override> overrides;
     if (!device.empty()) {
-      root.set_override("camera.device", device, "--device");
-      root.set_override("camera.match_card", "", "--device");
+      overrides.push_back({"camera.device", device, "--device"});
+      overrides.push_back({"camera.match_card", "", "--device"});
     }
-    if (!lcm_url.empty()) root.set_override("lcm.url", lcm_url, "--lcm-url");
+    if (!lcm_url.empty()) overrides.push_back({"lcm.url", lcm_url, "--lcm-url"});
+    const ParamNode root = cli::read_config(config_path, overrides);
     camerad::Params p;
     camerad::load(root, p);  // a ParamError: exit 2
-    if (print_config) {
-      std::cout << root.dump();
-      return 0;
-    }
+    if (program.print_config(root.dump())) return 0;
     std::cerr << root.dump();
     return run(p);
   });

@@ -385,7 +385,6 @@ double frame_time_us(BusMode mode, std::size_t n, double arb_bps, double data_bp
 }
 
 BusLoad bus_load(BusMode mode, double rate_hz, double arb_bps, double data_bps) {
-  constexpr double kHeartbeatHz = 10.0;
   double frames = 0, busy_us = 0;
   auto add = [&](double per_s, std::size_t bytes, BusMode m) {
     frames += per_s;

@@ -2,6 +2,7 @@
 #include "whiskeye/whiskerd/config.h"
 
 #include <algorithm>
+#include <charconv>
 #include <cstdio>
 #include <cstdlib>
 #include <system_error>
@@ -158,6 +159,39 @@ std::vector<std::filesystem::path> dropin_files(const std::filesystem::path& dir
   }
   std::sort(files.begin(), files.end());
   return files;
+}
+
+std::vector<std::pair<std::string, double>> calibration_keys(const CoreParams& p, int w) {
+  const wp::WhiskerCalibration& c = p.calibration[static_cast<std::size_t>(w)];
+  return {{"channel", p.channel[static_cast<std::size_t>(w)]},
+          {"offset_x", c.offset_x},
+          {"offset_y", c.offset_y},
+          {"gain_x", c.gain_x},
+          {"gain_y", c.gain_y},
+          {"rotation", c.rotation},
+          {"theta_offset", c.theta_offset},
+          {"theta_gain", c.theta_gain}};
+}
+
+std::string format_dropin(const std::vector<CalibrationEntry>& entries, const std::string& comment) {
+  std::string text;
+  std::size_t start = 0;
+  while (start < comment.size()) {
+    const std::size_t end = std::min(comment.find('\n', start), comment.size());
+    text += "# " + comment.substr(start, end - start) + "\n";
+    start = end + 1;
+  }
+  text += "calibration:\n  whiskers:\n";
+  for (const CalibrationEntry& e : entries) {
+    text += "    - {index: " + std::to_string(e.index);
+    for (const auto& [key, value] : e.keys) {
+      char number[32];
+      const auto written = std::to_chars(number, number + sizeof number, value);  // shortest that reads back the same
+      text += ", " + key + ": " + std::string(number, written.ptr);
+    }
+    text += "}\n";
+  }
+  return text;
 }
 
 std::string load_with_dropins(const ParamNode& root, const std::string& config_path, Params& p) {

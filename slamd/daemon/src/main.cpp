@@ -11,36 +11,39 @@
 
 #include <CLI/CLI.hpp>
 
-#include <iostream>
 #include <string>
+#include <vector>
 
 using namespace whiskeye;
-using slamd::Loaded;
 using slamd::Options;
+using slamd::Parameters;
 
 namespace {
 
-// The parameters in use: the files, then the command line's overrides (--set, then --mode), so
-// that --print-config shows what a run would use.
-Loaded load_config(const Options& o) {
-  Loaded l;
-  ParamNode root = o.config.empty() ? ParamNode::empty() : ParamNode::from_file(o.config);
-  for (const std::string& kv : o.sets) {
-    const size_t eq = kv.find('=');
-    if (eq == 0 || eq == std::string::npos || eq + 1 == kv.size()) {
-      throw ParamError("--set '" + kv + "': expected KEY=VALUE, e.g. slam.experience_map.drift_per_m=1000");
-    }
-    root.set_override(kv.substr(0, eq), kv.substr(eq + 1), "--set");
+// --set KEY=VALUE as an override of the config.
+cli::Override set_option(const std::string& kv) {
+  const size_t eq = kv.find('=');
+  if (eq == 0 || eq == std::string::npos || eq + 1 == kv.size()) {
+    throw ParamError("--set '" + kv + "': expected KEY=VALUE, e.g. slam.experience_map.drift_per_m=1000");
   }
-  if (!o.mode.empty()) root.set_override("slam.mode", o.mode, "--mode");
-  slam::load(root.section("slam"), l.slam);
-  slamd::load(root.section("slamd"), l.node);
+  return {kv.substr(0, eq), kv.substr(eq + 1), "--set"};
+}
+
+// The parameters in use: the files, then the command line's overrides (--set, then --mode).
+Parameters load_parameters(const Options& o) {
+  Parameters p;
+  std::vector<cli::Override> overrides;
+  for (const std::string& kv : o.sets) overrides.push_back(set_option(kv));
+  if (!o.mode.empty()) overrides.push_back({"slam.mode", o.mode, "--mode"});
+  ParamNode root = cli::read_config(o.config, overrides);
+  slam::load(root.section("slam"), p.slam);
+  slamd::load(root.section("slamd"), p.node);
   root.check_no_unknown_keys();
-  ParamNode robot = o.robot.empty() ? ParamNode::empty() : ParamNode::from_file(o.robot);
-  load(robot.section("robot"), l.robot);
+  ParamNode robot = cli::read_config(o.robot);
+  load(robot.section("robot"), p.robot);
   robot.check_no_unknown_keys();
-  l.dump = root.dump() + robot.dump();
-  return l;
+  p.dump = root.dump() + robot.dump();
+  return p;
 }
 
 }  // namespace
@@ -68,11 +71,8 @@ int main(int argc, char** argv) {
   return program.run(argc, argv, [&] {
     if (o.localise && o.map_file.empty()) throw cli::UsageError("--localise needs --map FILE");
     if (!o.replay_in.empty() && o.replay_out.empty()) throw cli::UsageError("--replay needs --output FILE");
-    const Loaded cfg = load_config(o);  // a ParamError (a bad file, a --mode it does not know): exit 2
-    if (o.print_config) {
-      std::cout << cfg.dump;
-      return 0;
-    }
-    return o.replay_in.empty() ? slamd::run_live(cfg, o) : slamd::run_replay(cfg, o);
+    const Parameters p = load_parameters(o);  // a ParamError (a bad file, a --mode it does not know): exit 2
+    if (program.print_config(p.dump)) return 0;
+    return o.replay_in.empty() ? slamd::run_live(p, o) : slamd::run_replay(p, o);
   });
 }

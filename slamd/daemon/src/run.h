@@ -37,7 +37,9 @@ struct Options {
   bool print_config = false;
 };
 
-struct Loaded {
+// The parameters in use: slam.yaml's (the command line's overrides included) and robot.yaml's, with
+// their --print-config text.
+struct Parameters {
   slam::SlamParams slam;
   NodeParams node;
   RobotGeometry robot = default_robot_geometry();
@@ -47,19 +49,19 @@ struct Loaded {
 // "slamd: <line>" on stderr with its journal priority (common/log.h): `journalctl -p warning -u slamd`
 // shows the rejected inputs, the failed checkpoints and the errors, not the progress.
 inline void slamd_log(LogLevel level, const std::string& line) { whiskeye::log_line(level, "slamd: " + line); }
-inline void log_line(const std::string& line) { slamd_log(LogLevel::kInfo, line); }
+inline void info_line(const std::string& line) { slamd_log(LogLevel::kInfo, line); }
 inline void warn_line(const std::string& line) { slamd_log(LogLevel::kWarning, line); }
 inline void error_line(const std::string& line) { slamd_log(LogLevel::kError, line); }
 
 // The map slamd starts from (whiskeye/slamd/startup.h: --map, resume or --fresh).
-inline std::unique_ptr<slam::VitaSlam> make_slam(const Loaded& cfg, const Options& o, CheckpointStore* store) {
+inline std::unique_ptr<slam::VitaSlam> make_slam(const Parameters& cfg, const Options& o, CheckpointStore* store) {
   return start_slam(cfg.slam, cfg.robot, StartupOptions{o.map_file, o.localise, o.fresh}, store, slamd_log);
 }
 
 
 // Until SIGTERM / SIGINT, or a failed LCM receive (exit 1); the final state is checkpointed.
-int run_live(const Loaded& cfg, const Options& o);
+int run_live(const Parameters& cfg, const Options& o);
 // The whole of --replay's log; 1 if the log was damaged or the final checkpoint failed.
-int run_replay(const Loaded& cfg, const Options& o);
+int run_replay(const Parameters& cfg, const Options& o);
 
 }  // namespace whiskeye::slamd

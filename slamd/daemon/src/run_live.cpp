@@ -33,7 +33,7 @@ void on_signal(int) { g_stop = true; }
 
 }  // namespace
 
-int run_live(const Loaded& cfg, const Options& o) {
+int run_live(const Parameters& cfg, const Options& o) {
   const std::string state_dir = live_state_directory(o.state_dir);
   std::optional<CheckpointStore> store;
   open_store(store, state_dir, o.checkpoint_keep, o.localise);
@@ -61,7 +61,7 @@ int run_live(const Loaded& cfg, const Options& o) {
   std::signal(SIGINT, on_signal);
   ServiceNotifier service("slamd", monotonic_us());
   service.ready("running");
-  log_line("running in " + slam::to_string(cfg.slam.mode) + " mode, " +
+  info_line("running in " + slam::to_string(cfg.slam.mode) + " mode, " +
            (store ? "state in " + state_dir : "localising in " + o.map_file + ", no checkpoints"));
   int64_t next_tick = monotonic_us();
   int64_t receive_drops = 0;
@@ -103,7 +103,7 @@ int run_live(const Loaded& cfg, const Options& o) {
   const int64_t errors_before_final = writer.counters().errors;
   if (store) checkpoint();
   writer.finish();  // the final state is on disk before slamd exits
-  log_line("stopped after " + std::to_string(node.counters().cycles) + " cycles");
+  info_line("stopped after " + std::to_string(node.counters().cycles) + " cycles");
   if (writer.counters().errors > errors_before_final) {
     // Logged by the writer; the exit status says so too, for systemd and whoever stopped slamd.
     error_line("the final checkpoint was not written: the state since the last one is lost");

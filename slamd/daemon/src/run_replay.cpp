@@ -43,7 +43,7 @@ class Progress {
 
 }  // namespace
 
-int run_replay(const Loaded& cfg, const Options& o) {
+int run_replay(const Parameters& cfg, const Options& o) {
   // Read in order into reused chunks: one pass that keeps few views (the camera frames a cycle may
   // still take), and mapping the log's pages costs more than copying them (LogReader::Access).
   LogReader reader(o.replay_in, LogReader::Access::kStreamed);

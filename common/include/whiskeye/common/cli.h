@@ -8,14 +8,18 @@
 //   exit status        0 done, 1 runtime failure, 2 bad command line or configuration, with one line
 //                      "<program>: <reason>" on stderr (command-line errors too).
 // A program builds its options on app(), then hands its body to run(), which parses and maps every
-// error to that status and line.
+// error to that status and line. Its parameters are the config file's with the command line's
+// overrides over them (read_config()), printed by --print-config (Program::print_config()).
 #pragma once
+
+#include "whiskeye/common/params.h"
 
 #include <CLI/CLI.hpp>
 
 #include <functional>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace whiskeye::cli {
 
@@ -35,6 +39,19 @@ class UsageError : public std::runtime_error {
 // Generated at build time (cmake/WhiskeyeVersion.cmake).
 const char* version();
 
+// One parameter the command line sets over the config file: `key` (dotted, e.g. "lcm.url") to
+// `value`, by `option` (named in errors and in --print-config).
+struct Override {
+  std::string key;
+  std::string value;
+  std::string option;
+};
+
+// The parameters a program runs with: the YAML file at `path` ("": every default), then the command
+// line's `overrides` over it, in order, each checked by the loader as the file's values are; so what
+// --print-config prints is what runs. A file that cannot be read throws ParamError (run(): exit 2).
+ParamNode read_config(const std::string& path, const std::vector<Override>& overrides = {});
+
 class Program {
  public:
   // `name` is the program's name on every error line and in --version; --help and --version are
@@ -48,8 +65,11 @@ class Program {
 
   // -c/--config FILE: `what` says what the file holds. A file that does not exist is a usage error.
   CLI::Option* add_config(std::string& path, const std::string& what);
-  // --print-config: print the parameters in use and exit.
+  // --print-config: print the parameters in use and exit (print_config()).
   CLI::Option* add_print_config(bool& flag);
+  // With --print-config given: prints `parameters` (the dump() of every ParamNode the program
+  // loaded) to stdout and returns true; the program then exits 0 without running.
+  bool print_config(const std::string& parameters) const;
   // --lcm-url URL (empty: $LCM_DEFAULT_URL, or LCM's default).
   CLI::Option* add_lcm_url(std::string& url);
   // -o/--output FILE: `what` says what is written.
@@ -67,6 +87,7 @@ class Program {
  private:
   std::string name_;
   CLI::App app_;
+  const bool* print_config_ = nullptr;  // add_print_config()'s flag
 };
 
 }  // namespace whiskeye::cli

@@ -7,6 +7,7 @@
 // clocks: frames carry the samples' utime.
 #pragma once
 
+#include "whiskeye/can/candump.h"
 #include "whiskeye/whisker_protocol/whisker_protocol.h"
 #include "whiskeye/sim/simulator.h"
 
@@ -21,31 +22,25 @@
 
 namespace whiskeye::sim {
 
-// One CAN frame of a log: time, 11-bit id, FD or classic, FD flags (bit 0 BRS, bit 1 ESI) and data.
-struct CanFrame {
-  int64_t utime = 0;
-  uint32_t id = 0;
-  bool fd = false;
-  uint8_t fd_flags = 0;
-  std::vector<uint8_t> data;
-};
-
-// FD frames go out with bit-rate switching (the bus runs 1/5 Mbit/s, docs/can-protocol.md).
-inline constexpr uint8_t kCanFdBrs = 0x01;
-
-// One line of `candump -l`, without the newline: "(1700000000.002000) can0 181##1<hex>" for an FD
-// frame, "(1700000000.002000) can0 701#0500" for a classic one (ids as 3 hex digits, uppercase).
-std::string format_candump_line(const CanFrame& frame, std::string_view interface);
-// Parses one such line (the `candump -l` subset above: standard ids, data frames). False on any
-// other text.
-bool parse_candump_line(std::string_view line, CanFrame& frame, std::string& interface);
+// The frames and the `candump -l` text format (whiskeye/can/candump.h).
+using CanFrame = can::LoggedFrame;
+using can::format_candump_line;
+using can::kCanFdBrs;
+using can::parse_candump_line;
 
 struct BoardTrafficParams {
   wp::BusMode mode = wp::BusMode::kFd;
   double rate_hz = 500.0;        // board sample rate; FD 500 Hz, classic 100 Hz (docs/can-protocol.md)
-  double heartbeat_hz = 10.0;    // per board
+  double heartbeat_hz = wp::kHeartbeatHz;  // per board
   wp::ProtocolIds ids;
   std::array<wp::WhiskerCalibration, wp::kNumWhiskers> calibration{};
+  // Whisker w's sensor is on board channel channel[w] (whiskerd's `channel`; a permutation).
+  std::array<int, wp::kNumWhiskers> channel = identity_channels();
+  static constexpr std::array<int, wp::kNumWhiskers> identity_channels() {
+    std::array<int, wp::kNumWhiskers> a{};
+    for (int w = 0; w < wp::kNumWhiskers; ++w) a[static_cast<std::size_t>(w)] = w;
+    return a;
+  }
   uint16_t first_seq = 0;        // seq of the first sample (FD: 16 bit, classic: its low 8 bits)
   uint8_t nmt_state = 0x05;      // heartbeat: operational
 };

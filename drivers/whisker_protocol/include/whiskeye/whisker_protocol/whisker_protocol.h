@@ -31,6 +31,12 @@ inline constexpr int16_t kHallLimit = 2047;
 inline constexpr int16_t kThetaLimit = 1024;
 inline constexpr double kThetaRadPerCount = kTwoPi / 4096.0;
 
+// Every board's heartbeat rate (CANopen producer time 100 ms).
+inline constexpr double kHeartbeatHz = 10.0;
+// The bus's bit rates (docs/can-protocol.md): arbitration 1 Mbit/s, FD data phase 5 Mbit/s.
+inline constexpr double kArbitrationBps = 1e6;
+inline constexpr double kFdDataBps = 5e6;
+
 // FD mode frame sizes (bytes); classic mode frames are always 8 bytes.
 inline constexpr std::size_t kFdSampleBytes = 32;
 inline constexpr std::size_t kFdCommandBytes = 64;

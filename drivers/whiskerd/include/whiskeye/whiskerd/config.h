@@ -11,6 +11,7 @@
 
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "whiskeye/gpio/motor_lines.h"
@@ -52,6 +53,19 @@ std::filesystem::path dropin_dir(const std::filesystem::path& config);
 // Its *.yaml files in file-name order (the order they apply in, later files win); none if the
 // directory does not exist. A path there that is not a regular file is a ParamError.
 std::vector<std::filesystem::path> dropin_files(const std::filesystem::path& dir);
+
+// Whisker w's calibration as whiskerd.yaml names it: channel, offset_x, offset_y, gain_x, gain_y,
+// rotation, theta_offset, theta_gain.
+std::vector<std::pair<std::string, double>> calibration_keys(const CoreParams& p, int w);
+
+// One whisker's entry of a drop-in: its index and the calibration keys to give it, in order.
+struct CalibrationEntry {
+  int index = 0;
+  std::vector<std::pair<std::string, double>> keys;  // e.g. {"offset_x", 12.5}, {"channel", 6}
+};
+// A drop-in's text: `comment` (each line prefixed "# "), then `calibration.whiskers` with the
+// entries, numbers written so that load_dropin() reads back the same doubles.
+std::string format_dropin(const std::vector<CalibrationEntry>& entries, const std::string& comment);
 
 // whiskerd's whole configuration: `root` (the config file with the command line's overrides, or
 // empty), then, when `config_path` is not empty, the drop-ins beside it. Returns what

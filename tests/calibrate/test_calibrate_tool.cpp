@@ -1,0 +1,208 @@
+// whiskeye-calibrate end to end, as on the first day with a robot: vita-sim writes the bring-up
+// sessions of a robot with a drawn true calibration as candump logs, the tool writes its drop-ins in
+// whiskerd's drop-in directory (map, rest, gain, theta), whiskerd's loader reads them, and whiskerd's
+// core fed with that robot's frames reproduces the simulated θ and deflections. Bad input through the
+// binary: a silent board, a stuck sensor, a sweep interrupted by a fault, a drop-in with a typo.
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "bringup_rig.h"
+#include "scratch.h"
+#include "subprocess.h"
+#include "whiskeye/whiskerd/config.h"
+#include "whiskeye/whiskerd/whiskerd_core.h"
+
+using namespace whiskeye;
+using ::testing::HasSubstr;
+using whiskeye::testing::Subprocess;
+
+namespace {
+
+constexpr uint64_t kTrueSeed = 7;
+
+std::pair<int, std::string> run(std::vector<std::string> args) {
+  Subprocess p(args);
+  const int status = p.wait(120);
+  return {status, p.output()};
+}
+
+std::size_t lines(const std::string& text) { return static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n')); }
+
+class CalibrateTool : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new std::string(whiskeye::testing::scratch_dir("calibrate_tool"));
+    std::filesystem::create_directories(etc() + "/whiskerd.d");
+    std::filesystem::copy_file(WHISKEYE_SOURCE_DIR "/config/whiskerd.yaml", config());
+  }
+  static void TearDownTestSuite() { delete dir_; }
+  static std::string etc() { return *dir_ + "/etc"; }
+  static std::string config() { return etc() + "/whiskerd.yaml"; }
+  static std::string path(const std::string& name) { return *dir_ + "/" + name; }
+
+  // vita-sim --bringup SESSION of the true robot into <name>.log; extra options after.
+  static std::string simulate(const std::string& session, const std::string& name, std::vector<std::string> extra = {}) {
+    std::vector<std::string> args = {VITA_SIM_EXE, "--bringup", session, "--true-calibration-seed",
+                                     std::to_string(kTrueSeed), "--whiskerd-config", WHISKEYE_SOURCE_DIR "/config/whiskerd.yaml",
+                                     "--candump", path(name + ".log"), "--write-true-calibration", path("truth.yaml")};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const auto [status, out] = run(args);
+    EXPECT_EQ(status, 0) << out;
+    return path(name + ".log");
+  }
+  // whiskeye-calibrate SUBCOMMAND --input LOG -c etc/whiskerd.yaml [args...]
+  static std::pair<int, std::string> calibrate(const std::string& sub, const std::string& log, std::vector<std::string> extra = {}) {
+    std::vector<std::string> args = {CALIBRATE_EXE, sub, "--input", log, "-c", config()};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return run(args);
+  }
+
+  static std::string* dir_;
+};
+std::string* CalibrateTool::dir_ = nullptr;
+
+TEST_F(CalibrateTool, RecoversTheTrueCalibrationAndWhiskerdReproducesTheSimulatedValues) {
+  // The first day: bus check, map, rest, jig, sweep, each writing its drop-in.
+  const std::string rest = simulate("rest", "rest");
+  const auto [bus_status, bus_out] = run({CALIBRATE_EXE, "bus", "--input", rest, "-c", config()});
+  EXPECT_EQ(bus_status, 0) << bus_out;
+  EXPECT_THAT(bus_out, HasSubstr("bus: ok"));
+  const std::pair<const char*, std::vector<std::string>> steps[] = {
+      {"map", {"-o", etc() + "/whiskerd.d/10-map.yaml"}},
+      {"rest", {"-o", etc() + "/whiskerd.d/20-rest.yaml"}},
+      {"gain", {"--deflection", "0.5", "-o", etc() + "/whiskerd.d/30-gain.yaml"}},
+      {"theta", {"-o", etc() + "/whiskerd.d/40-theta.yaml"}}};
+  const std::map<std::string, std::string> session_of = {{"map", "taps"}, {"rest", "rest"}, {"gain", "jig"}, {"theta", "sweep"}};
+  for (const auto& [sub, args] : steps) {
+    const std::string log = sub == std::string("rest") ? rest : simulate(session_of.at(sub), session_of.at(sub));
+    const auto [status, out] = calibrate(sub, log, args);
+    ASSERT_EQ(status, 0) << sub << ": " << out;
+    EXPECT_THAT(out, HasSubstr("whisker  key"));  // the old/new table
+  }
+
+  // What whiskerd loads, against the truth (itself a drop-in: load it over the defaults).
+  whiskerd::Params loaded;
+  whiskerd::load_with_dropins(ParamNode::from_file(config()), config(), loaded);
+  whiskerd::CoreParams truth;
+  whiskerd::load_dropin(ParamNode::from_file(path("truth.yaml")), truth);
+  for (int w = 0; w < kNumWhiskers; ++w) {
+    const wp::WhiskerCalibration& t = truth.calibration[static_cast<std::size_t>(w)];
+    const wp::WhiskerCalibration& e = loaded.calibration[static_cast<std::size_t>(w)];
+    EXPECT_EQ(loaded.channel[static_cast<std::size_t>(w)], truth.channel[static_cast<std::size_t>(w)]) << w;
+    EXPECT_NEAR(e.offset_x, t.offset_x, 1.0) << w;
+    EXPECT_NEAR(e.offset_y, t.offset_y, 1.0) << w;
+    EXPECT_NEAR(e.gain_x / t.gain_x, 1.0, 0.003) << w;
+    EXPECT_NEAR(e.gain_y / t.gain_y, 1.0, 0.003) << w;
+    EXPECT_NEAR(e.rotation, t.rotation, 0.003) << w;
+    EXPECT_NEAR(e.theta_offset, t.theta_offset, 1.0) << w;
+    EXPECT_NEAR(e.theta_gain / t.theta_gain, 1.0, 0.002) << w;
+  }
+
+  // whiskerd's core with that configuration, fed with the same robot's frames of new sessions (a
+  // sweep and a jig on other seeds), reports the simulated θ and deflections.
+  const sim::TrueCalibration drawn = sim::draw_true_calibration(kTrueSeed);
+  ASSERT_EQ(drawn.channel, truth.channel);
+  double worst_theta = 0, worst_deflection = 0;
+  int64_t compared = 0;
+  for (const sim::Session kind : {sim::Session::kSweep, sim::Session::kJig}) {
+    sim::SessionParams p;
+    p.session = kind;
+    p.seed = 99;
+    p.order = {0, 5, 13, drawn.swapped[0], drawn.swapped[1], drawn.mirrored_board * 4 + 2};
+    sim::BoardTraffic traffic(calibrate::test::traffic_of(drawn, wp::BusMode::kFd, p.rate_hz));
+    whiskerd::WhiskerCore core(loaded);  // each session a fresh start: the boards' sequences start over
+    whiskerd::PeriodOutput out;
+    std::vector<sim::CanFrame> frames;
+    int64_t mono = 0;
+    sim::run_session(p, [&](const rcp::WhiskerSample& s, const sim::WhiskerHealth& h) {
+      frames.clear();
+      traffic.add(s, h, frames);
+      mono += 2000;
+      for (const sim::CanFrame& f : frames) core.on_frame(f.id, f.fd, f.data, mono);
+      core.step(s.utime, mono, out);
+      for (int w = 0; w < kNumWhiskers; ++w) {
+        worst_theta = std::max(worst_theta, std::abs(out.theta[w] - s.theta[w]));
+        worst_deflection = std::max(worst_deflection, std::hypot(out.deflection_x[w] - s.deflection_x[w],
+                                                                 out.deflection_y[w] - s.deflection_y[w]));
+      }
+      ++compared;
+    });
+  }
+  EXPECT_GT(compared, 10000);
+  EXPECT_LT(worst_theta, 0.003) << "rad";
+  EXPECT_LT(worst_deflection, 0.004) << "full scale";
+  std::cout << "whiskerd with the drop-ins: worst theta error " << worst_theta << " rad, worst deflection error "
+            << worst_deflection << " over " << compared << " periods\n";
+}
+
+TEST_F(CalibrateTool, ASilentBoardFailsTheBusCheckAndRestWritesNothing) {
+  const std::string log = simulate("rest", "silent", {"--silent-board", "3", "--bringup-duration", "2"});
+  const auto [bus_status, bus_out] = calibrate("bus", log);
+  EXPECT_EQ(bus_status, 1) << bus_out;
+  EXPECT_THAT(bus_out, HasSubstr("    3     4        0.0           0.0     0  FAIL: absent"));
+  const std::string dropin = path("silent-rest.yaml");
+  const auto [status, out] = calibrate("rest", log, {"-o", dropin});
+  EXPECT_EQ(status, 1) << out;
+  EXPECT_THAT(out, HasSubstr("whiskeye-calibrate: rest: board 3 (CAN node 4) sent no samples"));
+  EXPECT_FALSE(std::filesystem::exists(dropin));
+}
+
+TEST_F(CalibrateTool, AStuckSensorIsOneLineNamingTheWhisker) {
+  const std::string log = simulate("rest", "stuck", {"--stuck-whiskers", "14", "--bringup-duration", "2"});
+  const auto [status, out] = calibrate("rest", log, {"-o", path("stuck-rest.yaml")});
+  EXPECT_EQ(status, 1) << out;
+  EXPECT_THAT(out, HasSubstr("whiskeye-calibrate: rest: whisker 14 (row 2, column 2)"));
+  EXPECT_THAT(out, HasSubstr("stuck"));
+  EXPECT_FALSE(std::filesystem::exists(path("stuck-rest.yaml")));
+}
+
+TEST_F(CalibrateTool, ASweepInterruptedByAFaultIsRefused) {
+  const std::string log = simulate("sweep", "fault", {"--fault-at", "3"});
+  const auto [status, out] = calibrate("theta", log, {"-o", path("fault-theta.yaml")});
+  EXPECT_EQ(status, 1) << out;
+  EXPECT_THAT(out, HasSubstr("whiskeye-calibrate: theta: sweep interrupted by a fault: board 0 reports a fault from 3.00 s"));
+  EXPECT_FALSE(std::filesystem::exists(path("fault-theta.yaml")));
+}
+
+TEST_F(CalibrateTool, ADropinWithATypoIsOneLineNamingTheFileAndTheKey) {
+  const std::string typo_etc = path("typo");
+  std::filesystem::create_directories(typo_etc + "/whiskerd.d");
+  std::filesystem::copy_file(WHISKEYE_SOURCE_DIR "/config/whiskerd.yaml", typo_etc + "/whiskerd.yaml");
+  const std::string typo = typo_etc + "/whiskerd.d/20-rest.yaml";
+  std::ofstream(typo) << "calibration:\n  whiskers:\n    - {index: 2, ofset_x: 3.5}\n";
+  const std::string log = simulate("rest", "typo", {"--bringup-duration", "1"});
+  const auto [status, out] = run({CALIBRATE_EXE, "rest", "--input", log, "-c", typo_etc + "/whiskerd.yaml"});
+  EXPECT_EQ(status, 2) << out;
+  EXPECT_EQ(lines(out), 1u) << out;
+  EXPECT_THAT(out, HasSubstr("whiskeye-calibrate: bad config: " + typo + ": unknown key 'calibration.whiskers[0].ofset_x' (line 3)"));
+  // whiskerd refuses it the same way, before it opens any device.
+  const auto [wstatus, wout] = run({WHISKERD_EXE, "-c", typo_etc + "/whiskerd.yaml", "--print-config"});
+  EXPECT_EQ(wstatus, 2) << wout;
+  EXPECT_THAT(wout, HasSubstr(typo + ": unknown key 'calibration.whiskers[0].ofset_x'"));
+}
+
+TEST_F(CalibrateTool, ALogThatIsNotACandumpIsOneLineNamingTheLine) {
+  const std::string bad = path("bad.log");
+  std::ofstream(bad) << "(1700000000.000000) can0 701#05\nhello\n";
+  const auto [status, out] = calibrate("bus", bad);
+  EXPECT_EQ(status, 1) << out;
+  EXPECT_EQ(lines(out), 1u) << out;
+  EXPECT_THAT(out, HasSubstr(bad + ":2: not a candump -l line: 'hello'"));
+}
+
+TEST_F(CalibrateTool, ThetaWithoutARecordedSweepIsAUsageError) {
+  const auto [status, out] = run({CALIBRATE_EXE, "theta", "-c", config()});
+  EXPECT_EQ(status, 2) << out;
+  EXPECT_EQ(lines(out), 1u) << out;
+  EXPECT_THAT(out, HasSubstr("theta: give the sweep with --input FILE"));
+}
+
+}  // namespace

@@ -1,0 +1,221 @@
+// whiskeye-calibrate's subcommands (see commands.h).
+#include "whiskeye/calibrate/commands.h"
+
+#include <whiskeye/common/cli.h>
+#include <whiskeye/common/config_path.h>
+#include <whiskeye/common/params.h>
+
+#include <atomic>
+#include <chrono>
+#include <ctime>
+#include <fstream>
+#include <functional>
+#include <iostream>
+#include <mutex>
+#include <stdexcept>
+#include <thread>
+
+#include "whiskeye/calibrate/estimators.h"
+#include "whiskeye/can/can_socket.h"
+#include "whiskeye/can/candump.h"
+#include "whiskeye/whiskerd/config.h"
+
+namespace whiskeye::calibrate {
+
+namespace {
+
+constexpr const char* kProgram = "whiskeye-calibrate";
+
+struct Setup {
+  whiskerd::Params params;
+  std::string config;
+};
+
+// whiskerd's configuration as whiskerd would run with it: the file, then its drop-ins.
+Setup load_setup(const Options& o, std::string* printed = nullptr) {
+  Setup s;
+  s.config = o.config.empty() ? default_config_path("whiskerd.yaml", "--config").string() : o.config;
+  const std::string text = whiskerd::load_with_dropins(ParamNode::from_file(s.config), s.config, s.params);
+  if (printed) *printed = text;
+  return s;
+}
+
+// A candump -l log into `r`; returns the seconds it spans. A line that is not a CAN frame of the
+// log format: runtime_error naming the file and the line.
+double read_log(const std::string& path, Recording& r, double rate_hz) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot open the candump log");
+  std::string line, interface;
+  can::LoggedFrame f;
+  int64_t number = 0, utime = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    if (line.empty()) continue;
+    if (can::parse_candump_line(line, f, interface)) {
+      r.add_frame(f.utime, f.id, f.fd, f.data);
+    } else if (can::parse_candump_error_line(line, utime)) {
+      r.add_error_frame(utime);
+    } else {
+      throw std::runtime_error(path + ":" + std::to_string(number) + ": not a candump -l line: '" + line.substr(0, 60) + "'");
+    }
+  }
+  if (r.first_utime() < 0) throw std::runtime_error(path + ": no CAN frame in the log");
+  return static_cast<double>(r.last_utime() - r.first_utime()) / 1e6 + 1.0 / rate_hz;
+}
+
+// Listens on the bus (never sends: the motors stay off) until `stop` says so, into `r` under `lock`.
+void listen(const std::string& interface, bool fd, Recording& r, std::mutex& lock, const std::function<bool()>& stop) {
+  can::Socket sock(interface, fd);
+  sock.set_receive_buffer(4 << 20);
+  can::Frame frame;
+  while (!stop()) {
+    const can::Socket::Rx rx = sock.receive(frame, 100000);
+    const std::lock_guard<std::mutex> guard(lock);
+    if (rx == can::Socket::Rx::kFrame && !frame.extended && !frame.rtr) {
+      r.add_frame(frame.rx_utime, frame.id, frame.fd, frame.payload());
+    } else if (rx == can::Socket::Rx::kErrorFrame) {
+      r.add_error_frame(frame.rx_utime);
+    } else if (rx == can::Socket::Rx::kDown) {
+      throw std::runtime_error("CAN " + interface + ": the interface went down");
+    }
+  }
+}
+
+// The recording of --input, or of --seconds on the bus. Returns the seconds it spans.
+double record(const Options& o, const Setup& s, Recording& r) {
+  if (!o.input.empty()) return read_log(o.input, r, s.params.rate_hz);
+  const std::string interface = o.interface.empty() ? s.params.interface : o.interface;
+  std::cerr << kProgram << ": listening on " << interface << " for " << o.seconds << " s (motors off)\n";
+  std::mutex lock;
+  const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(o.seconds);
+  listen(interface, s.params.mode == wp::BusMode::kFd, r, lock, [&] { return std::chrono::steady_clock::now() >= until; });
+  return o.seconds;
+}
+
+// Prints the table; refuses (exit 1) on problems or implausible values; else writes the drop-in
+// (or prints it without -o).
+int finish(const char* what, const Options& o, const Setup& s, Result result) {
+  const Problems bounds = check_bounds(result.estimates, Bounds{});
+  result.problems.insert(result.problems.end(), bounds.begin(), bounds.end());
+  std::cout << format_table(result.estimates);
+  if (!result.problems.empty()) {
+    for (const std::string& p : result.problems) std::cerr << kProgram << ": " << what << ": " << p << "\n";
+    std::cerr << kProgram << ": " << what << ": nothing written\n";
+    return cli::kExitFailure;
+  }
+  const std::time_t now = std::time(nullptr);
+  char stamp[32];
+  std::strftime(stamp, sizeof stamp, "%Y-%m-%d %H:%M:%S UTC", std::gmtime(&now));
+  const std::string text = whiskerd::format_dropin(
+      dropin_entries(result.estimates),
+      std::string("whiskeye-calibrate ") + what + ", " + stamp + ", from " +
+          (o.input.empty() ? "the bus" : o.input) + " (calibration in use: " + s.config + " and its drop-ins)");
+  if (o.output.empty()) {
+    std::cout << text;
+    return cli::kExitOk;
+  }
+  std::ofstream out(o.output, std::ios::trunc);
+  out << text;
+  out.flush();
+  if (!out) throw std::runtime_error(o.output + ": cannot write the drop-in");
+  std::cerr << kProgram << ": " << what << ": wrote " << o.output << "\n";
+  return cli::kExitOk;
+}
+
+}  // namespace
+
+int print_config(const Options& o) {
+  std::string printed;
+  load_setup(o, &printed);
+  std::cout << printed;
+  return cli::kExitOk;
+}
+
+int run_bus(const Options& o) {
+  const Setup s = load_setup(o);
+  Recording r(s.params.mode, s.params.ids);
+  const double seconds = record(o, s, r);
+  const BusReport rep = check_bus(r, s.params.rate_hz, seconds);
+  std::cout << format_bus_report(rep);
+  return rep.ok ? cli::kExitOk : cli::kExitFailure;
+}
+
+int run_rest(const Options& o) {
+  const Setup s = load_setup(o);
+  Recording r(s.params.mode, s.params.ids);
+  record(o, s, r);
+  return finish("rest", o, s, estimate_rest(r, s.params, Bounds{}));
+}
+
+int run_map(const Options& o) {
+  const Setup s = load_setup(o);
+  Recording r(s.params.mode, s.params.ids);
+  std::vector<int> order = o.expect;
+  if (order.empty()) {
+    for (int w = 0; w < kNumWhiskers; ++w) order.push_back(w);
+  }
+  if (!o.input.empty()) {
+    read_log(o.input, r, s.params.rate_hz);
+    return finish("map", o, s, map_whiskers(find_pushes(r), order, s.params));
+  }
+  // Interactive: the bus is recorded in the background while the operator pushes each whisker; after
+  // each Enter the pushes found so far are shown.
+  const std::string interface = o.interface.empty() ? s.params.interface : o.interface;
+  std::mutex lock;
+  std::atomic<bool> done{false};
+  std::exception_ptr failure;
+  std::thread listener([&] {
+    try {
+      listen(interface, s.params.mode == wp::BusMode::kFd, r, lock, [&] { return done.load(); });
+    } catch (...) {
+      failure = std::current_exception();
+      done = true;
+    }
+  });
+  std::cout << "Hands off the whiskers for 2 s...\n" << std::flush;
+  std::this_thread::sleep_for(std::chrono::seconds(2));
+  std::size_t shown = 0;
+  for (int w : order) {
+    std::cout << "Push " << whisker_name(w) << " forward (+x) and release, then up (+y) and release; then press Enter: "
+              << std::flush;
+    std::string ignored;
+    if (!std::getline(std::cin, ignored) || done) break;
+    std::vector<Push> pushes;
+    {
+      const std::lock_guard<std::mutex> guard(lock);
+      pushes = find_pushes(r);
+    }
+    for (; shown < pushes.size(); ++shown) {
+      const Push& p = pushes[shown];
+      std::cout << "  moved: channel " << p.channel << " (board " << p.channel / 4 << "), sensor x " << p.dx
+                << ", y " << p.dy << " counts\n";
+    }
+  }
+  done = true;
+  listener.join();
+  if (failure) std::rethrow_exception(failure);
+  return finish("map", o, s, map_whiskers(find_pushes(r), order, s.params));
+}
+
+int run_gain(const Options& o) {
+  if (!(o.deflection > 0.0 && o.deflection < 1.0)) throw cli::UsageError("gain: --deflection D (0 < D < 1) is required");
+  const Setup s = load_setup(o);
+  Recording r(s.params.mode, s.params.ids);
+  record(o, s, r);
+  return finish("gain", o, s, fit_gains(find_pushes(r), o.expect, o.deflection, s.params));
+}
+
+int run_theta(const Options& o) {
+  if (o.input.empty()) {
+    throw cli::UsageError(
+        "theta: give the sweep with --input FILE (a candump -l of whiskerd sweeping the end stops, docs/bring-up.md); "
+        "the tool does not drive the motors itself");
+  }
+  const Setup s = load_setup(o);
+  Recording r(s.params.mode, s.params.ids);
+  record(o, s, r);
+  const double stop = o.stop_deg > 0 ? o.stop_deg * kPi / 180.0 : s.params.controller.pattern.theta_limit;
+  return finish("theta", o, s, fit_theta(r, stop, s.params));
+}
+
+}  // namespace whiskeye::calibrate
