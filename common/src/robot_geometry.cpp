@@ -70,6 +70,10 @@ Vec3 RobotGeometry::whisker_point(int w, double theta, double r) const {
 
 RobotGeometry default_robot_geometry() { return generate(Layout{}, RobotGeometry{}); }
 
+double head_path_radius(double base_radius, const RobotGeometry& robot) {
+  return std::hypot(base_radius + robot.T_base_head.x, robot.T_base_head.y);
+}
+
 void load(const ParamNode& node, RobotGeometry& geometry) {
   RobotGeometry base = geometry;
   const ParamNode head = node.section("head");

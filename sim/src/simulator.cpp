@@ -1,6 +1,8 @@
 // The closed-loop simulation (see simulator.h).
 #include "whiskeye/sim/simulator.h"
 
+#include "whiskeye/common/utime.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -18,15 +20,13 @@ uint64_t derive_seed(uint64_t seed, uint64_t stream) {
   return z ^ (z >> 31);
 }
 
-int64_t to_us(double seconds) { return std::llround(seconds * 1e6); }
-
 FaultRecord interval_record(FaultKind kind, const FaultInterval& f, int index, double value) {
   FaultRecord r;
   r.kind = kind;
   r.index = index;
   r.value = value;
-  r.start_us = to_us(f.start);
-  r.end_us = to_us(f.start + f.duration);
+  r.start_us = seconds_to_utime(f.start);
+  r.end_us = seconds_to_utime(f.start + f.duration);
   return r;
 }
 
@@ -56,7 +56,7 @@ Simulator::Simulator(const World& world, const RobotGeometry& robot, const rcp::
     : world_(world),
       robot_(robot),
       params_(params),
-      controller_(controller, params.period_us > 0 ? 1e6 / static_cast<double>(params.period_us) : 500.0),
+      controller_(controller, params.period_us > 0 ? 1e6 / static_cast<double>(params.period_us) : kControlRateHz),
       plant_(plant_params_for(robot, plant), derive_seed(params.seed, 0)),
       renderer_(world_, robot_),
       camera_rng_(derive_seed(params.seed, 1)),
@@ -93,7 +93,7 @@ Simulator::Simulator(const World& world, const RobotGeometry& robot, const rcp::
     FaultRecord r;
     r.kind = FaultKind::Kidnap;
     r.value = k.to_angle;
-    r.start_us = to_us(k.at);
+    r.start_us = seconds_to_utime(k.at);
     r.end_us = std::numeric_limits<int64_t>::max();
     faults_.push_back(r);
   }

@@ -89,8 +89,7 @@ void plot_world(const World& world, const RobotGeometry& robot, const std::strin
   }
   const Trajectory& t = world.trajectory;
   cv::circle(img, px(t.centre.x, t.centre.y), static_cast<int>(t.radius * scale), cv::Scalar(200, 0, 200), 2, cv::LINE_AA);
-  // The head's path (the head is mounted ahead of the base, outwards).
-  const double head_r = std::hypot(t.radius + robot.T_base_head.x, robot.T_base_head.y);
+  const double head_r = head_path_radius(t.radius, robot);  // the head's path
   cv::circle(img, px(t.centre.x, t.centre.y), static_cast<int>(head_r * scale), cv::Scalar(230, 160, 230), 1, cv::LINE_AA);
   for (const Solid& s : world.solids) {
     const cv::Scalar c(40, 40, 40);

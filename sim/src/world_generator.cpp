@@ -50,11 +50,6 @@ std::string num(double v, int decimals = 4) {
   return s;
 }
 
-// Radius (m) of the circle the head travels on when the base circles at `base_radius`.
-double head_path_radius(double base_radius, const RobotGeometry& robot) {
-  return std::hypot(base_radius + robot.T_base_head.x, robot.T_base_head.y);
-}
-
 // Polar angle (deg) that `m` metres of the head's path span.
 double m_to_deg(double m, double head_r) { return m / head_r * 180.0 / kPi; }
 

@@ -71,6 +71,10 @@ struct RobotGeometry {
 // The standard WhiskEye layout (no file needed).
 RobotGeometry default_robot_geometry();
 
+// Radius (m) of the circle the head travels on while the base circles at `base_radius` facing
+// outwards (the head is mounted ahead of the base: T_base_head).
+double head_path_radius(double base_radius, const RobotGeometry& robot);
+
 // Loads `robot:` parameters (see config/robot.yaml): layout parameters from which every whisker is
 // generated, plus optional per-whisker overrides. Strict: unknown keys are errors.
 void load(const ParamNode& node, RobotGeometry& geometry);

@@ -4,6 +4,7 @@
 // step() is allocation-free except at the step that completes a whisk cycle.
 #pragma once
 
+#include <whiskeye/common/whisker_array.h>
 #include <whiskeye/rcp/contact_detector.h>
 #include <whiskeye/rcp/cycle_assembler.h>
 #include <whiskeye/rcp/params.h>
@@ -42,7 +43,7 @@ class Controller {
   // sample_rate_hz: how often step() is called. It sizes the whisk-cycle storage reserved up front
   // (a cycle holds sample_rate_hz / frequency_hz samples), so a faster loop does not grow it
   // mid-cycle, and sets the assembler's nominal sample period.
-  explicit Controller(const ControllerParams& params, double sample_rate_hz = 500.0);
+  explicit Controller(const ControllerParams& params, double sample_rate_hz = kControlRateHz);
 
   // One control period. Returns the command for this period computed from this sample (the
   // reaction to a contact seen in this sample is already in theta_command).

@@ -13,7 +13,7 @@ namespace whiskeye::rcp {
 struct ExperimentSpec {
   int cycles = 20;                 // whisk cycles to run (after enabling)
   int warmup_cycles = 1;           // first cycles left out of the figures (amplitude ramp)
-  int64_t period_us = 2000;        // control period (500 Hz)
+  int64_t period_us = kControlPeriodUs;  // control period
   int64_t start_utime = 1'000'000; // time of the first sample
   uint64_t seed = 1;
   PerWhisker<std::optional<Obstacle>> obstacles{};

@@ -30,7 +30,7 @@ using can::parse_candump_line;
 
 struct BoardTrafficParams {
   wp::BusMode mode = wp::BusMode::kFd;
-  double rate_hz = 500.0;        // board sample rate; FD 500 Hz, classic 100 Hz (docs/can-protocol.md)
+  double rate_hz = kControlRateHz;  // board sample rate; FD 500 Hz, classic 100 Hz (docs/can-protocol.md)
   double heartbeat_hz = wp::kHeartbeatHz;  // per board
   wp::ProtocolIds ids;
   std::array<wp::WhiskerCalibration, wp::kNumWhiskers> calibration{};

@@ -9,6 +9,7 @@
 #pragma once
 
 #include "whiskeye/common/robot_geometry.h"
+#include "whiskeye/common/whisker_array.h"
 #include "whiskeye/sim/odometry.h"
 #include "whiskeye/sim/renderer.h"
 #include "whiskeye/sim/whisker_contact.h"
@@ -30,7 +31,7 @@ struct SimParams {
   int64_t start_utime = 1'700'000'000'000'000;  // fixed default: runs are reproducible
   double duration = 0.0;          // s; 0 = world.trajectory.laps laps
   uint64_t seed = 1;
-  int64_t period_us = 2000;       // control period (500 Hz)
+  int64_t period_us = kControlPeriodUs;  // control period
   int odometry_divider = 10;      // ODOMETRY and GROUND_TRUTH every 10 periods (50 Hz)
   int contact_update_divider = 5; // obstacles recomputed every 5 periods (the head moves < 1 mm)
   SweepParams sweep;
