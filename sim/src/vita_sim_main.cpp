@@ -14,12 +14,12 @@
 #include "whiskeye/sim/world_generator.h"
 #include "whiskeye/slam/vita_slam.h"
 #include "whiskeye/whiskerd/config.h"
+#include "png_file.h"
 
 #include <whiskeye/rcp/params.h>
 
 #include <CLI/CLI.hpp>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <unistd.h>
 
@@ -123,7 +123,7 @@ void plot_world(const World& world, const RobotGeometry& robot, const std::strin
                             " m/s " + (t.counter_clockwise ? "ccw" : "cw") + ", facing " +
                             (t.outwards ? "outwards" : "inwards") + "; red: start";
   cv::putText(img, title, cv::Point(10, 25), cv::FONT_HERSHEY_SIMPLEX, 0.5, black, 1, cv::LINE_AA);
-  if (!cv::imwrite(path, img)) throw std::runtime_error(path + ": cannot write the PNG");
+  write_png(path, img.data, img.cols, img.rows, img.channels(), img.step[0]);
 }
 
 // Noise-free camera views at the given polar angles of the trajectory, tiled two per row at half
@@ -151,7 +151,7 @@ void plot_views(const World& world, const RobotGeometry& robot, const std::vecto
     cv::rectangle(tile, cv::Rect(0, 0, 190, 22), cv::Scalar(255), cv::FILLED);
     cv::putText(tile, label, cv::Point(5, 16), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0), 1, cv::LINE_AA);
   }
-  if (!cv::imwrite(path, out)) throw std::runtime_error(path + ": cannot write the PNG");
+  write_png(path, out.data, out.cols, out.rows, out.channels(), out.step[0]);
 }
 
 // "MIN,MAX" (or one number for both) of a generator option; GeneratorOptionError naming it.
@@ -519,10 +519,9 @@ int main(int argc, char** argv) {
       void camera(int64_t u, int64_t s, const std::vector<uint8_t>& g, int w, int h) override {
         if (next) next->camera(u, s, g, w, h);
         if (dir.empty() || s % every != 0) return;
-        const cv::Mat m(h, w, CV_8UC1, const_cast<uint8_t*>(g.data()));
         char name[64];
         std::snprintf(name, sizeof name, "/frame_%06lld.png", static_cast<long long>(s));
-        if (!cv::imwrite(dir + name, m)) throw std::runtime_error(dir + name + ": cannot write the PNG");
+        write_png(dir + name, g.data(), w, h, 1, static_cast<std::size_t>(w));
       }
     } tap(lcm.get(), candump.get(), frames_dir, frames_every);
 

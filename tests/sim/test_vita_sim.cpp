@@ -17,10 +17,13 @@
 #include <whiskeye/whisker_sample_t.hpp>
 
 #include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -136,6 +139,54 @@ TEST(VitaSim, PlotsTheWorldAsAPng) {
   ASSERT_GT(bytes.size(), 8u);
   EXPECT_EQ(bytes.substr(1, 3), "PNG");
   fs::remove(png);
+}
+
+TEST(VitaSim, FramesDirPngsHoldExactlyTheLoggedFramesAndThePlotsDecode) {
+  const std::string log = temp_path("frames.lcmlog");
+  const std::string dir = temp_path("frames");
+  const std::string world_png = temp_path("plot_world.png");
+  const std::string views_png = temp_path("plot_views.png");
+  ASSERT_EQ(vita_sim(arena() + " --duration 1 --seed 3 --frames-dir " + dir + " --frames-every 2 -o " + log), 0);
+  LogReader reader(log);
+  LogEvent e;
+  int compared = 0;
+  while (reader.next(e)) {
+    if (e.channel != "CAMERA") continue;
+    image_t img;
+    ASSERT_TRUE(decode_message(std::span<const uint8_t>(e.data), img));
+    char name[64];
+    std::snprintf(name, sizeof name, "/frame_%06lld.png", static_cast<long long>(img.seq));
+    const cv::Mat png = cv::imread(dir + name, cv::IMREAD_UNCHANGED);
+    if (img.seq % 2 != 0) {
+      EXPECT_TRUE(png.empty()) << name << ": only every second frame";
+      continue;
+    }
+    ASSERT_EQ(png.type(), CV_8UC1) << name;
+    ASSERT_EQ(png.cols, img.width);
+    ASSERT_EQ(png.rows, img.height);
+    for (int y = 0; y < img.height; ++y) {
+      for (int x = 0; x < img.width; ++x) {
+        ASSERT_EQ(png.at<uint8_t>(y, x), img.data[static_cast<std::size_t>(y) * img.row_stride + 2 * x]) << name;
+      }
+    }
+    ++compared;
+  }
+  EXPECT_EQ(compared, 3) << "frames 0, 2, 4 of 5";
+  ASSERT_EQ(vita_sim(arena() + " --plot-world " + world_png + " --plot-views " + views_png), 0);
+  const cv::Mat world = cv::imread(world_png, cv::IMREAD_UNCHANGED);
+  EXPECT_EQ(world.type(), CV_8UC3);
+  EXPECT_GT(world.cols, 600) << "6 m at 100 px a metre";
+  // Something other than the white background, in colour: the landmarks.
+  cv::Mat channels[3];
+  cv::split(world, channels);
+  EXPECT_GT(cv::norm(channels[0], channels[2], cv::NORM_L1), 0.0);
+  const cv::Mat views = cv::imread(views_png, cv::IMREAD_UNCHANGED);
+  EXPECT_EQ(views.type(), CV_8UC1);
+  EXPECT_EQ(views.cols, 640) << "two half-size views a row";
+  fs::remove(log);
+  fs::remove_all(dir);
+  fs::remove(world_png);
+  fs::remove(views_png);
 }
 
 TEST(VitaSim, BadInputExitsNonZero) {
