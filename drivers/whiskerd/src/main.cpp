@@ -10,6 +10,7 @@
 #include <iostream>
 #include <memory>
 #include <thread>
+#include <vector>
 
 #include <whiskeye/common/bus.h>
 #include <whiskeye/common/cli.h>
@@ -95,17 +96,15 @@ int main(int argc, char** argv) {
   program.add_print_config(print_config);
   return program.run(argc, argv, [&] {
     // The file, then the command line's overrides: what is printed is what runs.
-    ParamNode root = config_path.empty() ? ParamNode::empty() : ParamNode::from_file(config_path);
-    if (!interface.empty()) root.set_override("can.interface", interface, "--interface");
-    if (no_gpio) root.set_override("gpio.enabled", "false", "--no-gpio");
-    if (!lcm_url.empty()) root.set_override("lcm.url", lcm_url, "--lcm-url");
+    std::vector<cli::Override> overrides;
+    if (!interface.empty()) overrides.push_back({"can.interface", interface, "--interface"});
+    if (no_gpio) overrides.push_back({"gpio.enabled", "false", "--no-gpio"});
+    if (!lcm_url.empty()) overrides.push_back({"lcm.url", lcm_url, "--lcm-url"});
+    const ParamNode root = cli::read_config(config_path, overrides);
     Params params;
-    // The file, then its calibration drop-ins (whiskerd.d/*.yaml beside it); a ParamError: exit 2.
+    // Then the calibration drop-ins (whiskerd.d/*.yaml beside the file); a ParamError: exit 2.
     const std::string printed = load_with_dropins(root, config_path, params);
-    if (print_config) {
-      std::cout << printed;
-      return 0;
-    }
+    if (program.print_config(printed)) return 0;
     std::cerr << printed;
     return run(params);
   });

@@ -40,6 +40,12 @@ Setup load_setup(const Options& o, std::string* printed = nullptr) {
   return s;
 }
 
+// The seconds a recording spans, first frame to last plus one sample period (`fallback` if empty).
+double span_s(const Recording& r, double rate_hz, double fallback) {
+  if (r.first_utime() < 0) return fallback;
+  return static_cast<double>(r.last_utime() - r.first_utime()) / 1e6 + 1.0 / rate_hz;
+}
+
 // A candump -l log into `r`; returns the seconds it spans. A line that is not a CAN frame of the
 // log format: runtime_error naming the file and the line.
 double read_log(const std::string& path, Recording& r, double rate_hz) {
@@ -60,13 +66,14 @@ double read_log(const std::string& path, Recording& r, double rate_hz) {
     }
   }
   if (r.first_utime() < 0) throw std::runtime_error(path + ": no CAN frame in the log");
-  return static_cast<double>(r.last_utime() - r.first_utime()) / 1e6 + 1.0 / rate_hz;
+  return span_s(r, rate_hz, 0.0);
 }
 
 // Listens on the bus (never sends: the motors stay off) until `stop` says so, into `r` under `lock`.
 void listen(const std::string& interface, bool fd, Recording& r, std::mutex& lock, const std::function<bool()>& stop) {
   can::Socket sock(interface, fd);
   sock.set_receive_buffer(4 << 20);
+  std::cerr << kProgram << ": listening on " << interface << " (motors off)\n";
   can::Frame frame;
   while (!stop()) {
     const can::Socket::Rx rx = sock.receive(frame, 100000);
@@ -85,11 +92,10 @@ void listen(const std::string& interface, bool fd, Recording& r, std::mutex& loc
 double record(const Options& o, const Setup& s, Recording& r) {
   if (!o.input.empty()) return read_log(o.input, r, s.params.rate_hz);
   const std::string interface = o.interface.empty() ? s.params.interface : o.interface;
-  std::cerr << kProgram << ": listening on " << interface << " for " << o.seconds << " s (motors off)\n";
   std::mutex lock;
   const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(o.seconds);
   listen(interface, s.params.mode == wp::BusMode::kFd, r, lock, [&] { return std::chrono::steady_clock::now() >= until; });
-  return o.seconds;
+  return span_s(r, s.params.rate_hz, o.seconds);
 }
 
 // Prints the table; refuses (exit 1) on problems or implausible values; else writes the drop-in

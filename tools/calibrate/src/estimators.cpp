@@ -191,7 +191,9 @@ Result estimate_rest(const Recording& r, const whiskerd::CoreParams& current, co
 
 std::vector<Push> find_pushes(const Recording& r) {
   constexpr int64_t kMinPushUs = 50000;   // shorter excursions are noise or a knock
-  constexpr int64_t kBridgeUs = 50000;    // a dip shorter than this does not end a push
+  // A push ends at the first run of this many samples back at rest: counted in samples, not time, so
+  // frames that arrive late or in bursts (a loaded host, a replay) never split a push.
+  constexpr std::size_t kRestRun = 10;
   constexpr double kPlateau = 0.8;        // the plateau: where the push is within 80 % of its peak
   std::vector<Push> found;
   for (int ch = 0; ch < kChannels; ++ch) {
@@ -214,7 +216,7 @@ std::vector<Push> find_pushes(const Recording& r) {
         continue;
       }
       std::size_t end = i;  // last active sample of this push
-      for (std::size_t j = i + 1; j < s.size() && s[j].utime - s[end].utime <= kBridgeUs; ++j) {
+      for (std::size_t j = i + 1; j < s.size() && j - end <= kRestRun; ++j) {
         if (dev[j] > threshold) end = j;
       }
       if (s[end].utime - s[i].utime >= kMinPushUs) {
@@ -271,9 +273,9 @@ std::vector<int> whiskers_in(const std::vector<int>& order) {
 }
 
 // The pushes of `order` as (x push, y push) pairs on one channel each, or problems.
-bool pair_pushes(const std::vector<Push>& pushes, const std::vector<int>& order, const char* what, Problems& problems) {
+bool pair_pushes(const std::vector<Push>& pushes, const std::vector<int>& order, Problems& problems) {
   if (pushes.size() != 2 * order.size()) {
-    problems.push_back(std::string(what) + ": found " + std::to_string(pushes.size()) +
+    problems.push_back("found " + std::to_string(pushes.size()) +
                        " pushes in the recording, expected 2 per whisker (forward, then up) for the " +
                        std::to_string(order.size()) + " whiskers of --expect: " + std::to_string(2 * order.size()));
     return false;
@@ -304,7 +306,7 @@ bool pair_pushes(const std::vector<Push>& pushes, const std::vector<int>& order,
 Result map_whiskers(const std::vector<Push>& pushes, const std::vector<int>& expect, const whiskerd::CoreParams& current) {
   Result res;
   const std::vector<int> order = whiskers_in(expect);
-  if (!pair_pushes(pushes, order, "map", res.problems)) return res;
+  if (!pair_pushes(pushes, order, res.problems)) return res;
   std::array<int, kNumWhiskers> channel = current.channel;
   for (std::size_t i = 0; i < order.size(); ++i) {
     const int w = order[i];
@@ -350,7 +352,7 @@ Result fit_gains(const std::vector<Push>& pushes, const std::vector<int>& expect
                  const whiskerd::CoreParams& current) {
   Result res;
   const std::vector<int> order = whiskers_in(expect);
-  if (!pair_pushes(pushes, order, "gain", res.problems)) return res;
+  if (!pair_pushes(pushes, order, res.problems)) return res;
   for (std::size_t i = 0; i < order.size(); ++i) {
     const int w = order[i];
     const Push& px = pushes[2 * i];

@@ -75,7 +75,7 @@ struct Push {
   double sigma = 0;       // uncertainty of that mean, counts
 };
 // Every push in time order: a channel that leaves its rest (median) by more than 10 sigma (at least
-// 30 counts) for 50 ms or more. Pushes of two channels at once: the larger one (the other is crosstalk).
+// 30 counts) for 50 ms or more, until 10 samples in a row are back at rest. Pushes of two channels at once: the larger one (the other is crosstalk).
 std::vector<Push> find_pushes(const Recording& r);
 
 // The whiskers of `order`, each pushed forward (+x) then up (+y): which channel each is on, its
