@@ -1,7 +1,6 @@
 // The stack's LCM channel names (docs/lcm-channels.md): one home for the defaults. A program that
 // reads or writes a channel names it from here, so a reader cannot silently disagree with its
-// writer about a spelling. (Older code still spells some names as literals or configurable strings:
-// issue 26 moves them here.)
+// writer about a spelling.
 #pragma once
 
 namespace whiskeye::channels {
