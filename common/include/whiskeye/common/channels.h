@@ -1,6 +1,8 @@
 // The stack's LCM channel names (docs/lcm-channels.md): one home for the defaults. A program that
 // reads or writes a channel names it from here, so a reader cannot silently disagree with its
-// writer about a spelling.
+// writer about a spelling. Daemons let some names be configured (docs/lcm-channels.md); the tools
+// (vita-sim, vita-eval, whiskeye-viewer, whiskeye-logcheck) use these defaults only, so they do not
+// read a slamd whose output channels were renamed.
 #pragma once
 
 namespace whiskeye::channels {
