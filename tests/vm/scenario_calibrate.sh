@@ -1,0 +1,106 @@
+#!/bin/bash
+# VM scenario: the first day with a robot on a real (v)CAN bus. The bring-up sessions of a simulated
+# robot (calibrate_inputs.sh, a host fixture, in INPUTS) are played with can-utils' canplayer onto
+# vcan0 (mapping vcan0=can0) while whiskeye-calibrate listens on the socket (bus, rest) or candump
+# records them (taps, jig, sweep: map and gain are interactive live, theta reads a recorded sweep);
+# the drop-ins the tool writes must hold the true calibration (calibrate_vm_check), and a silent
+# board must fail the bus check.
+#   scenario_calibrate.sh RESULTS_DIR CALIBRATE CHECK INPUTS
+set -u
+RESULTS_DIR=$1
+CALIBRATE=$2
+CHECK=$3
+IN=$4
+source "$(dirname "$0")/lib.sh"
+
+setup_vcan vcan0
+sysctl -qw net.core.rmem_max=16777216   # candump's and the tool's 4-8 MB receive buffers
+ETC=$RESULTS_DIR/etc
+rm -rf "$ETC" && cp -r "$IN/etc" "$ETC"
+ORDER=$(cat "$IN/order")
+C=("$CALIBRATE" -c "$ETC/whiskerd.yaml")
+
+# listen SECONDS LOG SUBCOMMAND ARGS...: the tool on the bus while LOG is played onto it.
+listen() {
+  local seconds=$1 log=$2
+  shift 2
+  "${C[@]}" "$@" -i vcan0 --seconds "$seconds" > "$RESULTS_DIR/$1.out" 2> "$RESULTS_DIR/$1.err" &
+  local pid=$!
+  wait_for "$RESULTS_DIR/$1.err" "listening on vcan0" || echo "the tool did not start"
+  canplayer -I "$log" vcan0=can0
+  local rc=0
+  wait $pid || rc=$?
+  cat "$RESULTS_DIR/$1.out" "$RESULTS_DIR/$1.err"
+  return $rc
+}
+# record LOG OUT: candump's log of LOG played onto vcan0, written to the guest's tmpfs first (a
+# slow write over 9p stalls candump until its socket overflows) with a receive buffer of 8 MB; every
+# frame of LOG must be in it.
+record() {
+  local tmp=/tmp/$(basename "$2")
+  candump -r 8388608 -L vcan0 > "$tmp" &
+  local pid=$!
+  sleep 0.5
+  canplayer -I "$1" vcan0=can0
+  sleep 1
+  kill -INT $pid
+  wait $pid
+  cp "$tmp" "$2"
+  local played recorded
+  played=$(grep -c . "$1")
+  recorded=$(grep -c . "$2")
+  [ "$played" = "$recorded" ] || { echo "recorded $recorded of $played frames"; return 1; }
+}
+
+for f in rest.log taps.log jig.log sweep.log silent.log truth.yaml order; do
+  check "input_${f//./_}_present" test -s "$IN/$f"
+done
+check bus_check_passes_on_the_live_bus listen 5 "$IN/rest.log" bus
+bus_rc=0
+listen 4 "$IN/silent.log" bus > "$RESULTS_DIR/silent_bus.txt" 2>&1 || bus_rc=$?
+check bus_check_fails_on_a_silent_board test "$bus_rc" = 1
+check bus_check_names_the_silent_board grep -q "    2     3        0.0           0.0     0  FAIL: absent" "$RESULTS_DIR/silent_bus.txt"
+
+for s in taps jig sweep; do
+  check "candump_records_the_${s}_session" record "$IN/$s.log" "$RESULTS_DIR/$s.candump"
+done
+check map_writes_its_dropin "${C[@]}" map --input "$RESULTS_DIR/taps.candump" --expect "$ORDER" -o "$ETC/whiskerd.d/10-map.yaml"
+# The interactive map on the live bus: the operator's Enter after each whisker comes through a fifo,
+# all of them once the taps have been played; it must find the wiring map found in the recording.
+map_live() {
+  local fifo=/tmp/map_enter
+  rm -f "$fifo" && mkfifo "$fifo"
+  "${C[@]}" map -i vcan0 --expect "$ORDER" -o "$RESULTS_DIR/map_live.yaml" < "$fifo" \
+    > "$RESULTS_DIR/map_live.out" 2> "$RESULTS_DIR/map_live.err" &
+  local pid=$!
+  exec 3> "$fifo"
+  wait_for "$RESULTS_DIR/map_live.err" "listening on vcan0" || echo "the tool did not start"
+  wait_for "$RESULTS_DIR/map_live.out" "Hands off" || echo "no prompt"
+  sleep 2.5
+  canplayer -I "$IN/taps.log" vcan0=can0
+  sleep 0.5
+  local i
+  for i in $(echo "$ORDER" | tr ',' ' '); do echo >&3; sleep 0.2; done
+  exec 3>&-
+  local rc=0
+  wait $pid || rc=$?
+  cat "$RESULTS_DIR/map_live.out" "$RESULTS_DIR/map_live.err"
+  [ $rc = 0 ] || { echo "map exited $rc"; return 1; }
+  grep -q "  moved: channel" "$RESULTS_DIR/map_live.out" || { echo "no push shown after an Enter"; return 1; }
+  # (no /dev/fd in the guest: no process substitution)
+  grep -o 'index: [0-9]*, channel: [0-9]*' "$RESULTS_DIR/map_live.yaml" > /tmp/map_live.channels
+  grep -o 'index: [0-9]*, channel: [0-9]*' "$ETC/whiskerd.d/10-map.yaml" > /tmp/map_log.channels
+  test -s /tmp/map_live.channels && diff /tmp/map_live.channels /tmp/map_log.channels
+}
+check map_live_interactive_finds_the_same_wiring map_live
+# rest after map: the offsets go to the whiskers the map wired.
+check rest_live_writes_its_dropin listen 5 "$IN/rest.log" rest -o "$ETC/whiskerd.d/20-rest.yaml"
+check gain_writes_its_dropin "${C[@]}" gain --input "$RESULTS_DIR/jig.candump" --expect "$ORDER" --deflection 0.5 -o "$ETC/whiskerd.d/30-gain.yaml"
+check theta_writes_its_dropin "${C[@]}" theta --input "$RESULTS_DIR/sweep.candump" -o "$ETC/whiskerd.d/40-theta.yaml"
+ls -l "$ETC/whiskerd.d"
+
+"$CHECK" --truth "$IN/truth.yaml" --config "$ETC/whiskerd.yaml" --whiskers "$ORDER" \
+  --results "$RESULTS_FILE" > "$RESULTS_DIR/check.log" 2>&1
+exited_ok calibrate_vm_check_exits_0 $?
+cat "$RESULTS_DIR/check.log"
+exit 0
