@@ -206,3 +206,20 @@ TEST_F(CalibrateTool, ThetaWithoutARecordedSweepIsAUsageError) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST(VitaSimBringup, BadOptionsAreOneLineAndExit2) {
+  const std::vector<std::vector<std::string>> bad = {
+      {VITA_SIM_EXE, "--bringup", "rest"},                                          // no --candump
+      {VITA_SIM_EXE, "--bringup", "nap", "--candump", "/dev/null"},                 // no such session
+      {VITA_SIM_EXE, "--bringup", "rest", "--candump", "/dev/null", "--silent-board", "6"}};
+  for (const auto& args : bad) {
+    const auto [status, out] = run(args);
+    EXPECT_EQ(status, 2) << out;
+    EXPECT_EQ(lines(out), 1u) << out;
+    EXPECT_EQ(out.rfind("vita-sim: ", 0), 0u) << out;
+  }
+}
+
+}  // namespace
