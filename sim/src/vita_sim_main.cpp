@@ -182,7 +182,8 @@ struct RangeOption {
 
 // --generate-world: draws a world, checks it and writes it. Returns the exit status.
 int generate(GeneratorOptions options, const std::vector<RangeOption>& ranges, const RobotGeometry& robot,
-             const std::string& slam_config, const std::string& output_world, bool quiet) {
+             const std::string& slam_config, const std::string& output_world, const std::string& output_json,
+             bool quiet) {
   try {
     for (const RangeOption& r : ranges) {
       if (!r.text.empty()) options.*r.field = parse_range(r.name, r.text);
@@ -215,6 +216,12 @@ int generate(GeneratorOptions options, const std::vector<RangeOption>& ranges, c
   out << g.yaml;
   out.flush();
   if (!out) throw std::runtime_error(output_world + ": cannot write the world");
+  if (!output_json.empty()) {
+    std::ofstream js(output_json, std::ios::binary | std::ios::trunc);
+    js << g.json;
+    js.flush();
+    if (!js) throw std::runtime_error(output_json + ": cannot write the world's JSON");
+  }
   if (!quiet) {
     std::cerr << "vita-sim: wrote " << output_world << " (" << options.family << ", world seed " << options.world_seed
               << ", draw " << g.attempts << "): " << g.report.place_pairs.size() << " look-alike pairs of places, "
@@ -302,6 +309,7 @@ int main(int argc, char** argv) {
   bool generate_flag = false;
   GeneratorOptions gen;
   std::string output_world;
+  std::string output_world_json;
   std::string slam_config;
   std::vector<RangeOption> gen_ranges{
       {"--arena-side", "Generated world: arena side range MIN,MAX (m; 5,8)", &GeneratorOptions::side, ""},
@@ -315,6 +323,8 @@ int main(int argc, char** argv) {
                "Draw a world (--world-seed, --family), check its aliasing and write it to --output-world; no simulation");
   app.add_option("--world-seed", gen.world_seed, "Seed of the generated world")->capture_default_str();
   app.add_option("--output-world", output_world, "YAML file the generated world is written to");
+  app.add_option("--output-world-json", output_world_json,
+                 "Also write the generated world's header and drawn parameters to this JSON file");
   app.add_option("--family", gen.family, "Generated world family: aliased (the paper's premise) or stress (premise broken)")
       ->capture_default_str();
   app.add_flag("--faults", gen.faults,
@@ -384,7 +394,7 @@ int main(int argc, char** argv) {
     }
     if (generate_flag) {
       if (slam_config.empty()) slam_config = default_config_path("slam.yaml", "--slam-config");
-      return generate(gen, gen_ranges, robot, slam_config, output_world, quiet);
+      return generate(gen, gen_ranges, robot, slam_config, output_world, output_world_json, quiet);
     }
     if (!bringup.session.empty()) return run_bringup(bringup, candump_path, whiskerd_config, can_interface, seed, start_utime);
     if (world_path.empty()) {

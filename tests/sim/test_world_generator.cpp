@@ -218,6 +218,27 @@ TEST(VitaSimGenerate, WritesAWorldTheSimulatorRuns) {
   fs::remove(log);
 }
 
+TEST(VitaSimGenerate, WritesTheWorldsJsonBesideItWithTheYamlsNumbers) {
+  const std::string world = temp_path("wj.yaml");
+  const std::string json = temp_path("wj.json");
+  ASSERT_EQ(vita_sim("--generate-world --world-seed 2 --output-world " + world + " --output-world-json " + json), 0);
+  const std::string text = slurp(json);
+  EXPECT_EQ(text, aliased(2).json) << "the CLI writes exactly the library's JSON";
+  const World& w = aliased(2).world;
+  char side[32];
+  std::snprintf(side, sizeof side, "%.3f", 2.0 * std::abs(w.walls[0].from.x));
+  EXPECT_NE(text.find(std::string("\"arena_side\": ") + side + ","), std::string::npos) << text;
+  EXPECT_NE(text.find("\"tactile_landmarks\": " + std::to_string(w.solids.size()) + ","), std::string::npos) << text;
+  EXPECT_NE(text.find("\"landmarks\": " + std::to_string(w.landmarks.size()) + ","), std::string::npos) << text;
+  EXPECT_NE(text.find("\"laps\": " + std::to_string(w.trajectory.laps) + "}"), std::string::npos) << text;
+  // The header's lines, without "# ", in order.
+  const std::string yaml = slurp(world);
+  const std::string first = yaml.substr(2, yaml.find('\n') - 2);
+  EXPECT_NE(text.find("\"header\": [\n  \"" + first + "\""), std::string::npos) << text;
+  fs::remove(world);
+  fs::remove(json);
+}
+
 TEST(VitaSimGenerate, BadGeneratorOptionsExitTwoNamingTheOption) {
   const std::string err = temp_path("err.txt");
   const std::string out = " --output-world " + temp_path("never.yaml");

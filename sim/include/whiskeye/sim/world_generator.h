@@ -113,6 +113,9 @@ AliasReport check_aliasing(const World& world, const RobotGeometry& robot, const
 
 struct GeneratedWorld {
   std::string yaml;  // header comment + `world:` document
+  // The header's lines and the drawn parameters as JSON, numbers as the YAML writes them
+  // (vita-sim --output-world-json), so a reader needs no YAML parser.
+  std::string json;
   World world;       // the same, as loaded back
   AliasReport report;
   int attempts = 0;  // draws made (the last one kept)

@@ -1,0 +1,55 @@
+"""What every part of the suite shares: the repository's paths, the programs, modes, scenarios and
+metrics, the one-line error exit, number formatting and the atomic JSON files of the results."""
+import hashlib
+import json
+import os
+import sys
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+SCRIPT = os.path.join(ROOT, "scripts", "suite")  # the entry point the Slurm jobs call back into
+PROGRAMS = ("vita-sim", "slamd", "vita-eval")
+MODES = ("visual", "tactile", "vita")
+SCENARIOS = ("normal", "kidnap", "restart")
+KIDNAPS_PER_WORLD = 3  # --scenario kidnap (1 with --quick)
+RESTART_SESSIONS = 4  # --scenario restart: sessions localising in each world's map (1 with --quick) ...
+RESTART_SESSION_LAPS = 2  # ... each this many laps
+# A session's clock: its first utime, far after any first session's (vita-sim's default start plus
+# < 10^4 s), so that the map's experiences and the session's events never share a time.
+RESTART_SESSION_UTIME = 2_000_000_000_000_000
+RESTART_SESSION_UTIME_STEP = 10_000_000_000  # us between sessions
+METRICS = (  # key, label, better
+    ("arr", "ARR", "high"),
+    ("arcr", "ARCR", "high"),
+    ("lem", "LEM pos RMSE (m)", "low"),
+    ("enm", "EnM", "low"),
+    ("false_closures", "false closures", "low"),
+)
+
+
+def fail(msg, status=2):
+    print(f"suite: {msg}", file=sys.stderr)
+    sys.exit(status)
+
+
+def fmt(v, spec=".4f"):
+    return "n/a" if v is None else format(v, spec)
+
+
+def file_digest(path):
+    with open(path, "rb") as f:
+        return hashlib.sha256(f.read()).hexdigest()[:16]
+
+
+def read_json(path):
+    try:
+        with open(path) as f:
+            return json.load(f)
+    except (OSError, ValueError):
+        return None
+
+
+def write_json(path, doc):
+    """Atomically: a reader (another node, the aggregation) sees the old file or the whole new one."""
+    with open(path + ".tmp", "w") as f:
+        json.dump(doc, f, indent=1, sort_keys=True)
+    os.replace(path + ".tmp", path)

@@ -1,0 +1,235 @@
+"""The one summary of both executors: suite.json, suite.md and the plots from the worlds' records;
+the progress lines and the summary on the terminal."""
+import os
+import shlex
+import sys
+import threading
+import time
+
+from .cli import executor_options, world_options
+from .common import METRICS, MODES, ROOT, SCRIPT, file_digest, fmt, write_json
+from .plots import write_plots
+from .stats import distribution, percentile
+from .targets import (FOOLED_ARCR, FOOLED_ENM_RATIO, check_localisation_targets, check_targets,
+                      fooled, fooled_where_fusion_is_not, localisation_summary, miss_lines, vita_conditions)
+
+
+def localisation_markdown(worlds, scenario):
+    """The localisation section of suite.md: per mode the distributions, the senses fooled where the
+    fusion is not, and each world's instants."""
+    what = "kidnap" if scenario == "kidnap" else "session start"
+    md = ["", f"## Localisation after each {what}", "",
+          "Per mode over every instant: correctly localised (vita-eval: the first re-localisation within the paper's "
+          "tolerance after which none is false) within one and two laps of travel, the laps it took (median, 90th "
+          "percentile, worst; never: n/a), the false localisations before it, the time spent reporting LOCALISING and "
+          "the mean position error of the events after it.", "",
+          "| mode | instants | localised | <= 1 lap | <= 2 laps | laps median | 90th pct | worst | never | "
+          "without false loc. | false loc. total | most at one | LOCALISING s median | error after median (m) | worst (m) |",
+          "|" + "---|" * 15]
+    for m in MODES:
+        x = localisation_summary(worlds, m)
+        md.append(f"| {m} | {x['instants']} | {x['localised']} | {x['within_one_lap']} | {x['within_max_laps']} | "
+                  f"{fmt(x['laps']['median'], '.2f')} | {fmt(x['laps']['p10'], '.2f')} | {fmt(x['laps']['worst'], '.2f')} | "
+                  f"{x['laps']['undefined']} | {x['without_false_localisation']} | {x['false_localisations_total']} | "
+                  f"{fmt(x['false_localisations']['worst'], 'd')} | {fmt(x['localising_s']['median'], '.1f')} | "
+                  f"{fmt(x['lem_after_m']['median'], '.3f')} | {fmt(x['lem_after_m']['worst'], '.3f')} |")
+    for m in ("visual", "tactile"):
+        f = fooled_where_fusion_is_not(worlds, m)
+        md += ["", f"{m.capitalize()} alone took a false localisation where ViTa took none after {len(f)} instant(s)"
+               + (": " + ", ".join(f"world {wi} at {i['t_s']:.0f} s ({i['false_localisations']})" for wi, i in f[:12])
+                  + (", ..." if len(f) > 12 else "") if f else "") + "."]
+    md += ["", "| world | seed | instant (s) | " + " | ".join(f"{m} laps | {m} false" for m in MODES) + " |",
+           "|" + "---|" * (3 + 2 * len(MODES))]
+    for w in worlds:
+        loc = w.get("localisation") or {}
+        for k, v in enumerate(loc.get("vita") or []):
+            cells = [str(w["index"]), str(w["world_seed"]), f"{v['t_s']:.0f}" + (f" (session {v['session']})" if v["session"] else "")]
+            for m in MODES:
+                i = (loc.get(m) or [None] * (k + 1))[k]
+                cells += ["never" if not i["localised"] else fmt(i["laps"], ".2f"), str(i["false_localisations"])]
+            md.append("| " + " | ".join(cells) + " |")
+    return md
+
+
+def ran_as(a):
+    if a.slurm_array:
+        return f"as Slurm array job {a.slurm_array}"
+    return f"with {a.jobs} jobs" if a.jobs else "on Slurm"
+
+
+def half_step_beyond(v, thresholds):
+    """Where half the ViTa run's median experience step exceeds the paper's thresholds (then the
+    nearest experience can be further than them: a neighbour miss is unavoidable)."""
+    if not thresholds or v.get("spacing_m") is None or v.get("spacing_deg") is None:
+        return "n/a"
+    out = [unit for unit, half, limit in (("m", v["spacing_m"] / 2, thresholds["correct_m"]),
+                                          ("deg", v["spacing_deg"] / 2, thresholds["correct_deg"])) if half > limit]
+    return " and ".join(out) if out else "no"
+
+
+def aggregate(a, records, failed, wall_s):
+    """suite.json, suite.md and the plots from the worlds' records: the one summary of both executors."""
+    worlds = sorted(records, key=lambda w: w["index"])
+    summary = {m: {k: distribution([w["modes"][m][k] for w in worlds], b) for k, _, b in METRICS} for m in MODES}
+    for m in MODES:
+        summary[m]["false_closures"]["worlds_with_any"] = sum(1 for w in worlds if (w["modes"][m]["false_closures"] or 0) > 0)
+    if a.scenario == "normal":
+        targets = check_targets(worlds, a.family, a.faults)
+    else:
+        targets = check_localisation_targets(worlds, a.scenario) if a.family == "aliased" else []
+        summary["localisation"] = {m: localisation_summary(worlds, m) for m in MODES}
+    checked = bool(targets)
+    misses = miss_lines(targets)
+    per_world_ok = {w["index"]: all(vita_conditions(w).values()) if a.family == "aliased" else None for w in worlds}
+    fooled_counts = {m: sum(1 for w in worlds if fooled(w, m)) for m in ("visual", "tactile")}
+    thresholds = next((w["thresholds"] for w in worlds if w.get("thresholds")), None)
+    doc = {
+        "suite_seed": a.suite_seed, "family": a.family, "faults": a.faults, "worlds_requested": a.worlds,
+        "laps_override": a.laps, "config": os.path.relpath(a.config, ROOT) if a.config.startswith(ROOT) else a.config,
+        "config_sha256": file_digest(a.config), "wall_time_s": round(wall_s, 1), "jobs": a.jobs,
+        "scenario": a.scenario, "executor": a.executor, "slurm": {"array_job": a.slurm_array, "aggregate_job": os.environ.get("SLURM_JOB_ID")}
+        if a.slurm_array else None,
+        "thresholds": thresholds, "summary": summary, "fooled": fooled_counts, "targets_checked": checked,
+        "targets": targets, "target_misses": misses, "failed_worlds": failed, "worlds": worlds,
+    }
+    write_json(os.path.join(a.results, "suite.json"), doc)
+    plots = [] if a.no_plots or not worlds else write_plots(worlds, a, per_world_ok)
+
+    md = [f"# World suite: family `{a.family}`{' with sensor faults' if a.faults else ''}"
+          f"{'' if a.scenario == 'normal' else f', scenario {a.scenario}'}, suite seed {a.suite_seed}", ""]
+    md.append(f"{len(worlds)} worlds ({len(failed)} failed){f', {a.laps} laps each' if a.laps else ''}; "
+              f"parameters `{doc['config']}` (sha256 {doc['config_sha256']}); {wall_s:.0f} s {ran_as(a)}. "
+              f"Rerun: `scripts/suite --worlds {a.worlds} --suite-seed {a.suite_seed} --family {a.family}"
+              f"{' --faults' if a.faults else ''}{'' if a.scenario == 'normal' else f' --scenario {a.scenario}'}"
+              f"{' --quick' if a.quick else ''}{f' --laps {a.laps}' if a.laps else ''}`.")
+    md += ["", "## Distributions", "",
+           "Per mode and metric: the median, the 10th percentile on the bad side (the 10th for ARR and ARCR, "
+           "the 90th for LEM, EnM and false closures) and the worst world; `n/a` runs (e.g. ARR of a one-lap run) "
+           "are left out and counted.", "",
+           "| mode | metric | median | 10th pct (bad side) | worst | n/a |", "|---|---|---|---|---|---|"]
+    for m in MODES:
+        for key, label, _ in METRICS:
+            s = summary[m][key]
+            spec = {"enm": ".3e", "false_closures": ".1f"}.get(key, ".4f")
+            md.append(f"| {m} | {label} | {fmt(s['median'], spec)} | {fmt(s['p10'], spec)} | {fmt(s['worst'], spec)} | {s['undefined']} |")
+    if thresholds:
+        md += ["", f"A *false closure* is a re-localisation to an experience made more than {thresholds['false_closure_m']:g} m "
+               f"or {thresholds['false_closure_deg']:g}° from where the robot truly is; a paper-wrong one (beyond "
+               f"{thresholds['correct_m']:g} m / {thresholds['correct_deg']:g}°) within that is a *neighbour miss*."]
+    shares = [w["modes"]["vita"]["neighbour_miss_share"] for w in worlds if w["modes"]["vita"].get("neighbour_miss_share") is not None]
+    md += ["", "Worlds with any false closure: " + ", ".join(
+        f"{m} {summary[m]['false_closures']['worlds_with_any']}" for m in MODES) + f" of {len(worlds)}. "
+        f"ViTa's paper-wrong re-localisations that are neighbour misses: median share {fmt(percentile(shares, 50) if shares else None, '.3f')} "
+        f"over the {len(shares)} worlds that have any."]
+    steps = [w for w in worlds if w["modes"]["vita"].get("spacing_m") is not None]
+    if steps:
+        beyond = sum(1 for w in steps if half_step_beyond(w["modes"]["vita"], w.get("thresholds")) not in ("no", "n/a"))
+        md += ["", f"ViTa's experience spacing (median step to each new experience, by ground truth): median over worlds "
+               f"{percentile([w['modes']['vita']['spacing_m'] for w in steps], 50):.3f} m and "
+               f"{percentile([w['modes']['vita']['spacing_deg'] for w in steps], 50):.2f}°; half a step exceeds the paper's "
+               f"thresholds on {beyond} of {len(steps)} worlds."]
+    md += ["", f"Single senses *fooled* (ARCR < {FOOLED_ARCR} with an EnM ≥ {FOOLED_ENM_RATIO:g}× ViTa's): "
+           f"vision on {fooled_counts['visual']} of {len(worlds)} worlds, touch on {fooled_counts['tactile']}.", ""]
+    if a.scenario != "normal" and worlds:
+        md += localisation_markdown(worlds, a.scenario) + [""]
+    if not worlds:
+        md += ["No world finished: no distribution and no target check.", ""]
+    elif checked:
+        issue = "robust-SLAM issue" if a.scenario == "normal" else "global-localisation issue"
+        md += [f"## Targets ({issue})", "", "| target | measured | |", "|---|---|---|"]
+        md += [f"| {t['target']} | {t['measured']} | {'met' if t['met'] else '**MISSED**'} |" for t in targets]
+        md += ["", "Every target met." if not misses else "Missed:"] + [f"- {x}" for x in misses] + [""]
+    else:
+        md += [f"No targets are set on the `{a.family}` family: reported only.", ""]
+    md += ["## Worlds", "",
+           "Worlds where ViTa made a false closure first (most first), then by index. FC: false closures. "
+           "ViTa spacing: its median experience step (m, °); '½ step beyond' names where half of it exceeds the paper's "
+           "thresholds.", "",
+           "| world | seed | side (m) | r (m) | v (m/s) | laps | dir | tactile | "
+           + " | ".join(f"{m} ARR | {m} ARCR | {m} LEM | {m} EnM | {m} FC" for m in MODES)
+           + " | ViTa spacing (m) | ViTa step (°) | ½ step beyond | ViTa ok |",
+           "|" + "---|" * (12 + 5 * len(MODES))]
+    def listing(w):
+        fc = w["modes"]["vita"]["false_closures"] or 0
+        return (fc == 0, -fc, w["index"])
+    for w in sorted(worlds, key=listing):
+        g = w["generation"]
+        cells = [str(w["index"]), str(w["world_seed"]), fmt(g.get("arena_side"), ".2f"), fmt(g.get("trajectory.radius"), ".3f"),
+                 fmt(g.get("trajectory.speed"), ".4f"), str(a.laps or int(g.get("trajectory.laps", 0))),
+                 str(g.get("trajectory.direction", "")), str(g.get("tactile_landmarks", ""))]
+        for m in MODES:
+            r = w["modes"][m]
+            cells += [fmt(r["arr"], ".3f"), fmt(r["arcr"], ".3f"), fmt(r["lem"], ".3f"), fmt(r["enm"], ".2e"),
+                      fmt(r["false_closures"], "d")]
+        v = w["modes"]["vita"]
+        cells += [fmt(v.get("spacing_m"), ".3f"), fmt(v.get("spacing_deg"), ".2f"), half_step_beyond(v, w.get("thresholds"))]
+        ok = per_world_ok[w["index"]]
+        cells.append("—" if ok is None else ("yes" if ok else "**no**"))
+        md.append("| " + " | ".join(cells) + " |")
+    # The worst worlds, each with the command that reruns it alone.
+    md += ["", "## Worst worlds (ViTa)", ""]
+    def badness(w):
+        v = w["modes"]["vita"]
+        return (v["false_closures"] or 0, -(v["arcr"] if v["arcr"] is not None else 1.0),
+                v["lem"] if v["lem"] is not None else 0.0)
+    for w in sorted(worlds, key=badness, reverse=True)[:3]:
+        v = w["modes"]["vita"]
+        worst = v.get("false_closure_worst_m")
+        md.append(f"- world {w['index']} (seed {w['world_seed']}): {fmt(v['false_closures'], 'd')} false closures"
+                  + (f" (worst {worst:.2f} m)" if worst is not None else "") + f", ARCR {fmt(v['arcr'], '.3f')}, "
+                  f"LEM {fmt(v['lem'], '.3f')} m, ARR {fmt(v['arr'], '.3f')}, EnM {fmt(v['enm'], '.5f')}. "
+                  f"Rerun alone: `{w['rerun']}`")
+    if failed:
+        md += ["", "## Failed worlds", ""] + [f"- world {x['index']} (seed {x['world_seed']}): {x['failed']}" for x in failed]
+    if plots:
+        md += ["", "## Plots", ""] + [f"![{os.path.basename(p)}](plots/{os.path.basename(p)})" for p in plots]
+    with open(os.path.join(a.results, "suite.md"), "w") as f:
+        f.write("\n".join(md) + "\n")
+    return doc
+
+
+class Progress:
+    def __init__(self, total, tty):
+        self.total, self.tty, self.done, self.start = total, tty, 0, time.monotonic()
+        self.lock = threading.Lock()
+
+    def world(self, rec):
+        with self.lock:
+            self.done += 1
+            el = time.monotonic() - self.start
+            eta = el / self.done * (self.total - self.done)
+            if "failed" in rec:
+                what = f"FAILED: {rec['failed']}"
+            else:
+                v = rec["modes"]["vita"]
+                what = ("resumed" if rec.get("resumed") else "done") + \
+                    f": ViTa ARR {fmt(v['arr'], '.3f')} ARCR {fmt(v['arcr'], '.3f')} LEM {fmt(v['lem'], '.3f')}" \
+                    f" false closures {fmt(v.get('false_closures'), 'd')}"
+                loc = (rec.get("localisation") or {}).get("vita")
+                if loc:
+                    what += (f"; localised {sum(1 for i in loc if i['localised'])}/{len(loc)}, "
+                             f"false localisations {sum(i['false_localisations'] for i in loc)}")
+            line = f"[{self.done}/{self.total}] world {rec['index']} (seed {rec['world_seed']}) {what}; ETA {eta:.0f} s"
+            if self.tty:
+                sys.stderr.write("\r\033[K" + line)
+                if self.done == self.total:
+                    sys.stderr.write("\n")
+            else:
+                sys.stderr.write(line + "\n")
+            sys.stderr.flush()
+
+
+def report(a, doc, bins):
+    """The summary and the failed worlds on the terminal; the exit status of the suite."""
+    print(open(os.path.join(a.results, "suite.md")).read().split("## Worlds")[0].rstrip())
+    print(f"\nsuite: {a.results}/suite.md, suite.json, plots/", file=sys.stderr)
+    failed = doc["failed_worlds"]
+    if failed:
+        print(f"suite: {len(failed)} world(s) failed: " + ", ".join(f"{x['index']} ({x['log']})" for x in failed),
+              file=sys.stderr)
+        print("suite: rerun only those: " + shlex.join([SCRIPT, *world_options(a, bins), *executor_options(a),
+                                                        "--retry-failed"]), file=sys.stderr)
+        return 1  # the suite did not run through
+    if a.check and doc["target_misses"]:
+        return 1
+    return 0

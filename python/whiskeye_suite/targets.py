@@ -1,0 +1,215 @@
+"""The targets --check applies (the robust-SLAM issue's over a normal suite, the global-localisation
+issue's over kidnaps and session starts) and the per-world judgements behind them."""
+from .common import fmt
+from .stats import distribution, percentile
+
+# The robust-SLAM issue's targets for ViTa over a suite of the aliased family (docs/evaluation.md,
+# "Targets"). What a false closure is (its tolerance) is vita-eval's, read from its JSON.
+NO_FALSE_CLOSURE_SHARE = (23, 24)  # worlds without a false closure: at least 23 in 24 ...
+NO_FALSE_CLOSURE_SHARE_FAULTS = (22, 24)  # ... 22 in 24 with --faults
+MAX_FALSE_CLOSURES = 2  # on any world
+LEM_GOOD_M, LEM_GOOD_SHARE, LEM_FLOOR_M = 0.10, 0.90, 0.20
+ARCR_MEDIAN, ARCR_FLOOR = 0.98, 0.95
+ARR_MEDIAN, ARR_FLOOR = 0.78, 0.55
+LEM_OVER_BEST_SENSE_M = 0.03  # ViTa's LEM at most the better sense's plus this
+FOOLED_ARCR = 0.95  # a single sense closing wrong loops (ARCR below this) ...
+FOOLED_ENM_RATIO = 10.0  # ... with an EnM at least this many times ViTa's is "fooled"
+# The global-localisation issue's targets for ViTa after kidnaps and session starts (docs/evaluation.md).
+LOCALISED_ONE_LAP_SHARE = 0.95  # correctly localised within one lap after at least this share ...
+LOCALISED_MAX_LAPS = 2.0  # ... and within this many after every one
+NO_FALSE_LOCALISATION_SHARE = 0.95  # no false localisation after at least this share ...
+MAX_FALSE_LOCALISATIONS = 1  # ... and at most this many after any
+LEM_AFTER_LOCALISATION_M = 0.10  # the mean position error from the localisation on
+
+
+def targets_help():
+    """The --check targets in words, from the constants that check them."""
+    return (f"Targets: no false closure on >= {NO_FALSE_CLOSURE_SHARE[0]}/{NO_FALSE_CLOSURE_SHARE[1]} of worlds "
+            f"({NO_FALSE_CLOSURE_SHARE_FAULTS[0]}/{NO_FALSE_CLOSURE_SHARE_FAULTS[1]} with --faults) and at most "
+            f"{MAX_FALSE_CLOSURES} on any; LEM position RMSE <= {LEM_GOOD_M:.2f} m on >= {LEM_GOOD_SHARE:.0%} of "
+            f"worlds, <= {LEM_FLOOR_M:.2f} m on every one; ARCR median >= {ARCR_MEDIAN}, >= {ARCR_FLOOR} on every "
+            f"world; ARR median >= {ARR_MEDIAN}, >= {ARR_FLOOR} on every world (n/a is a miss); never worse than its "
+            f"best sense: median ARR >= vision's, and on every world LEM <= the better single sense's + "
+            f"{LEM_OVER_BEST_SENSE_M:.2f} m and false closures <= the fewer of the single senses'.")
+
+
+def best_sense(w, key):
+    """The better single sense's value of `key` on world `w` (the lower; None when neither has one)."""
+    vals = [w["modes"][m][key] for m in ("visual", "tactile") if w["modes"][m][key] is not None]
+    return min(vals) if vals else None
+
+
+def vita_conditions(w):
+    """Whether ViTa's run on world `w` meets each per-world part of the targets (the shares' parts
+    too); n/a is a miss."""
+    v = w["modes"]["vita"]
+    fc, lem = v["false_closures"], v["lem"]
+    best_lem, best_fc = best_sense(w, "lem"), best_sense(w, "false_closures")
+    return {
+        "no_false_closure": fc == 0,
+        "false_closures_max": fc is not None and fc <= MAX_FALSE_CLOSURES,
+        "lem_good": lem is not None and lem <= LEM_GOOD_M,
+        "lem_floor": lem is not None and lem <= LEM_FLOOR_M,
+        "arcr_floor": v["arcr"] is not None and v["arcr"] >= ARCR_FLOOR,
+        "arr_floor": v["arr"] is not None and v["arr"] >= ARR_FLOOR,
+        "lem_vs_senses": lem is not None and (best_lem is None or lem <= best_lem + LEM_OVER_BEST_SENSE_M),
+        "false_closures_vs_senses": fc is not None and (best_fc is None or fc <= best_fc),
+    }
+
+
+def check_targets(worlds, family, faults):
+    """The robust-SLAM issue's targets over the suite (none are set on `stress`): a list of
+    {target, measured, met, worlds_missed}, every target with its measured figure."""
+    if family != "aliased" or not worlds:
+        return []
+    n = len(worlds)
+    cond = {w["index"]: vita_conditions(w) for w in worlds}
+    vita = lambda w, key: w["modes"]["vita"][key]  # noqa: E731
+    name = lambda w: f"world {w['index']} (seed {w['world_seed']})"  # noqa: E731
+    targets = []
+
+    def add(target, measured, met, missed=()):
+        targets.append({"target": target, "measured": measured, "met": bool(met), "worlds_missed": list(missed)})
+
+    def share(condition, num, den, target):
+        k = sum(1 for w in worlds if cond[w["index"]][condition])
+        add(target, f"{k} of {n} worlds (need {-(-num * n // den)})", k * den >= num * n,
+            [name(w) for w in worlds if not cond[w["index"]][condition]])
+
+    def every(condition, target, value, worse="high", spec=".3f"):
+        """`value(w)`: the world's number behind the condition (None: n/a, the worst); the worst
+        world's is shown, `worse` saying which way is worse."""
+        missed = [w for w in worlds if not cond[w["index"]][condition]]
+        sign = 1 if worse == "high" else -1
+        worst = max(missed or worlds, key=lambda w: (value(w) is None, sign * (value(w) or 0)))
+        shown = f"worst {fmt(value(worst), spec)} on {name(worst)}"
+        add(target, shown if not missed else f"missed on {len(missed)} of {n} worlds; {shown}", not missed,
+            [name(w) for w in missed])
+
+    def median(key, mode, floor, target):
+        vals = [w["modes"][mode][key] for w in worlds if w["modes"][mode][key] is not None]
+        undefined = n - len(vals)
+        med = percentile(vals, 50) if vals else None
+        measured = f"median {fmt(med, '.3f')}" + (f", n/a on {undefined} of {n} worlds" if undefined else "")
+        add(target, measured, med is not None and med >= floor and not undefined,
+            [name(w) for w in worlds if w["modes"][mode][key] is None])
+        return med
+
+    num, den = NO_FALSE_CLOSURE_SHARE_FAULTS if faults else NO_FALSE_CLOSURE_SHARE
+    share("no_false_closure", num, den, f"ViTa: no false closure on >= {num}/{den} of worlds")
+    every("false_closures_max", f"ViTa: at most {MAX_FALSE_CLOSURES} false closures on any world",
+          lambda w: vita(w, "false_closures"), spec="d")
+    share("lem_good", round(LEM_GOOD_SHARE * 100), 100,
+          f"ViTa LEM position RMSE <= {LEM_GOOD_M:.2f} m on >= {LEM_GOOD_SHARE:.0%} of worlds")
+    every("lem_floor", f"ViTa LEM position RMSE <= {LEM_FLOOR_M:.2f} m on every world",
+          lambda w: vita(w, "lem"))
+    median("arcr", "vita", ARCR_MEDIAN, f"ViTa ARCR median >= {ARCR_MEDIAN}")
+    every("arcr_floor", f"ViTa ARCR >= {ARCR_FLOOR} on every world", lambda w: vita(w, "arcr"), "low")
+    median("arr", "vita", ARR_MEDIAN, f"ViTa ARR median >= {ARR_MEDIAN}")
+    every("arr_floor", f"ViTa ARR >= {ARR_FLOOR} on every world", lambda w: vita(w, "arr"), "low")
+    # Never worse than its best sense.
+    arrs = {m: [w["modes"][m]["arr"] for w in worlds if w["modes"][m]["arr"] is not None] for m in ("vita", "visual")}
+    mv, ms = (percentile(arrs[m], 50) if arrs[m] else None for m in ("vita", "visual"))
+    add("ViTa median ARR >= vision's median ARR", f"{fmt(mv, '.3f')} against {fmt(ms, '.3f')}",
+        mv is not None and (ms is None or mv >= ms))
+    every("lem_vs_senses", f"ViTa LEM <= min(vision's, touch's) + {LEM_OVER_BEST_SENSE_M:.2f} m on every world "
+          "(shown: ViTa's minus the best sense's)",
+          lambda w: None if vita(w, "lem") is None or best_sense(w, "lem") is None else vita(w, "lem") - best_sense(w, "lem"),
+          spec="+.3f")
+    every("false_closures_vs_senses", "ViTa false closures <= min(vision's, touch's) on every world "
+          "(shown: ViTa's minus the best sense's)",
+          lambda w: None if vita(w, "false_closures") is None or best_sense(w, "false_closures") is None
+          else vita(w, "false_closures") - best_sense(w, "false_closures"), spec="+d")
+    return targets
+
+
+def instants(worlds, mode):
+    """Every localisation instant of `mode` over the worlds, each with its world's index."""
+    return [dict(i, world=w["index"], world_seed=w["world_seed"]) for w in worlds
+            for i in ((w.get("localisation") or {}).get(mode) or [])]
+
+
+def localisation_summary(worlds, mode):
+    """Distributions over `mode`'s instants: laps to the first correct localisation (never: n/a),
+    false localisations before it, time LOCALISING, the error after it."""
+    ins = instants(worlds, mode)
+    n = len(ins)
+    laps = [i["laps"] if i["localised"] else None for i in ins]
+    return {
+        "instants": n,
+        "localised": sum(1 for i in ins if i["localised"]),
+        "within_one_lap": sum(1 for x in laps if x is not None and x <= 1.0),
+        "within_max_laps": sum(1 for x in laps if x is not None and x <= LOCALISED_MAX_LAPS),
+        "laps": distribution(laps, "low"),
+        "false_localisations": distribution([i["false_localisations"] for i in ins], "low"),
+        "false_localisations_total": sum(i["false_localisations"] for i in ins),
+        "without_false_localisation": sum(1 for i in ins if i["false_localisations"] == 0),
+        "localising_s": distribution([i["localising_s"] for i in ins], "low"),
+        "lem_after_m": distribution([i["lem_after_m"] for i in ins], "low"),
+    }
+
+
+def fooled_where_fusion_is_not(worlds, mode):
+    """Instants where `mode` took a false localisation and ViTa none (the same kidnap or session)."""
+    out = []
+    for w in worlds:
+        loc = w.get("localisation") or {}
+        for s, v in zip(loc.get(mode) or [], loc.get("vita") or []):
+            if s["false_localisations"] > 0 and v["false_localisations"] == 0:
+                out.append((w["index"], s))
+    return out
+
+
+def check_localisation_targets(worlds, scenario):
+    """The global-localisation issue's targets for ViTa after every kidnap or session start: a list
+    of {target, measured, met, worlds_missed} as check_targets()."""
+    ins = instants(worlds, "vita")
+    if not ins:
+        return []
+    n = len(ins)
+    what = "kidnaps" if scenario == "kidnap" else "session starts"
+    name = lambda i: f"world {i['world']} (seed {i['world_seed']}) at {i['t_s']:.0f} s"  # noqa: E731
+    targets = []
+
+    def add(target, measured, met, missed):
+        targets.append({"target": target, "measured": measured, "met": bool(met), "worlds_missed": [name(i) for i in missed]})
+
+    one = [i for i in ins if not (i["localised"] and i["laps"] is not None and i["laps"] <= 1.0)]
+    k = n - len(one)
+    add(f"ViTa: correctly localised within one lap after >= {LOCALISED_ONE_LAP_SHARE:.0%} of {what}",
+        f"{k} of {n}", k >= LOCALISED_ONE_LAP_SHARE * n, one)
+    late = [i for i in ins if not (i["localised"] and i["laps"] is not None and i["laps"] <= LOCALISED_MAX_LAPS)]
+    worst = max((i["laps"] for i in ins if i["localised"] and i["laps"] is not None), default=None)
+    add(f"ViTa: correctly localised within {LOCALISED_MAX_LAPS:g} laps after every one of them",
+        f"{len(late)} of {n} not" + (f"; slowest {worst:.2f} laps" if worst is not None else ""), not late, late)
+    falses = [i for i in ins if i["false_localisations"] > 0]
+    add(f"ViTa: no false localisation after >= {NO_FALSE_LOCALISATION_SHARE:.0%} of {what}",
+        f"{n - len(falses)} of {n}", n - len(falses) >= NO_FALSE_LOCALISATION_SHARE * n, falses)
+    many = [i for i in ins if i["false_localisations"] > MAX_FALSE_LOCALISATIONS]
+    add(f"ViTa: at most {MAX_FALSE_LOCALISATIONS} false localisation after any",
+        f"most {max(i['false_localisations'] for i in ins)}", not many, many)
+    bad = [i for i in ins if i["localised"] and (i["lem_after_m"] is None or i["lem_after_m"] > LEM_AFTER_LOCALISATION_M)]
+    worst_lem = max((i["lem_after_m"] for i in ins if i["lem_after_m"] is not None), default=None)
+    add(f"ViTa: error after the localisation <= {LEM_AFTER_LOCALISATION_M:.2f} m (mean position error of its events)",
+        f"worst {fmt(worst_lem, '.3f')} m", not bad, bad)
+    return targets
+
+
+def miss_lines(targets):
+    """A line per missed target: its measured figure and the worlds that missed it."""
+    out = []
+    for t in targets:
+        if t["met"]:
+            continue
+        line = f"{t['target']}: {t['measured']}"
+        if t["worlds_missed"]:
+            line += " (" + ", ".join(t["worlds_missed"][:6]) + (", ..." if len(t["worlds_missed"]) > 6 else "") + ")"
+        out.append(line)
+    return out
+
+
+def fooled(w, mode):
+    """A single sense is fooled when it closes wrong loops with a map error >= 10x ViTa's."""
+    s, v = w["modes"][mode], w["modes"]["vita"]
+    return (s["arcr"] is not None and s["arcr"] < FOOLED_ARCR and s["enm"] is not None and v["enm"] is not None
+            and s["enm"] >= FOOLED_ENM_RATIO * v["enm"])
