@@ -198,11 +198,16 @@ TEST_F(CalibrateTool, ALogThatIsNotACandumpIsOneLineNamingTheLine) {
   EXPECT_THAT(out, HasSubstr(bad + ":2: not a candump -l line: 'hello'"));
 }
 
-TEST_F(CalibrateTool, ThetaWithoutARecordedSweepIsAUsageError) {
-  const auto [status, out] = run({CALIBRATE_EXE, "theta", "-c", config()});
-  EXPECT_EQ(status, 2) << out;
+TEST_F(CalibrateTool, ALiveSweepWithoutItsDevicesIsOneLineNamingThemAndMovesNothing) {
+  // theta on the bus opens the motor lines first, then the CAN interface: either missing is exit 1.
+  const auto [status, out] = run({CALIBRATE_EXE, "theta", "-c", config(), "-i", "nosuchcan0"});
+  EXPECT_EQ(status, 1) << out;
   EXPECT_EQ(lines(out), 1u) << out;
-  EXPECT_THAT(out, HasSubstr("theta: give the sweep with --input FILE"));
+  EXPECT_THAT(out, HasSubstr("whiskeye-calibrate: GPIO line 'WHISKER_MOTOR_EN'"));
+  const auto [can_status, can_out] = run({CALIBRATE_EXE, "theta", "-c", config(), "-i", "nosuchcan0", "--no-gpio"});
+  EXPECT_EQ(can_status, 1) << can_out;
+  EXPECT_EQ(lines(can_out), 1u) << can_out;
+  EXPECT_THAT(can_out, HasSubstr("whiskeye-calibrate: CAN nosuchcan0: "));
 }
 
 }  // namespace

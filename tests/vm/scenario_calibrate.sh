@@ -3,14 +3,16 @@
 # robot (calibrate_inputs.sh, a host fixture, in INPUTS) are played with can-utils' canplayer onto
 # vcan0 (mapping vcan0=can0) while whiskeye-calibrate listens on the socket (bus, rest) or candump
 # records them (taps, jig, sweep: map and gain are interactive live, theta reads a recorded sweep);
-# the drop-ins the tool writes must hold the true calibration (calibrate_vm_check), and a silent
-# board must fail the bus check.
-#   scenario_calibrate.sh RESULTS_DIR CALIBRATE CHECK INPUTS
+# theta sweeps live through whiskerd's control loop against closed-loop simulated boards
+# (board_sim_vm); the drop-ins the tool writes must hold the true calibration (calibrate_vm_check),
+# a silent board must fail the bus check and a fault during the sweep must stop it.
+#   scenario_calibrate.sh RESULTS_DIR CALIBRATE CHECK INPUTS BOARDS
 set -u
 RESULTS_DIR=$1
 CALIBRATE=$2
 CHECK=$3
 IN=$4
+BOARDS=$5
 source "$(dirname "$0")/lib.sh"
 
 setup_vcan vcan0
@@ -96,7 +98,28 @@ check map_live_interactive_finds_the_same_wiring map_live
 # rest after map: the offsets go to the whiskers the map wired.
 check rest_live_writes_its_dropin listen 5 "$IN/rest.log" rest -o "$ETC/whiskerd.d/20-rest.yaml"
 check gain_writes_its_dropin "${C[@]}" gain --input "$RESULTS_DIR/jig.candump" --expect "$ORDER" --deflection 0.5 -o "$ETC/whiskerd.d/30-gain.yaml"
-check theta_writes_its_dropin "${C[@]}" theta --input "$RESULTS_DIR/sweep.candump" -o "$ETC/whiskerd.d/40-theta.yaml"
+check theta_from_a_recorded_sweep "${C[@]}" theta --input "$RESULTS_DIR/sweep.candump" -o "$RESULTS_DIR/theta_recorded.yaml"
+# theta on the live bus: whiskerd's control loop sweeps the closed-loop boards (board_sim_vm, the same
+# true robot), first with board 0 reporting a fault after 5 s (refused), then whole.
+sweep() {
+  local fault=$1 seconds=$2 out=$3
+  "$BOARDS" --interface vcan0 --truth-seed 5 --seconds $((seconds + 12)) ${fault:+--fault-at $fault} \
+    > "$RESULTS_DIR/boards_$seconds.log" 2>&1 &
+  local boards=$!
+  local rc=0
+  "${C[@]}" theta -i vcan0 --no-gpio --sweep-seconds "$seconds" -o "$out" > "$RESULTS_DIR/theta_$seconds.out" \
+    2> "$RESULTS_DIR/theta_$seconds.err" || rc=$?
+  kill $boards 2> /dev/null
+  wait $boards
+  cat "$RESULTS_DIR/theta_$seconds.err" "$RESULTS_DIR/boards_$seconds.log"
+  return $rc
+}
+fault_rc=0
+sweep 5 12 "$RESULTS_DIR/theta_fault.yaml" > "$RESULTS_DIR/sweep_fault.txt" 2>&1 || fault_rc=$?
+check theta_live_refuses_a_sweep_interrupted_by_a_fault test "$fault_rc" = 1
+check theta_live_names_the_fault grep -q "sweep interrupted by a fault: board 0" "$RESULTS_DIR/sweep_fault.txt"
+check theta_live_writes_nothing_then test ! -e "$RESULTS_DIR/theta_fault.yaml"
+check theta_live_sweeps_through_whiskerds_control_loop sweep "" 30 "$ETC/whiskerd.d/40-theta.yaml"
 ls -l "$ETC/whiskerd.d"
 
 "$CHECK" --truth "$IN/truth.yaml" --config "$ETC/whiskerd.yaml" --whiskers "$ORDER" \

@@ -16,6 +16,7 @@
 #include <thread>
 
 #include "whiskeye/calibrate/estimators.h"
+#include "whiskeye/calibrate/sweep.h"
 #include "whiskeye/can/can_socket.h"
 #include "whiskeye/can/candump.h"
 #include "whiskeye/whiskerd/config.h"
@@ -69,11 +70,12 @@ double read_log(const std::string& path, Recording& r, double rate_hz) {
   return span_s(r, rate_hz, 0.0);
 }
 
-// Listens on the bus (never sends: the motors stay off) until `stop` says so, into `r` under `lock`.
-void listen(const std::string& interface, bool fd, Recording& r, std::mutex& lock, const std::function<bool()>& stop) {
+// Listens on the bus (this socket never sends) until `stop` says so, into `r` under `lock`.
+void listen(const std::string& interface, bool fd, Recording& r, std::mutex& lock, const std::function<bool()>& stop,
+            const char* motors = "motors off") {
   can::Socket sock(interface, fd);
   sock.set_receive_buffer(4 << 20);
-  std::cerr << kProgram << ": listening on " << interface << " (motors off)\n";
+  std::cerr << kProgram << ": listening on " << interface << " (" << motors << ")\n";
   can::Frame frame;
   while (!stop()) {
     const can::Socket::Rx rx = sock.receive(frame, 100000);
@@ -86,6 +88,13 @@ void listen(const std::string& interface, bool fd, Recording& r, std::mutex& loc
       throw std::runtime_error("CAN " + interface + ": the interface went down");
     }
   }
+}
+
+bool any_fault(const Recording& r) {
+  for (int b = 0; b < wp::kNumBoards; ++b) {
+    if (r.board(b).fault_samples > 0) return true;
+  }
+  return false;
 }
 
 // The recording of --input, or of --seconds on the bus. Returns the seconds it spans.
@@ -212,15 +221,26 @@ int run_gain(const Options& o) {
 }
 
 int run_theta(const Options& o) {
-  if (o.input.empty()) {
-    throw cli::UsageError(
-        "theta: give the sweep with --input FILE (a candump -l of whiskerd sweeping the end stops, docs/bring-up.md); "
-        "the tool does not drive the motors itself");
-  }
   const Setup s = load_setup(o);
   Recording r(s.params.mode, s.params.ids);
-  record(o, s, r);
   const double stop = o.stop_deg > 0 ? o.stop_deg * kPi / 180.0 : s.params.controller.pattern.theta_limit;
+  if (!o.input.empty()) {
+    record(o, s, r);
+  } else {
+    // whiskerd's control loop sweeps; a second socket records what the boards report.
+    const std::string interface = o.interface.empty() ? s.params.interface : o.interface;
+    std::mutex lock;
+    const SweepOutcome swept = run_sweep(s.params, {stop, 0.1, o.sweep_seconds, interface, !o.no_gpio},
+                                         [&](const std::function<bool()>& until) {
+                                           // Any fault a board reports ends the sweep at once.
+                                           listen(interface, s.params.mode == wp::BusMode::kFd, r, lock,
+                                                  [&] { return until() || any_fault(r); }, "whiskerd sweeping");
+                                         });
+    if (!swept.abort.empty()) {
+      std::cerr << kProgram << ": theta: sweep interrupted: " << swept.abort << "; nothing written\n";
+      return cli::kExitFailure;
+    }
+  }
   return finish("theta", o, s, fit_theta(r, stop, s.params));
 }
 

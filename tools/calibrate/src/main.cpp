@@ -34,7 +34,8 @@ int main(int argc, char** argv) {
   CLI::App* map = app.add_subcommand("map", "push each whisker forward then up: its channel, rotation and axis signs");
   CLI::App* gain = app.add_subcommand("gain", "a jig deflects each whisker forward then up by --deflection: gains "
                                               "and rotation");
-  CLI::App* theta = app.add_subcommand("theta", "a sweep against both end stops (--input): theta offset and gain");
+  CLI::App* theta = app.add_subcommand("theta", "whiskerd's control loop sweeps against both end stops (or --input: a "
+                                                "recorded sweep): theta offset and gain");
   for (CLI::App* sub : {map, gain}) {
     sub->add_option("--expect", o.expect, "whiskers in the order touched, e.g. 0,1,2 (default 0..23)")
         ->delimiter(',')
@@ -43,6 +44,10 @@ int main(int argc, char** argv) {
   gain->add_option("--deflection", o.deflection, "the jig's deflection, in whiskerd's units (full scale 1)")->required();
   theta->add_option("--stop-deg", o.stop_deg, "the end stops at ±this (default: whiskerd's rcp.pattern.theta_limit_deg)")
       ->check(CLI::Range(10.0, 90.0));
+  theta->add_option("--sweep-seconds", o.sweep_seconds, "on the bus: how long to sweep (0.1 Hz)")
+      ->check(CLI::Range(12.0, 600.0))
+      ->capture_default_str();
+  theta->add_flag("--no-gpio", o.no_gpio, "on the bus: no motor enable / fault lines (a rig without them)");
 
   return program.run(argc, argv, [&] {
     if (o.print_config) return calibrate::print_config(o);

@@ -18,6 +18,8 @@ struct Options {
   std::vector<int> expect;     // map, gain: whiskers in the order touched (empty: 0..23)
   double deflection = 0.0;     // gain: the jig's deflection (whiskerd's units)
   double stop_deg = 0.0;       // theta: the end stops at ±this (0: whiskerd's rcp.pattern.theta_limit_deg)
+  double sweep_seconds = 25.0; // theta on the bus: how long whiskerd sweeps
+  bool no_gpio = false;        // theta on the bus: no motor enable / fault lines (a rig without them)
   bool print_config = false;   // print whiskerd's configuration in use (file and drop-ins) and exit
 };
 
