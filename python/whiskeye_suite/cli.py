@@ -28,6 +28,9 @@ slamd) is localised in by 4 more sessions that start at drawn places of the path
 aggregation job; waits for them (at most --timeout seconds) unless --no-wait. DIR must be on a
 filesystem every node shares, and the programs at the same path on every node.
 --retry-failed: run only the worlds whose last run failed (either executor).
+--config A.yaml --config B.yaml (a parameter study): every world drawn (with A) and simulated once,
+replayed under each config; DIR/study.md compares them side by side, DIR/by-config/<name>/ has each
+config's suite summary. --sweep KEY=V1,V2,...: --config with KEY at each value (DIR/configs/).
 """
 import argparse
 import os
@@ -61,7 +64,10 @@ def parse_args(argv):
     p.add_argument("--laps", type=int, default=None, help="laps of every world (default: the world's own)")
     p.add_argument("--camera-format", default=None, help="the simulated camera's frames: yuyv, grey or mjpeg "
                    "(vita-sim --camera-format; default: the world's, YUYV)")
-    p.add_argument("--config", default=os.path.join(ROOT, "config/slam.yaml"), help="slamd parameters")
+    p.add_argument("--config", action="append", default=None, help="slamd parameters (default config/slam.yaml); "
+                   "given more than once, a parameter study: every world simulated once and replayed under each")
+    p.add_argument("--sweep", default=None, metavar="KEY=V1,V2,...", help="a parameter study of one slamd parameter: "
+                   "--config (one, or the default) with KEY set to each value, the derived configs in DIR/configs/")
     p.add_argument("--robot", default=os.path.join(ROOT, "config/robot.yaml"), help="robot geometry")
     p.add_argument("--check", action="store_true", help="print every target met or missed; exit 1 when one is missed")
     p.add_argument("--bin", default=None, help="folder with vita-sim, slamd, vita-eval (default: build them)")
@@ -80,6 +86,7 @@ def parse_args(argv):
     p.add_argument("--run-world", type=int, default=None, help=argparse.SUPPRESS)
     p.add_argument("--slurm-array", default=None, help=argparse.SUPPRESS)
     p.add_argument("--started-at", type=float, default=None, help=argparse.SUPPRESS)
+    p.add_argument("--world-config", default=None, help=argparse.SUPPRESS)  # a study's worlds are drawn with it
     a = p.parse_args(argv)
     if a.family not in ("aliased", "stress"):
         fail(f"--family: unknown family '{a.family}' (aliased or stress)")
@@ -119,10 +126,22 @@ def parse_args(argv):
         a.sbatch_args = shlex.split(a.sbatch_args)
     except ValueError as e:
         fail(f"--sbatch-args: {e}")
-    for opt in ("config", "robot"):
-        if not os.path.isfile(getattr(a, opt)):
-            fail(f"--{opt}: {getattr(a, opt)} is not a file")
-        setattr(a, opt, os.path.abspath(getattr(a, opt)))
+    configs = a.config or [os.path.join(ROOT, "config/slam.yaml")]
+    for path in configs + [a.robot] + ([a.world_config] if a.world_config else []):
+        if not os.path.isfile(path):
+            fail(f"--{'robot' if path == a.robot else 'config'}: {path} is not a file")
+    configs = [os.path.abspath(c) for c in configs]
+    a.robot = os.path.abspath(a.robot)
+    a.config = configs[0]
+    a.study = len(configs) > 1 or a.sweep is not None
+    if a.sweep is not None:
+        if len(configs) > 1:
+            fail("--sweep: varies one --config, not several")
+        a.sweep = parse_sweep(a.sweep)
+        a.variants = None  # derived by study.derive_sweep once the programs are known
+    else:
+        a.variants = variants_of(configs) if a.study else [(None, a.config)]
+    a.world_config = os.path.abspath(a.world_config) if a.world_config else a.config
     if a.results is None:
         scenario = "" if a.scenario == "normal" else f"-{a.scenario}"
         name = f"{a.family}{'-faults' if a.faults else ''}{scenario}-s{a.suite_seed}{'-quick' if a.quick else ''}"
@@ -134,11 +153,45 @@ def parse_args(argv):
     return a
 
 
+LABEL_CHARS = set("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789._=+-")
+
+
+def variants_of(configs):
+    """A study's configs by label: each file's name without .yaml (its results' folder name)."""
+    out = []
+    for path in configs:
+        label = os.path.basename(path)
+        label = label[:-5] if label.endswith(".yaml") else label
+        if not label or not set(label) <= LABEL_CHARS or label.startswith("world-"):
+            fail(f"--config: {path}: a study names each config by its file name, and '{label}' cannot name a folder "
+                 "(letters, digits, . _ = + -; not world-*)")
+        if label in (x for x, _ in out):
+            fail(f"--config: two configs named '{label}' (a study names each by its file name)")
+        out.append((label, path))
+    return out
+
+
+def parse_sweep(text):
+    """'KEY=V1,V2,...' -> (KEY, [V1, V2, ...]): at least two distinct values."""
+    key, eq, values = text.partition("=")
+    values = [v.strip() for v in values.split(",")]
+    if not eq or not key or "." not in key or any(not v for v in values):
+        fail(f"--sweep: '{text}' is not KEY=V1,V2,... (e.g. slam.match.threshold_visual=0.08,0.10,0.12)")
+    if len(set(values)) < 2 or len(set(values)) != len(values):
+        fail(f"--sweep: '{text}' needs two or more distinct values")
+    return key, values
+
+
 def world_options(a, bins):
     """The options that make the suite's worlds, spelled out: what the Slurm jobs are given, and the
     command that reruns the suite."""
     out = ["--worlds", str(a.worlds), "--suite-seed", str(a.suite_seed), "--family", a.family,
-           "--results", a.results, "--config", a.config, "--robot", a.robot, "--bin", bins]
+           "--results", a.results]
+    for _, config in a.variants:  # a sweep's derived configs: the tasks need not know the sweep
+        out += ["--config", config]
+    out += ["--robot", a.robot, "--bin", bins]
+    if a.study:
+        out += ["--world-config", a.world_config]
     if a.faults:
         out.append("--faults")
     if a.scenario != "normal":

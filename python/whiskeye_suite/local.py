@@ -18,16 +18,18 @@ def scratch_for(a, index):
     return d, lambda: shutil.rmtree(d, ignore_errors=True)
 
 
-def run_one(a, bins, index, key):
+def run_one(a, bins, index, keys):
+    """World `index` under every config: their records or failures, in the order of a.variants."""
     scratch, cleanup = scratch_for(a, index)
     try:
-        return run_world(a, bins, index, key, scratch)
+        return run_world(a, bins, index, keys, scratch)
     finally:
         cleanup()
 
 
-def run_local(a, bins, key, todo, progress):
+def run_local(a, bins, keys, todo, progress):
     """Every world of `todo` on this machine, --jobs at once."""
     with concurrent.futures.ThreadPoolExecutor(max_workers=a.jobs) as pool:
-        for fut in concurrent.futures.as_completed([pool.submit(run_one, a, bins, i, key) for i in todo]):
-            progress.world(fut.result())
+        for fut in concurrent.futures.as_completed([pool.submit(run_one, a, bins, i, keys) for i in todo]):
+            for doc in fut.result():
+                progress.world(doc)

@@ -8,9 +8,10 @@ import time
 from .cli import parse_args
 from .common import PROGRAMS, ROOT, fail
 from .local import run_local, run_one
-from .pipeline import collect, world_key, world_state
+from .pipeline import collect, world_keys, world_state
 from .report import Progress, aggregate, report
 from .slurm import run_slurm
+from .study import aggregate_study, derive_sweep
 
 
 def build():
@@ -28,21 +29,33 @@ def check_programs(bins):
             fail(f"--bin: {os.path.join(bins, tool)} is not an executable")
 
 
+def summarise(a, keys, wall_s):
+    """The summary of what DIR holds: a suite's suite.*, or a study's study.* and by-config/."""
+    if a.study:
+        return aggregate_study(a, keys, wall_s)
+    return aggregate(a, *collect(a, keys[None]), wall_s)
+
+
 def main(argv):
     a = parse_args(argv)
     os.makedirs(a.results, exist_ok=True)
     started_at = a.started_at or time.time()
     if a.aggregate_only:
-        key = None
+        keys = None
         if a.slurm_array:  # the aggregation job: only what this suite's options and programs made
             check_programs(a.bin)
-            key = world_key(a, a.bin)
-        records, failed = collect(a, key)
-        if not records and not failed:
-            fail(f"{a.results}: no finished world to aggregate")
-        doc = aggregate(a, records, failed, time.time() - started_at)
+        if a.sweep:
+            a.variants = derive_sweep(a, a.bin)
         if a.slurm_array:
-            print(f"suite: {a.results}/suite.md, suite.json, plots/ ({len(records)} worlds, {len(failed)} failed)")
+            keys = world_keys(a, a.bin)
+        keys = keys or {label: None for label, _ in a.variants}
+        if not any(collect(a, key, label) != ([], []) for label, key in keys.items()):
+            fail(f"{a.results}: no finished world to aggregate")
+        doc = summarise(a, keys, time.time() - started_at)
+        if a.slurm_array:
+            name = "study" if a.study else "suite"
+            print(f"suite: {a.results}/{name}.md, {name}.json, plots/ ({len(doc['worlds'])} worlds, "
+                  f"{len(doc['failed_worlds'])} failed)")
             return 0
         return report(a, doc, a.bin or os.path.join(ROOT, "build", "bin"))
     if a.executor == "slurm" and a.run_world is None and not shutil.which("sbatch"):
@@ -50,27 +63,35 @@ def main(argv):
              "e.g. Debian's slurm-client, or load the cluster's Slurm module)")
     bins = os.path.abspath(a.bin or build())
     check_programs(bins)
-    key = world_key(a, bins)
+    if a.sweep:
+        a.variants = derive_sweep(a, bins)
+    keys = world_keys(a, bins)
     if a.run_world is not None:  # an array task: one world, its outcome on stdout (the task's log)
-        rec = run_one(a, bins, a.run_world, key)
-        print(f"suite: world {a.run_world} " + (f"FAILED: {rec['failed']}" if "failed" in rec else
-                                                 "resumed" if rec.get("resumed") else "done"))
-        return 1 if "failed" in rec else 0
+        docs = run_one(a, bins, a.run_world, keys)
+        for doc in docs:
+            print(f"suite: world {a.run_world}" + (f" [{doc['config']}]" if doc.get("config") else "") + " "
+                  + (f"FAILED: {doc['failed']}" if "failed" in doc else "resumed" if doc.get("resumed") else "done"))
+        return 1 if any("failed" in doc for doc in docs) else 0
 
-    states = {i: world_state(a, i, key) for i in range(1, a.worlds + 1)}
-    done = {i: doc for i, (state, doc) in states.items() if state == "done"}
-    todo = [i for i, (state, _) in states.items() if state == "failed" or (state == "todo" and not a.retry_failed)]
-    progress = Progress(len(done) + len(todo), sys.stderr.isatty())
-    print(f"suite: {a.worlds} worlds ({a.family}{', faults' if a.faults else ''}, suite seed {a.suite_seed}) "
+    # A world is done when every config has its record; it runs again when one failed or (unless
+    # --retry-failed) has none.
+    states = {i: [world_state(a, i, keys[label], label) for label, _ in a.variants] for i in range(1, a.worlds + 1)}
+    done = {i: [doc for _, doc in s] for i, s in states.items() if all(state == "done" for state, _ in s)}
+    todo = [i for i, s in states.items() if i not in done and (
+        any(state == "failed" for state, _ in s) or not a.retry_failed)]
+    progress = Progress(len(a.variants) * (len(done) + len(todo)), sys.stderr.isatty())
+    configs = f", {len(a.variants)} configs" if a.study else ""
+    print(f"suite: {a.worlds} worlds ({a.family}{', faults' if a.faults else ''}, suite seed {a.suite_seed}{configs}) "
           + (f"with {a.jobs} jobs" if a.executor == "local" else "on Slurm") + f" -> {a.results}"
           + (f"; retrying {len(todo)} failed" if a.retry_failed else ""), file=sys.stderr)
-    for doc in done.values():
-        progress.world(dict(doc, resumed=True))
+    for docs in done.values():
+        for doc in docs:
+            progress.world(dict(doc, resumed=True))
     if a.executor == "slurm" and todo:
-        doc = run_slurm(a, bins, key, todo, progress, started_at)
+        doc = run_slurm(a, bins, keys, todo, progress, started_at)
         if doc is None:
             return 0
     else:
-        run_local(a, bins, key, todo, progress)
-        doc = aggregate(a, *collect(a, key), time.time() - started_at)
+        run_local(a, bins, keys, todo, progress)
+        doc = summarise(a, keys, time.time() - started_at)
     return report(a, doc, bins)

@@ -75,59 +75,79 @@ def world_dir(a, index):
     return os.path.join(a.results, f"world-{index:03d}")
 
 
-def world_key(a, bins):
-    """What makes a world's result: the options, the parameters and the programs (its seed aside)."""
+def variant_dir(a, index, label):
+    """Where a world's results under one config go: the world's folder in a one-config suite (label
+    None), its subfolder named by the config in a parameter study."""
+    return world_dir(a, index) if label is None else os.path.join(world_dir(a, index), label)
+
+
+def world_key(a, bins, config=None):
+    """What makes a world's result: the options, the parameters and the programs (its seed aside).
+    In a parameter study also the config the worlds were drawn with."""
+    config = config or a.config
+    study = {"world_config": file_digest(a.world_config)} if a.study else {}
     return json.dumps({"family": a.family, "faults": a.faults, "scenario": a.scenario, "quick": a.quick, "laps": a.laps,
                        **({"camera_format": a.camera_format} if a.camera_format else {}),
-                       "config": file_digest(a.config),
+                       "config": file_digest(config), **study,
                        "robot": file_digest(a.robot), "programs": [file_digest(os.path.join(bins, t)) for t in PROGRAMS]},
                       sort_keys=True)
 
 
-def world_state(a, index, key):
-    """('done', record), ('failed', failure) or ('todo', None) for world `index` in DIR. A record or
-    failure counts only for this world (the seed) and, given a key, for the same options and programs."""
+def world_keys(a, bins):
+    """Each config's key, by its label (None in a one-config suite)."""
+    return {label: world_key(a, bins, config) for label, config in a.variants}
+
+
+def world_state(a, index, key, label=None):
+    """('done', record), ('failed', failure) or ('todo', None) for world `index` under config `label`
+    in DIR. A record or failure counts only for this world (the seed) and, given a key, for the same
+    options and programs."""
     seed = a.suite_seed * 1000 + index
     for state, name in (("done", "world.json"), ("failed", "failed.json")):
-        doc = read_json(os.path.join(world_dir(a, index), name))
+        doc = read_json(os.path.join(variant_dir(a, index, label), name))
         if doc and doc.get("world_seed") == seed and (key is None or doc.get("key") == key):
             return state, doc
     return "todo", None
 
 
-def record_failure(a, index, key, message, log, **extra):
+def record_failure(a, index, key, message, log, label=None, **extra):
     """A world's failure, kept in DIR so that the aggregation lists it and --retry-failed finds it."""
-    os.makedirs(world_dir(a, index), exist_ok=True)
+    d = variant_dir(a, index, label)
+    os.makedirs(d, exist_ok=True)
     failure = {"index": index, "world_seed": a.suite_seed * 1000 + index, "key": key, "failed": message, "log": log,
-               **extra}
-    write_json(os.path.join(world_dir(a, index), "failed.json"), failure)
+               **({"config": label} if label is not None else {}), **extra}
+    write_json(os.path.join(d, "failed.json"), failure)
     return failure
 
 
-def run_world(a, bins, index, key, scratch):
-    """Generate, simulate, replay three modes, evaluate: the job for one world, whichever executor
-    runs it. The simulator and replay logs go to `scratch` (deleted here). Writes and returns the
-    world's record (world.json), or its failure (failed.json)."""
-    state, doc = world_state(a, index, key)
-    if state == "done":
-        return dict(doc, resumed=True)
+def run_world(a, bins, index, keys, scratch):
+    """Generate, simulate, then per config replay three modes and evaluate: the job for one world,
+    whichever executor runs it. The world is simulated once for every config it has no record for.
+    The simulator and replay logs go to `scratch` (deleted here). Writes every config's record
+    (world.json) or failure (failed.json) and returns them in the order of a.variants."""
+    states = {label: world_state(a, index, keys[label], label) for label, _ in a.variants}
+    todo = [(label, config) for label, config in a.variants if states[label][0] != "done"]
+    if not todo:
+        return [dict(states[label][1], resumed=True) for label, _ in a.variants]
     seed = a.suite_seed * 1000 + index
     d = world_dir(a, index)
-    record_path = os.path.join(d, "world.json")
-    os.makedirs(d, exist_ok=True)
-    if os.path.exists(record_path):
-        os.remove(record_path)  # another world's or other options': it must not stand in for this run
+    for label, _ in todo:
+        os.makedirs(variant_dir(a, index, label), exist_ok=True)
+        record_path = os.path.join(variant_dir(a, index, label), "world.json")
+        if os.path.exists(record_path):
+            os.remove(record_path)  # another world's or other options': it must not stand in for this run
     log = os.path.join(d, "run.log")
-    open(log, "w").close()
+    open(log, "w" if len(todo) == len(a.variants) else "a").close()  # a study's configs already done keep their log
     world = os.path.join(d, "world.yaml")
     generated = os.path.join(d, "generation.json")
     sim_log = os.path.join(scratch, "sim.lcmlog")
-    outs = [os.path.join(scratch, f"slam-{mode}.lcmlog") for mode in MODES]
     t0 = time.monotonic()
     timings = {}
+    done = {}
     try:
         gen = [os.path.join(bins, "vita-sim"), "--generate-world", "--world-seed", str(seed), "--family", a.family,
-               "--output-world", world, "--output-world-json", generated, "--robot", a.robot, "--slam-config", a.config]
+               "--output-world", world, "--output-world-json", generated, "--robot", a.robot, "--slam-config",
+               a.world_config]
         if a.faults:
             gen.append("--faults")
         if a.scenario == "kidnap":
@@ -143,6 +163,27 @@ def run_world(a, bins, index, key, scratch):
             sim += ["--camera-format", a.camera_format]
         run(sim, log)
         timings["simulate_s"] = time.monotonic() - t
+        for n, (label, config) in enumerate(todo):
+            done[label] = replay_and_evaluate(a, bins, index, keys[label], label, config, world, generated, sim_log,
+                                              scratch, log, dict(timings), last=n == len(todo) - 1)
+    except WorldFailed as e:
+        for label, _ in todo:
+            if label not in done:
+                done[label] = record_failure(a, index, keys[label], str(e), log, label)
+    finally:
+        if os.path.exists(sim_log):
+            os.remove(sim_log)
+    return [done[label] if label in done else dict(states[label][1], resumed=True) for label, _ in a.variants]
+
+
+def replay_and_evaluate(a, bins, index, key, label, config, world, generated, sim_log, scratch, log, timings, last):
+    """One config's part of a world: slamd --replay in the three modes, vita-eval, the record. The
+    simulator log is removed after the last config's replays (peak disk: one simulator log per job).
+    A step that fails is this config's failure (failed.json); the world's other configs still run."""
+    seed = a.suite_seed * 1000 + index
+    d = variant_dir(a, index, label)
+    outs = [os.path.join(scratch, f"slam-{mode}.lcmlog") for mode in MODES]
+    try:
         t = time.monotonic()
         for mode, out in zip(MODES, outs):
             saved = []
@@ -150,9 +191,10 @@ def run_world(a, bins, index, key, scratch):
                 shutil.rmtree(os.path.join(scratch, f"state-{mode}"), ignore_errors=True)
                 saved = ["--state-dir", os.path.join(scratch, f"state-{mode}"), "--checkpoint-every", "0"]
             run([os.path.join(bins, "slamd"), "--replay", sim_log, "--output", out, "--mode", mode, "--config",
-                 a.config, "--robot", a.robot, *saved], log)
+                 config, "--robot", a.robot, *saved], log)
         timings["replay_s"] = time.monotonic() - t
-        os.remove(sim_log)  # peak disk: one simulator log per job
+        if last:
+            os.remove(sim_log)
         t = time.monotonic()
         evaluate = [os.path.join(bins, "vita-eval"), "--json", os.path.join(d, "metrics.json"), "--trace",
                     os.path.join(d, "trace")]
@@ -164,12 +206,12 @@ def run_world(a, bins, index, key, scratch):
         timings["evaluate_s"] = time.monotonic() - t
         if a.scenario == "restart":
             t = time.monotonic()
-            sessions = run_sessions(a, bins, seed, world, scratch, outs, d, log)
+            sessions = run_sessions(a, bins, seed, world, scratch, outs, d, log, config)
             timings["sessions_s"] = time.monotonic() - t
     except WorldFailed as e:
-        return record_failure(a, index, key, str(e), log)
+        return record_failure(a, index, key, str(e), log, label)
     finally:
-        for f in [sim_log] + outs:
+        for f in outs:
             if os.path.exists(f):
                 os.remove(f)
         for mode in MODES:
@@ -187,6 +229,7 @@ def run_world(a, bins, index, key, scratch):
         "index": index,
         "world_seed": seed,
         "key": key,
+        **({"config": label} if label is not None else {}),
         "world": os.path.relpath(world, a.results),
         "generation": generation_of(generated),
         "modes": runs,
@@ -196,9 +239,9 @@ def run_world(a, bins, index, key, scratch):
         "rerun": f"vita-sim --generate-world --world-seed {seed} --family {a.family}{' --faults' if a.faults else ''}"
                  + (f" --kidnaps {1 if a.quick else KIDNAPS_PER_WORLD}" if a.scenario == "kidnap" else "") + " "
                  f"--output-world w.yaml && scripts/demo --world w.yaml --seed {seed}"
-                 + (f" --laps {a.laps}" if a.laps else ""),
+                 + (f" --laps {a.laps}" if a.laps else "") + (f" --config {config}" if label is not None else ""),
     }
-    write_json(record_path, rec)  # a world is done only once this is written
+    write_json(os.path.join(d, "world.json"), rec)  # a world is done only once this is written
     if os.path.exists(os.path.join(d, "failed.json")):
         os.remove(os.path.join(d, "failed.json"))
     return rec
@@ -215,7 +258,7 @@ def instants_of(run, session=None):
     return out
 
 
-def run_sessions(a, bins, seed, world, scratch, first_outs, d, log):
+def run_sessions(a, bins, seed, world, scratch, first_outs, d, log, config):
     """--scenario restart: sessions that start at drawn places of the world's path, each localising in
     the map its first run saved (slamd --map FILE --localise), in every mode. Returns each mode's
     localisation instants, one per session."""
@@ -236,7 +279,7 @@ def run_sessions(a, bins, seed, world, scratch, first_outs, d, log):
                 if not maps:
                     raise WorldFailed(f"slamd --mode {mode} saved no map in {state} (see {log})")
                 run([os.path.join(bins, "slamd"), "--replay", sim_log, "--output", o, "--mode", mode, "--config",
-                     a.config, "--robot", a.robot, "--map", os.path.join(state, maps[-1]), "--localise"], log)
+                     config, "--robot", a.robot, "--map", os.path.join(state, maps[-1]), "--localise"], log)
             os.remove(sim_log)
             js = os.path.join(d, f"session-{k}.json")
             evaluate = [os.path.join(bins, "vita-eval"), "--json", js, "--session-start", "--map-truth",
@@ -255,11 +298,11 @@ def run_sessions(a, bins, seed, world, scratch, first_outs, d, log):
     return out
 
 
-def collect(a, key):
-    """The finished worlds and the failed ones in DIR, by index."""
+def collect(a, key, label=None):
+    """The finished worlds and the failed ones in DIR under config `label`, by index."""
     records, failed = [], []
     for i in range(1, a.worlds + 1):
-        state, doc = world_state(a, i, key)
+        state, doc = world_state(a, i, key, label)
         if state == "done":
             records.append(doc)
         elif state == "failed":

@@ -209,7 +209,8 @@ class Progress:
                 if loc:
                     what += (f"; localised {sum(1 for i in loc if i['localised'])}/{len(loc)}, "
                              f"false localisations {sum(i['false_localisations'] for i in loc)}")
-            line = f"[{self.done}/{self.total}] world {rec['index']} (seed {rec['world_seed']}) {what}; ETA {eta:.0f} s"
+            config = f" [{rec['config']}]" if rec.get("config") else ""
+            line = f"[{self.done}/{self.total}] world {rec['index']}{config} (seed {rec['world_seed']}) {what}; ETA {eta:.0f} s"
             if self.tty:
                 sys.stderr.write("\r\033[K" + line)
                 if self.done == self.total:
@@ -221,12 +222,14 @@ class Progress:
 
 def report(a, doc, bins):
     """The summary and the failed worlds on the terminal; the exit status of the suite."""
-    print(open(os.path.join(a.results, "suite.md")).read().split("## Worlds")[0].rstrip())
-    print(f"\nsuite: {a.results}/suite.md, suite.json, plots/", file=sys.stderr)
+    name = "study" if a.study else "suite"
+    print(open(os.path.join(a.results, name + ".md")).read().split("## Worlds")[0].rstrip())
+    print(f"\nsuite: {a.results}/{name}.md, {name}.json, plots/" + (", by-config/" if a.study else ""), file=sys.stderr)
     failed = doc["failed_worlds"]
     if failed:
-        print(f"suite: {len(failed)} world(s) failed: " + ", ".join(f"{x['index']} ({x['log']})" for x in failed),
-              file=sys.stderr)
+        print(f"suite: {len(failed)} world(s) failed: " + ", ".join(
+            f"{x['index']}{' [' + x['config'] + ']' if x.get('config') else ''} ({x['log']})" for x in failed),
+            file=sys.stderr)
         print("suite: rerun only those: " + shlex.join([SCRIPT, *world_options(a, bins), *executor_options(a),
                                                         "--retry-failed"]), file=sys.stderr)
         return 1  # the suite did not run through

@@ -64,9 +64,10 @@ def slurm_states(job_ids):
     return out
 
 
-def run_slurm(a, bins, key, todo, progress, started_at):
+def run_slurm(a, bins, keys, todo, progress, started_at):
     """Submits `todo` as one array job and the aggregation after it; waits for both (at most
-    --timeout s, reporting every world as it ends), then returns the aggregation's suite.json."""
+    --timeout s, reporting every world, under every config, as it ends), then returns the
+    aggregation's suite.json (a study's study.json)."""
     name = f"suite-{a.family}-s{a.suite_seed}"
     sbatch = ["sbatch", "--parsable", "--chdir", a.results] + (["--partition", a.partition] if a.partition else []) \
         + a.sbatch_args
@@ -82,6 +83,14 @@ def run_slurm(a, bins, key, todo, progress, started_at):
                   what).strip().split(";")[0]
     agg_out = os.path.join(a.results, "slurm-aggregate.out")
     jobs = [array]
+    pending = []  # (world, config) pairs the array runs; a study's pairs already done are reported now
+    for i in todo:
+        for label, _ in a.variants:
+            state, doc = world_state(a, i, keys[label], label)
+            if state == "done":
+                progress.world(dict(doc, resumed=True))
+            else:
+                pending.append((i, label))
     try:
         agg = slurm(sbatch + ["--job-name", name + "-aggregate", "--dependency", f"afterany:{array}",
                               "--output", agg_out, "--wrap",
@@ -89,27 +98,29 @@ def run_slurm(a, bins, key, todo, progress, started_at):
                                                          "--started-at", repr(started_at)])],
                     what + " (aggregation)").strip().split(";")[0]
         jobs.append(agg)
-        for i in todo:
-            record_failure(a, i, key, f"its Slurm array task ended without a result (see {world_dir(a, i)}/slurm.out)",
-                           os.path.join(world_dir(a, i), "slurm.out"), placeholder=True)
+        for i, label in pending:
+            record_failure(a, i, keys[label], f"its Slurm array task ended without a result (see {world_dir(a, i)}/slurm.out)",
+                           os.path.join(world_dir(a, i), "slurm.out"), label, placeholder=True)
         slurm(["scontrol", "release", array], "scontrol release")
     except SystemExit:
         cancel(jobs)  # no half a suite left queued
         raise
     print(f"suite: {len(todo)} world(s) as Slurm array job {array} ({array_spec(todo)}), aggregation job {agg}",
           file=sys.stderr)
+    summary = "study" if a.study else "suite"
     if a.no_wait:
-        print(f"suite: not waiting; squeue -j {array},{agg}; the summary will be {a.results}/suite.md", file=sys.stderr)
+        print(f"suite: not waiting; squeue -j {array},{agg}; the summary will be {a.results}/{summary}.md",
+              file=sys.stderr)
         return None
-    deadline, pending, poll_s = time.monotonic() + a.timeout, list(todo), 1.0
+    deadline, poll_s = time.monotonic() + a.timeout, 1.0
     try:
         while True:
             states = slurm_states([array, agg])
-            for i in list(pending):
-                state, doc = world_state(a, i, key)
+            for i, label in list(pending):
+                state, doc = world_state(a, i, keys[label], label)
                 if state == "done" or (state == "failed" and not doc.get("placeholder")):
                     progress.world(doc)
-                    pending.remove(i)
+                    pending.remove((i, label))
             if states is not None and all(s in SLURM_ENDED for s in states.get(agg, [])):  # ended, or gone
                 break
             if time.monotonic() > deadline:
@@ -121,11 +132,11 @@ def run_slurm(a, bins, key, todo, progress, started_at):
     except KeyboardInterrupt:
         cancel(jobs)
         fail(f"interrupted: Slurm jobs {array} and {agg} cancelled", 130)
-    for i in pending:  # ended after the last look, or died without a word (the placeholder stands)
-        state, doc = world_state(a, i, key)
+    for i, label in pending:  # ended after the last look, or died without a word (the placeholder stands)
+        state, doc = world_state(a, i, keys[label], label)
         if doc:
             progress.world(doc)
-    doc = read_json(os.path.join(a.results, "suite.json"))
+    doc = read_json(os.path.join(a.results, summary + ".json"))
     if not doc or (doc.get("slurm") or {}).get("aggregate_job") != agg:
-        fail(f"the aggregation job {agg} ended without writing suite.json (see {agg_out})", 1)
+        fail(f"the aggregation job {agg} ended without writing {summary}.json (see {agg_out})", 1)
     return doc

@@ -1,6 +1,7 @@
 #!/usr/bin/python3
 """The world suite's package (python/whiskeye_suite) imported and driven on small synthetic inputs:
-distributions, the generator's JSON, the targets, the summary it renders, the options it spells out.
+distributions, the generator's JSON, the targets, the summary it renders, the options it spells out,
+and a parameter study's configs, comparison and summary.
 
   test_suite_package.py SOURCE_DIR
 """
@@ -16,7 +17,7 @@ SOURCE = sys.argv.pop(1)
 sys.dont_write_bytecode = True
 sys.path.insert(0, os.path.join(SOURCE, "python"))
 
-from whiskeye_suite import cli, pipeline, report, slurm, stats, targets  # noqa: E402
+from whiskeye_suite import cli, pipeline, report, slurm, stats, study, targets  # noqa: E402
 
 THRESHOLDS = {"correct_m": 0.08, "correct_deg": 4.6, "false_closure_m": 0.25, "false_closure_deg": 15.0}
 
@@ -112,12 +113,16 @@ def options(results, **over):
     return a
 
 
-class Summary(unittest.TestCase):
+class InTempDir(unittest.TestCase):
+    """A results folder of its own for each test."""
     def setUp(self):
         self.tmp = tempfile.mkdtemp(prefix="suite_pkg_")
 
     def tearDown(self):
         shutil.rmtree(self.tmp)
+
+
+class Summary(InTempDir):
 
     def test_the_summary_lists_false_closures_first_and_the_worst_worlds(self):
         worlds = [world(1), world(2, vita=(0.8, 0.9, 0.12, 0.002, 1)), world(3, vita=(0.9, 1.0, 0.04, 0.001, 0))]
@@ -157,6 +162,110 @@ class Options(unittest.TestCase):
     def test_slurm_arrays_are_written_as_ranges(self):
         self.assertEqual(slurm.array_spec([1, 2, 3, 5, 7, 8]), "1-3,5,7-8")
         self.assertEqual(slurm.array_spec([4]), "4")
+
+
+CONFIG = """slam:
+  mode: vita                  # visual | tactile | vita
+  match:
+    shift_max: 5
+    threshold_visual: 0.1
+    tactile_veto: 0.5         # ViTa: vision decides
+  experience_map:
+    threshold_visual: 7
+"""
+
+
+class StudyConfigs(unittest.TestCase):
+    def test_a_swept_key_is_set_where_the_config_writes_it_comment_kept(self):
+        out = study.set_key(CONFIG, "slam.match.tactile_veto", "0.25")
+        self.assertIn("    tactile_veto: 0.25        # ViTa: vision decides\n", out)
+        self.assertEqual(out.replace("0.25        #", "0.5         #"), CONFIG)
+        # The same leaf under another section is another key.
+        out = study.set_key(CONFIG, "slam.match.threshold_visual", "0.12")
+        self.assertIn("    shift_max: 5\n    threshold_visual: 0.12\n    tactile_veto:", out)
+        self.assertTrue(out.endswith("  experience_map:\n    threshold_visual: 7\n"), out)
+        self.assertEqual(study.set_key(CONFIG, "slam.experience_map.threshold_visual", "9").count(": 9\n"), 1)
+
+    def test_a_key_the_config_does_not_write_is_none(self):
+        self.assertIsNone(study.set_key(CONFIG, "slam.match.nonsense", "1"))
+        self.assertIsNone(study.set_key(CONFIG, "slam.match", "1"))  # a section, not a value
+
+    def test_sweeps_and_labels_are_checked(self):
+        self.assertEqual(cli.parse_sweep("slam.match.threshold_visual=0.1, 0.12"),
+                         ("slam.match.threshold_visual", ["0.1", "0.12"]))
+        for bad in ("threshold_visual=0.1,0.2", "slam.match.threshold_visual=0.1", "slam.x=1,1", "slam.x=1,,2"):
+            with self.assertRaises(SystemExit, msg=bad) as e:
+                cli.parse_sweep(bad)
+            self.assertEqual(e.exception.code, 2)
+        self.assertEqual(cli.variants_of(["/a/slam.yaml", "/b/fast.yaml"]), [("slam", "/a/slam.yaml"),
+                                                                             ("fast", "/b/fast.yaml")])
+        for bad in (["/a/slam.yaml", "/b/slam.yaml"], ["/a/world-001.yaml", "/b/x.yaml"], ["/a/my config.yaml"]):
+            with self.assertRaises(SystemExit, msg=bad):
+                cli.variants_of(bad)
+
+
+class StudyComparison(InTempDir):
+    def test_differences_count_better_and_worse_by_the_metrics_side(self):
+        d = study.differences([0.1, 0.2, None, 0.3], [0.05, 0.25, 0.1, 0.3], "low")
+        self.assertEqual((d["n"], d["better"], d["worse"], d["same"]), (3, 1, 1, 1))
+        self.assertAlmostEqual(d["min"], -0.05)
+        self.assertAlmostEqual(d["max"], 0.05)
+        self.assertEqual(study.differences([0.8], [0.9], "high")["better"], 1)
+
+    def study(self, worlds_a, worlds_b, fail_b=None):
+        configs = []
+        for label in ("base", "fast"):
+            path = os.path.join(self.tmp, label + ".yaml")
+            with open(path, "w") as f:
+                f.write(CONFIG.replace("0.1", "0.1" if label == "base" else "0.2"))
+            configs.append(path)
+        a = options(self.tmp, study=True, variants=cli.variants_of(configs), world_config=configs[0], sweep=None,
+                    worlds=len(worlds_a), check=False)
+        keys = {"base": "ka", "fast": "kb"}
+        for label, worlds in (("base", worlds_a), ("fast", worlds_b)):
+            for w in worlds:
+                d = pipeline.variant_dir(a, w["index"], label)
+                os.makedirs(d)
+                with open(os.path.join(d, "world.json"), "w") as f:
+                    json.dump(dict(w, key=keys[label], config=label), f)
+        if fail_b:
+            pipeline.record_failure(a, fail_b, "kb", "slamd exited 1 (see log)", "log", "fast")
+        return study.aggregate_study(a, keys, 5.0)
+
+    def test_the_configs_are_compared_side_by_side_world_by_world(self):
+        base = [world(1), world(2), world(3, vita=(0.9, 1.0, 0.04, 0.001, 0))]
+        fast = [world(1, vita=(0.85, 1.0, 0.15, 0.001, 2)), world(2), world(3, vita=(0.95, 1.0, 0.03, 0.001, 0))]
+        doc = self.study(base, fast)
+        self.assertEqual([c["label"] for c in doc["configs"]], ["base", "fast"])
+        self.assertEqual(doc["summary"]["base"]["vita"]["lem"]["worst"], 0.05)
+        self.assertEqual(doc["summary"]["fast"]["vita"]["lem"]["worst"], 0.15)
+        lem = doc["differences"]["fast"]["vita"]["lem"]
+        self.assertEqual((lem["better"], lem["worse"], lem["same"]), (1, 1, 1))
+        self.assertAlmostEqual(lem["max"], 0.10)
+        # World 1 disagrees most on LEM, then world 3; world 2 not at all.
+        self.assertEqual([r["world"] for r in doc["disagreements"]["vita"]["lem"]], [1, 3])
+        self.assertEqual([r["world"] for r in doc["disagreements"]["vita"]["false_closures"]], [1])
+        with open(os.path.join(self.tmp, "study.md")) as f:
+            md = f.read()
+        self.assertIn("| vita | LEM pos RMSE (m) | 0.0500 / 0.0500 / 0.0500 | 0.0500 / 0.1300 / 0.1500 |", md)
+        self.assertIn("| fast | vita | LEM pos RMSE (m) | +0.0000 | -0.0100 | +0.1000 | 1 | 1 | 1 |", md)
+        self.assertIn("- LEM pos RMSE (m): world 1 (seed 5001): base 0.0500, fast 0.1500; "
+                      "world 3 (seed 5003): base 0.0400, fast 0.0300.", md)
+        self.assertIn("| 1 | 5001 | 0.850 | 1.000 | 0.050 | 0 | 0.850 | 1.000 | 0.150 | 2 |", md)
+        # Each config's own suite summary.
+        for label in ("base", "fast"):
+            with open(os.path.join(self.tmp, "by-config", label, "suite.json")) as f:
+                self.assertEqual(len(json.load(f)["worlds"]), 3)
+
+    def test_a_config_that_failed_on_a_world_is_listed_and_left_out_of_its_column(self):
+        doc = self.study([world(1), world(2)], [world(1)], fail_b=2)
+        self.assertEqual([(f["index"], f["config"]) for f in doc["failed_worlds"]], [(2, "fast")])
+        self.assertEqual(doc["summary"]["fast"]["vita"]["lem"]["n"], 1)
+        self.assertEqual(doc["differences"]["fast"]["vita"]["lem"]["n"], 1)
+        with open(os.path.join(self.tmp, "study.md")) as f:
+            md = f.read()
+        self.assertIn("- world 2 (seed 5002) under fast: slamd exited 1 (see log)", md)
+        self.assertIn("| 2 | 5002 | 0.850 | 1.000 | 0.050 | 0 | — | — | — | — |", md)
 
 
 if __name__ == "__main__":

@@ -109,6 +109,61 @@ class QuickSuite(unittest.TestCase):
         with open(os.path.join(d, "suite.json")) as f:
             self.assertEqual([w["world_seed"] for w in json.load(f)["worlds"]], [2001])
 
+    def test_a_sweep_simulates_each_world_once_and_replays_it_under_every_value(self):
+        d = os.path.join(self.tmp, "study")
+        args = ("--quick", "--bin", BIN, "--results", d, "--sweep", "slam.match.threshold_visual=0.1,0.3")
+        r = suite(*args)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        with open(os.path.join(d, "study.json")) as f:
+            doc = json.load(f)
+        labels = ["threshold_visual=0.1", "threshold_visual=0.3"]
+        self.assertEqual([c["label"] for c in doc["configs"]], labels)
+        self.assertEqual(doc["sweep"], {"key": "slam.match.threshold_visual", "values": ["0.1", "0.3"]})
+        self.assertIn("    threshold_visual: 0.3\n", read(os.path.join(d, "configs", labels[1] + ".yaml")))
+        for i in (1, 2, 3):
+            log = read(os.path.join(d, f"world-{i:03d}", "run.log"))
+            self.assertEqual(log.count("--generate-world"), 1, log)
+            self.assertEqual(log.count("vita-sim --world "), 1, log)  # simulated once ...
+            self.assertEqual(log.count("slamd --replay"), 6, log)  # ... replayed in three modes per value
+            self.assertEqual(log.count("threshold_visual=0.3.yaml --robot"), 3, log)
+        # The base value is config/slam.yaml's: the same numbers as the one-config suite.
+        base = {w["index"]: w["configs"][labels[0]] for w in doc["worlds"]}
+        self.assertEqual(base, metrics(self.load("a")))
+        with open(os.path.join(d, "by-config", labels[0], "suite.json")) as f:
+            self.assertEqual(json.load(f)["summary"], self.load("a")["summary"])
+        other = {w["index"]: w["configs"][labels[1]] for w in doc["worlds"]}
+        self.assertNotEqual(other, base, "a visual threshold three times the shipped one changes the runs")
+        md = read(os.path.join(d, "study.md"))
+        for section in ("## Side by side", f"## Per-world differences against {labels[0]}",
+                        "## Where the configs disagree most (ViTa)", "## Worlds"):
+            self.assertIn(section, md)
+        self.assertGreater(os.path.getsize(os.path.join(d, "plots", "study_metrics.png")), 1000)
+        self.assertGreater(os.path.getsize(os.path.join(d, "plots", "study_differences.png")), 1000)
+        self.assertEqual([f for _, _, files in os.walk(d) for f in files if f.endswith(".lcmlog")], [])
+        # Resumable: every (world, value) pair is done; a new value runs alone, each world simulated once more.
+        again = suite(*args)
+        self.assertEqual(again.stderr.count(" resumed: "), 6, again.stderr)
+        more = suite("--quick", "--bin", BIN, "--results", d, "--no-plots",
+                     "--sweep", "slam.match.threshold_visual=0.1,0.3,0.05")
+        self.assertEqual(more.returncode, 0, more.stderr)
+        self.assertEqual(more.stderr.count(" resumed: "), 6, more.stderr)
+        self.assertEqual(more.stderr.count("[threshold_visual=0.05] (seed"), 3, more.stderr)
+        log = read(os.path.join(d, "world-001", "run.log"))
+        self.assertEqual(log.count("vita-sim --world "), 2, log)
+        self.assertEqual(log.count("slamd --replay"), 9, log)
+
+    def test_a_study_refuses_what_it_cannot_vary(self):
+        for args, text in ((("--sweep", "slam.match.nonsense=1,2"), "does not set slam.match.nonsense"),
+                           (("--sweep", "slam.match.threshold_visual=-1,0.1"), "threshold_visual=-1: "),
+                           (("--sweep", "slam.match.threshold_visual=0.1"), "two or more distinct values"),
+                           (("--config", os.path.join(SOURCE, "config", "slam.yaml"), "--config",
+                             os.path.join(SOURCE, "config", "slam.yaml")), "two configs named 'slam'")):
+            with tempfile.TemporaryDirectory() as d:
+                r = suite("--quick", "--bin", BIN, "--results", d, *args)
+            self.assertEqual(r.returncode, 2, r.stderr)
+            self.assertEqual(len(r.stderr.strip().splitlines()), 1, r.stderr)
+            self.assertIn(text, r.stderr)
+
     def test_the_same_suite_seed_gives_the_same_numbers(self):
         other = suite("--quick", "--bin", BIN, "--results", os.path.join(self.tmp, "b"), "--jobs", "1", "--no-plots")
         self.assertEqual(other.returncode, 0, other.stderr)

@@ -92,6 +92,14 @@ class SlurmSuite(unittest.TestCase):
         cls.retried_doc = load(cls.results)
         cls.retried_md = read(os.path.join(cls.results, "suite.md"))
         cls.again = suite(*args)
+        # A parameter study on Slurm: a sweep of two values, each world simulated once in its task.
+        cls.study_dir = os.path.join(cls.tmp, "study")
+        study = ("--quick", "--executor", "slurm", "--partition", cluster.partition, "--bin", BIN, "--results",
+                 cls.study_dir, "--timeout", "600", "--no-plots", "--sweep", "slam.match.threshold_visual=0.1,0.3")
+        cls.study = suite(*study)
+        cls.study_doc = json.loads(read(os.path.join(cls.study_dir, "study.json"))) \
+            if os.path.exists(os.path.join(cls.study_dir, "study.json")) else None
+        cls.study_again = suite(*study)
 
     def test_the_local_run_ran(self):
         self.assertEqual(self.local.returncode, 0, self.local.stderr)
@@ -145,6 +153,26 @@ class SlurmSuite(unittest.TestCase):
         self.assertNotIn("Slurm array job", self.again.stderr)
         self.assertEqual(self.again.stderr.count(" resumed: "), 3, self.again.stderr)
         self.assertEqual(metrics(load(self.results)), metrics(self.retried_doc))
+
+    def test_a_study_runs_each_world_once_as_a_task_and_the_aggregation_compares_the_configs(self):
+        self.assertEqual(self.study.returncode, 0, self.study.stderr)
+        self.assertIn("3 world(s) as Slurm array job", self.study.stderr)
+        self.assertIsNotNone(self.study_doc)
+        self.assertIsNotNone(self.study_doc["slurm"]["aggregate_job"])
+        labels = [c["label"] for c in self.study_doc["configs"]]
+        self.assertEqual(labels, ["threshold_visual=0.1", "threshold_visual=0.3"])
+        self.assertEqual(self.study.stderr.count("] (seed"), 6, self.study.stderr)
+        local = load(os.path.join(self.tmp, "local"))
+        self.assertEqual({w["index"]: w["configs"][labels[0]] for w in self.study_doc["worlds"]}, metrics(local))
+        for i in (1, 2, 3):
+            log = read(os.path.join(self.study_dir, f"world-{i:03d}", "run.log"))
+            self.assertEqual(log.count("vita-sim --world "), 1, log)
+            self.assertEqual(log.count("slamd --replay"), 6, log)
+        self.assertIn("## Side by side", read(os.path.join(self.study_dir, "study.md")))
+        # Resumable: every (world, value) pair is done, nothing is submitted.
+        self.assertEqual(self.study_again.returncode, 0, self.study_again.stderr)
+        self.assertNotIn("Slurm array job", self.study_again.stderr)
+        self.assertEqual(self.study_again.stderr.count(" resumed: "), 6, self.study_again.stderr)
 
 
 class SlurmBadInput(unittest.TestCase):
