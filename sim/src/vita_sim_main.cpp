@@ -182,8 +182,8 @@ struct RangeOption {
 
 // --generate-world: draws a world, checks it and writes it. Returns the exit status.
 int generate(GeneratorOptions options, const std::vector<RangeOption>& ranges, const RobotGeometry& robot,
-             const std::string& slam_config, const std::string& output_world, const std::string& output_json,
-             bool quiet) {
+             const rcp::ControllerParams& controller, const std::string& slam_config, const std::string& output_world,
+             const std::string& output_json, bool quiet) {
   try {
     for (const RangeOption& r : ranges) {
       if (!r.text.empty()) options.*r.field = parse_range(r.name, r.text);
@@ -205,6 +205,7 @@ int generate(GeneratorOptions options, const std::vector<RangeOption>& ranges, c
     check.visual = slam.visual;
     check.match = slam.match;
   }
+  check.whisking = controller.pattern;
   GeneratedWorld g;
   try {
     g = generate_world(options, robot, check);
@@ -392,9 +393,19 @@ int main(int argc, char** argv) {
       load(root.section("robot"), robot);
       root.check_no_unknown_keys();
     }
+    // Read where it is used: the simulation, and the generator's whisk period.
+    const auto load_controller = [&] {
+      rcp::ControllerParams controller;
+      if (!rcp_path.empty()) {
+        const ParamNode root = ParamNode::from_file(rcp_path);
+        rcp::load(root, controller);
+        root.check_no_unknown_keys();
+      }
+      return controller;
+    };
     if (generate_flag) {
       if (slam_config.empty()) slam_config = default_config_path("slam.yaml", "--slam-config");
-      return generate(gen, gen_ranges, robot, slam_config, output_world, output_world_json, quiet);
+      return generate(gen, gen_ranges, robot, load_controller(), slam_config, output_world, output_world_json, quiet);
     }
     if (!bringup.session.empty()) return run_bringup(bringup, candump_path, whiskerd_config, can_interface, seed, start_utime);
     if (world_path.empty()) {
@@ -473,12 +484,7 @@ int main(int argc, char** argv) {
     params.seed = seed;
     params.duration = duration;
     params.start_utime = start_utime;
-    rcp::ControllerParams controller;
-    if (!rcp_path.empty()) {
-      const ParamNode root = ParamNode::from_file(rcp_path);
-      rcp::load(root, controller);
-      root.check_no_unknown_keys();
-    }
+    const rcp::ControllerParams controller = load_controller();
     const rcp::PlantParams plant;
     Simulator sim(world, robot, controller, plant, params);
 

@@ -386,13 +386,14 @@ void load(const ParamNode& node, World& world) {
   world = std::move(w);
 }
 
-World load_world_file(const std::string& path) {
-  const ParamNode root = ParamNode::from_file(path);
+World load_world(const ParamNode& root) {
   World w;
   load(root.section("world"), w);
   root.check_no_unknown_keys();
   return w;
 }
+
+World load_world_file(const std::string& path) { return load_world(ParamNode::from_file(path)); }
 
 bool ray_panel(const Point2& o, const Point2& d, const Panel& p, double& t, double& s) {
   const double ex = p.to.x - p.from.x;

@@ -241,7 +241,10 @@ struct World {
 // Loads `world:` from a parsed document; strict (unknown keys, unknown pattern names, degenerate
 // shapes are ParamErrors naming the key).
 void load(const ParamNode& node, World& world);
-// Reads a world file and checks it has no unknown keys.
+// The `world:` document of a parsed world file (or text), checked for unknown keys: what every
+// reader of a whole world file calls.
+World load_world(const ParamNode& root);
+// Reads a world file: load_world(ParamNode::from_file(path)).
 World load_world_file(const std::string& path);
 
 // ---- 2-D ray geometry shared by the renderer and the whisker contact model ----
