@@ -10,17 +10,15 @@
 #include "whiskeye/sim/can_log.h"
 #include "whiskeye/sim/lcm_sink.h"
 #include "whiskeye/sim/bringup_cli.h"
+#include "whiskeye/sim/generate_cli.h"
 #include "whiskeye/sim/simulator.h"
-#include "whiskeye/sim/world_generator.h"
-#include "whiskeye/slam/vita_slam.h"
+#include "whiskeye/sim/world_plots.h"
 #include "whiskeye/whiskerd/config.h"
 #include "png_file.h"
 
 #include <whiskeye/rcp/params.h>
 
 #include <CLI/CLI.hpp>
-#include <opencv2/core.hpp>
-#include <opencv2/imgproc.hpp>
 #include <unistd.h>
 
 #include <cmath>
@@ -29,207 +27,12 @@
 #include <fstream>
 #include <iostream>
 #include <memory>
-#include <limits>
 #include <string>
 
 namespace {
 
 using namespace whiskeye;
 using namespace whiskeye::sim;
-
-// Top-down map: walls, visual landmarks (with their pattern names), tactile solids, the trajectory
-// and the start pose. 100 px per metre.
-void plot_world(const World& world, const RobotGeometry& robot, const std::string& path) {
-  double x0 = std::numeric_limits<double>::infinity();
-  double y0 = x0;
-  double x1 = -x0;
-  double y1 = -x0;
-  for (const Panel& p : world.walls) {
-    for (const Point2& q : {p.from, p.to}) {
-      x0 = std::min(x0, q.x);
-      y0 = std::min(y0, q.y);
-      x1 = std::max(x1, q.x);
-      y1 = std::max(y1, q.y);
-    }
-  }
-  if (!std::isfinite(x0)) {
-    const Trajectory& t = world.trajectory;
-    x0 = t.centre.x - t.radius - 1.0;
-    x1 = t.centre.x + t.radius + 1.0;
-    y0 = t.centre.y - t.radius - 1.0;
-    y1 = t.centre.y + t.radius + 1.0;
-  }
-  const double scale = 100.0;
-  const int margin = 60;
-  const int W = static_cast<int>((x1 - x0) * scale) + 2 * margin;
-  const int H = static_cast<int>((y1 - y0) * scale) + 2 * margin;
-  cv::Mat img(H, W, CV_8UC3, cv::Scalar(255, 255, 255));
-  auto px = [&](double x, double y) {
-    return cv::Point(static_cast<int>(std::lround(margin + (x - x0) * scale)),
-                     static_cast<int>(std::lround(H - margin - (y - y0) * scale)));
-  };
-  const cv::Scalar black(0, 0, 0);
-  const cv::Scalar colours[] = {{200, 60, 20}, {20, 140, 20}, {20, 20, 200}, {160, 20, 160}, {0, 140, 200}};
-  for (const Panel& p : world.walls) cv::line(img, px(p.from.x, p.from.y), px(p.to.x, p.to.y), cv::Scalar(120, 120, 120), 6);
-  for (const Panel& p : world.landmarks) {
-    const cv::Scalar c = colours[static_cast<std::size_t>(p.pattern) % 5];
-    cv::line(img, px(p.from.x, p.from.y), px(p.to.x, p.to.y), c, 12);
-    const Point2 mid{0.5 * (p.from.x + p.to.x), 0.5 * (p.from.y + p.to.y)};
-    const double dx = world.trajectory.centre.x - mid.x;
-    const double dy = world.trajectory.centre.y - mid.y;
-    const double n = std::hypot(dx, dy);
-    const std::string label = p.name + " (" + world.patterns[static_cast<std::size_t>(p.pattern)].name + ")";
-    int baseline = 0;
-    const cv::Size size = cv::getTextSize(label, cv::FONT_HERSHEY_SIMPLEX, 0.45, 1, &baseline);
-    // Centred, far enough inwards that the text clears the wall.
-    const double inset = 0.3 + 0.5 * size.width / scale * std::abs(dx / n);
-    const cv::Point at = px(mid.x + inset * dx / n, mid.y + inset * dy / n);
-    cv::putText(img, label, at - cv::Point(size.width / 2, -size.height / 2), cv::FONT_HERSHEY_SIMPLEX, 0.45, c, 1,
-                cv::LINE_AA);
-  }
-  const Trajectory& t = world.trajectory;
-  cv::circle(img, px(t.centre.x, t.centre.y), static_cast<int>(t.radius * scale), cv::Scalar(200, 0, 200), 2, cv::LINE_AA);
-  const double head_r = head_path_radius(t.radius, robot);  // the head's path
-  cv::circle(img, px(t.centre.x, t.centre.y), static_cast<int>(head_r * scale), cv::Scalar(230, 160, 230), 1, cv::LINE_AA);
-  for (const Solid& s : world.solids) {
-    const cv::Scalar c(40, 40, 40);
-    if (s.shape == Solid::Shape::Circle) {
-      cv::circle(img, px(s.centre.x, s.centre.y), std::max(2, static_cast<int>(s.radius * scale)), c, cv::FILLED, cv::LINE_AA);
-    } else {
-      std::vector<cv::Point> poly;
-      for (const Point2& q : s.vertices) poly.push_back(px(q.x, q.y));
-      cv::fillPoly(img, std::vector<std::vector<cv::Point>>{poly}, c, cv::LINE_AA);
-    }
-    // Labels inside the path, clear of the wall landmarks' labels.
-    const double dx = s.centre.x - t.centre.x;
-    const double dy = s.centre.y - t.centre.y;
-    const double n = std::max(1e-9, std::hypot(dx, dy));
-    const cv::Point at = px(s.centre.x - 0.75 * dx / n, s.centre.y - 0.75 * dy / n);
-    cv::putText(img, s.name, at - cv::Point(static_cast<int>(s.name.size()) * 4, -4), cv::FONT_HERSHEY_SIMPLEX, 0.45,
-                black, 1, cv::LINE_AA);
-  }
-  // Start pose: base position and heading.
-  const Pose2 start = t.pose_at(0.0);
-  const cv::Point a = px(start.x, start.y);
-  const cv::Point b = px(start.x + 0.4 * std::cos(start.theta), start.y + 0.4 * std::sin(start.theta));
-  cv::arrowedLine(img, a, b, cv::Scalar(0, 0, 255), 2, cv::LINE_AA, 0, 0.3);
-  cv::circle(img, a, 6, cv::Scalar(0, 0, 255), cv::FILLED, cv::LINE_AA);
-  double vx;
-  double vy;
-  double om;
-  t.body_velocity(vx, vy, om);
-  const std::string title = world.name + ": " + std::to_string(t.laps) + " laps, r = " +
-                            std::to_string(t.radius).substr(0, 4) + " m, " + std::to_string(t.speed).substr(0, 4) +
-                            " m/s " + (t.counter_clockwise ? "ccw" : "cw") + ", facing " +
-                            (t.outwards ? "outwards" : "inwards") + "; red: start";
-  cv::putText(img, title, cv::Point(10, 25), cv::FONT_HERSHEY_SIMPLEX, 0.5, black, 1, cv::LINE_AA);
-  write_png(path, img.data, img.cols, img.rows, img.channels(), img.step[0]);
-}
-
-// Noise-free camera views at the given polar angles of the trajectory, tiled two per row at half
-// size with their angle written on them: to check a world's visual aliasing by eye.
-void plot_views(const World& world, const RobotGeometry& robot, const std::vector<double>& angles_deg,
-                const std::string& path) {
-  World w = world;
-  w.camera.sigma = 0.0;
-  Renderer renderer(w, robot);
-  FastRng rng(1);
-  const int tw = renderer.width() / 2;
-  const int th = renderer.height() / 2;
-  const int cols = std::min<int>(2, static_cast<int>(angles_deg.size()));
-  const int rows = (static_cast<int>(angles_deg.size()) + 1) / 2;
-  cv::Mat out(rows * th, cols * tw, CV_8UC1, cv::Scalar(255));
-  for (std::size_t i = 0; i < angles_deg.size(); ++i) {
-    Trajectory t = w.trajectory;
-    t.start_angle = deg_to_rad(angles_deg[i]);
-    std::vector<uint8_t> grey;
-    renderer.render(t.pose_at(0.0), 0.0, rng, grey);
-    const cv::Mat full(renderer.height(), renderer.width(), CV_8UC1, grey.data());
-    cv::Mat tile = out(cv::Rect(static_cast<int>(i % 2) * tw, static_cast<int>(i / 2) * th, tw, th));
-    cv::resize(full, tile, tile.size(), 0, 0, cv::INTER_AREA);
-    const std::string label = "polar angle " + std::to_string(static_cast<int>(std::lround(angles_deg[i]))) + " deg";
-    cv::rectangle(tile, cv::Rect(0, 0, 190, 22), cv::Scalar(255), cv::FILLED);
-    cv::putText(tile, label, cv::Point(5, 16), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0), 1, cv::LINE_AA);
-  }
-  write_png(path, out.data, out.cols, out.rows, out.channels(), out.step[0]);
-}
-
-// "MIN,MAX" (or one number for both) of a generator option; GeneratorOptionError naming it.
-Range parse_range(const std::string& option, const std::string& text) {
-  const auto comma = text.find(',');
-  const std::string a = text.substr(0, comma);
-  const std::string b = comma == std::string::npos ? a : text.substr(comma + 1);
-  Range r;
-  try {
-    std::size_t ia = 0;
-    std::size_t ib = 0;
-    r.min = std::stod(a, &ia);
-    r.max = std::stod(b, &ib);
-    if (ia != a.size() || ib != b.size()) throw std::invalid_argument("trailing text");
-  } catch (const std::exception&) {
-    throw GeneratorOptionError(option + ": expected MIN,MAX (or one number), got '" + text + "'");
-  }
-  return r;
-}
-
-// A drawing range of the generator as a command-line option: "MIN,MAX" text into a Range field.
-struct RangeOption {
-  const char* name;
-  const char* help;
-  Range GeneratorOptions::*field;
-  std::string text;
-};
-
-// --generate-world: draws a world, checks it and writes it. Returns the exit status.
-int generate(GeneratorOptions options, const std::vector<RangeOption>& ranges, const RobotGeometry& robot,
-             const rcp::ControllerParams& controller, const std::string& slam_config, const std::string& output_world,
-             const std::string& output_json, bool quiet) {
-  try {
-    for (const RangeOption& r : ranges) {
-      if (!r.text.empty()) options.*r.field = parse_range(r.name, r.text);
-    }
-    validate(options);
-  } catch (const GeneratorOptionError& e) {
-    std::cerr << "vita-sim: " << e.what() << "\n";
-    return 2;
-  }
-  if (output_world.empty()) {
-    std::cerr << "vita-sim: --generate-world needs --output-world FILE\n";
-    return 2;
-  }
-  AliasCheckParams check;
-  {
-    const ParamNode root = ParamNode::from_file(slam_config);
-    slam::SlamParams slam;
-    slam::load(root.section("slam"), slam);
-    check.visual = slam.visual;
-    check.match = slam.match;
-  }
-  check.whisking = controller.pattern;
-  GeneratedWorld g;
-  try {
-    g = generate_world(options, robot, check);
-  } catch (const GeneratorOptionError& e) {  // a request no world can meet, said before any draw
-    std::cerr << "vita-sim: " << e.what() << "\n";
-    return 2;
-  }
-  std::ofstream out(output_world, std::ios::binary | std::ios::trunc);
-  out << g.yaml;
-  out.flush();
-  if (!out) throw std::runtime_error(output_world + ": cannot write the world");
-  if (!output_json.empty()) {
-    std::ofstream js(output_json, std::ios::binary | std::ios::trunc);
-    js << g.json;
-    js.flush();
-    if (!js) throw std::runtime_error(output_json + ": cannot write the world's JSON");
-  }
-  if (!quiet) {
-    std::cerr << "vita-sim: wrote " << output_world << " (" << options.family << ", world seed " << options.world_seed
-              << ", draw " << g.attempts << "): " << g.report.place_pairs.size() << " look-alike pairs of places, "
-              << g.world.solids.size() << " tactile landmarks\n";
-  }
-  return 0;
-}
 
 // One line per injected fault: what, when (s since the start) and what it touched.
 std::string fault_summary(const FaultRecord& f, int64_t start_utime) {
@@ -307,38 +110,8 @@ int main(int argc, char** argv) {
   std::string can_mode;
   std::string can_interface;
   app.add_option("--world", world_path, "World YAML file (e.g. config/worlds/aliased_arena.yaml)")->check(CLI::ExistingFile);
-  bool generate_flag = false;
-  GeneratorOptions gen;
-  std::string output_world;
-  std::string output_world_json;
-  std::string slam_config;
-  std::vector<RangeOption> gen_ranges{
-      {"--arena-side", "Generated world: arena side range MIN,MAX (m; 5,8)", &GeneratorOptions::side, ""},
-      {"--radius", "Generated world: trajectory radius range MIN,MAX (m; 0.8,1.3)", &GeneratorOptions::radius, ""},
-      {"--speed", "Generated world: tangential speed range MIN,MAX (m/s; 0.07,0.15)", &GeneratorOptions::speed, ""},
-      {"--gen-laps", "Generated world: laps range MIN,MAX (4,10)", &GeneratorOptions::laps, ""},
-      {"--wall-landmarks", "Generated world: wall landmarks MIN,MAX (4,8)", &GeneratorOptions::wall_landmarks, ""},
-      {"--tactile-landmarks", "Generated world: tactile landmarks MIN,MAX (3,6)", &GeneratorOptions::tactile_landmarks,
-       ""}};
-  app.add_flag("--generate-world", generate_flag,
-               "Draw a world (--world-seed, --family), check its aliasing and write it to --output-world; no simulation");
-  app.add_option("--world-seed", gen.world_seed, "Seed of the generated world")->capture_default_str();
-  app.add_option("--output-world", output_world, "YAML file the generated world is written to");
-  app.add_option("--output-world-json", output_world_json,
-                 "Also write the generated world's header and drawn parameters to this JSON file");
-  app.add_option("--family", gen.family, "Generated world family: aliased (the paper's premise) or stress (premise broken)")
-      ->capture_default_str();
-  app.add_flag("--faults", gen.faults,
-               "Generated world: add the standard sensor faults (4 dead whiskers, a board offline 30 s, a 10 s camera "
-               "blackout, a 20 % odometry slip for 10 s)");
-  app.add_option("--kidnaps", gen.kidnaps,
-                 "Generated world: draw N kidnaps (0.." + std::to_string(kMaxKidnaps) +
-                     ") after the first lap, a lap apart where the run allows, each 90-270 deg along the path from "
-                     "where the robot is");
-  app.add_option("--slam-config", slam_config,
-                 "slamd config whose visual template and match threshold the check uses (default: slam.yaml" +
-                     kDefaultConfigDirs);
-  for (RangeOption& r : gen_ranges) app.add_option(r.name, r.text, r.help);
+  GenerateCliOptions generate;
+  add_generate_options(app, generate, kDefaultConfigDirs);
   program.add_output(output, "LCM log to write");
   app.add_option("--candump", candump_path,
                  "Also (or only) write the whisker boards' CAN frames as a candump -l log, for canplayer");
@@ -403,10 +176,7 @@ int main(int argc, char** argv) {
       }
       return controller;
     };
-    if (generate_flag) {
-      if (slam_config.empty()) slam_config = default_config_path("slam.yaml", "--slam-config");
-      return generate(gen, gen_ranges, robot, load_controller(), slam_config, output_world, output_world_json, quiet);
-    }
+    if (generate.generate) return run_generate(generate, robot, load_controller(), quiet);
     if (!bringup.session.empty()) return run_bringup(bringup, candump_path, whiskerd_config, can_interface, seed, start_utime);
     if (world_path.empty()) {
       std::cerr << "vita-sim: --world FILE is required (or --generate-world)\n";
