@@ -223,13 +223,37 @@ TEST(Localiser, AViewRecognisedAsAnotherTemplateOfAPlaceSupportsIt) {
   // Template 7 is the best match (its one experience at place 7); the view would pass as template
   // 100 too, which place 26 (where odometry says) holds: level, no commit.
   Localiser with = at_26();
-  EXPECT_FALSE(with.on_localising_cycle(7, 0.0, ring.map, [](int t) { return t == 100; }));
+  EXPECT_FALSE(with.on_localising_cycle(
+      7, 0.0, ring.map, [](int t) { return t == 100 ? Recognition::Recognised : Recognition::None; }));
   EXPECT_EQ(with.hypotheses(), 2);
   // Judged by the best template alone, place 26 looks otherwise and place 7 wins.
   Localiser without = at_26();
   const auto c = without.on_localising_cycle(7, 0.0, ring.map);
   ASSERT_TRUE(c);
   EXPECT_EQ(c->experience, 7);
+}
+
+// ViTa: where vision alone would recognise the view as a template a place holds and only touch
+// objects (another phase of the whisk, a contact missed), the place gets no support, and loses
+// none: touch withholds evidence, it does not contradict what vision knows.
+TEST(Localiser, APlaceOnlyTouchObjectsToIsNotContradicted) {
+  Ring ring([](int i) { return i == 26 ? 100 : i; });
+  LocaliserParams p;
+  p.commit_score = 1;
+  p.commit_margin = 2;
+  ring.map.set_current(26);
+  // Template 7 (place 7) is recognised; place 26, where odometry says, holds template 100, which
+  // the view is `at_26`. Place 7 starts at +1; it commits only if the prior fell behind by 2.
+  const auto first_cycle = [&](Recognition at_26) {
+    Localiser loc(p);
+    loc.start(true, 0);
+    return loc.on_localising_cycle(7, 0.0, ring.map, [&](int t) { return t == 100 ? at_26 : Recognition::None; });
+  };
+  const auto contradicted = first_cycle(Recognition::None);
+  ASSERT_TRUE(contradicted) << "the place is known and looks otherwise: -1, and place 7 leads by 2";
+  EXPECT_EQ(contradicted->experience, 7);
+  EXPECT_FALSE(first_cycle(Recognition::SeenOnly)) << "vision knows place 26; touch alone does not count against it";
+  EXPECT_FALSE(first_cycle(Recognition::Recognised));
 }
 
 TEST(Localiser, AWindowTooSmallForItsDisagreementsIsAParamError) {

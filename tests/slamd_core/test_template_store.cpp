@@ -240,6 +240,35 @@ TEST(TemplateMatch, FusedVisionChoosesFirstAndTouchVouchesOnlyForANearMiss) {
   EXPECT_NEAR(s.match({&v, &t}, fused, p).error, 0.25, 1e-9);
 }
 
+// The localiser's question, template by template: recognised by the match's rules, seen only
+// (vision alone would take it; touch objects), or neither.
+TEST(TemplateMatch, RecogniserTellsRecognisedFromSeenOnlyFromNeither) {
+  TemplateStore s(64, 40);
+  const VisualTemplate v = random_template(60);
+  const TactileTemplate touched = random_tactile(61);
+  const TactileTemplate empty{};
+  s.add({&v, &touched}, 0, 0, 0);                                    // 0: this view, a contact
+  s.add({&v, &empty}, 0, 0, 0);                                      // 1: this view, nothing touched
+  const VisualTemplate other = random_template(62);
+  s.add({&other, &empty}, 0, 0, 0);                                  // 2: another view
+  const MatchParams p;
+  const Terms fused{true, true, true};
+  const TemplateStore::Recogniser felt_nothing(s, {&v, &empty}, fused, p, p.threshold_vita);
+  EXPECT_EQ(felt_nothing(1), Recognition::Recognised);
+  EXPECT_EQ(felt_nothing(0), Recognition::SeenOnly) << "an empty PFH is 1/σ_PFH from a contact's: touch objects";
+  EXPECT_EQ(felt_nothing(2), Recognition::None);
+  EXPECT_EQ(felt_nothing(3), Recognition::None) << "no such template";
+  // Vision alone: no veto, so no 'seen only'.
+  const TemplateStore::Recogniser seen(s, {&v, nullptr}, {true, false, false}, p, p.threshold_visual);
+  EXPECT_EQ(seen(0), Recognition::Recognised);
+  EXPECT_EQ(seen(1), Recognition::Recognised);
+  EXPECT_EQ(seen(2), Recognition::None);
+  // The Recogniser passes what match() would pick.
+  const BestMatch m = s.match({&v, &touched}, fused, p);
+  EXPECT_EQ(m.id, 0);
+  EXPECT_EQ(TemplateStore::Recogniser(s, {&v, &touched}, fused, p, p.threshold_vita)(m.id), Recognition::Recognised);
+}
+
 TEST(TemplateMatch, FusedAnEmptyTouchIsNotTakenForAContactNorAContactForAnEmptyTouch) {
   TemplateStore s(64, 40);
   const VisualTemplate v = random_template(60);

@@ -49,7 +49,7 @@ bool Localiser::on_tracking_recognition(bool refused, int recognised_template, i
                                         const ExperienceMap& map) {
   if (localising() || recognised_template < 0) return false;
   // The experiences made since the oldest disagreement still in the window are no evidence.
-  const auto first_refused = std::find_if(recent_.begin(), recent_.end(), [](const Recognition& r) { return r.refused; });
+  const auto first_refused = std::find_if(recent_.begin(), recent_.end(), [](const TrackedRecognition& r) { return r.refused; });
   const int suspect_from = first_refused != recent_.end() ? first_refused->first_new_id : first_new_id;
   // A disagreement only where the map knows the place the robot thinks it is at (by what it held
   // before the disagreements began): in a place never mapped, a view that is only like one
@@ -60,9 +60,9 @@ bool Localiser::on_tracking_recognition(bool refused, int recognised_template, i
   }
   recent_.push_back({refused, first_new_id});
   while (static_cast<int>(recent_.size()) > params_.kidnap_window) recent_.pop_front();
-  const auto refusals = std::count_if(recent_.begin(), recent_.end(), [](const Recognition& r) { return r.refused; });
+  const auto refusals = std::count_if(recent_.begin(), recent_.end(), [](const TrackedRecognition& r) { return r.refused; });
   if (params_.kidnap_disagreements <= 0 || refusals < params_.kidnap_disagreements) return false;
-  const int evidence_below = std::find_if(recent_.begin(), recent_.end(), [](const Recognition& r) {
+  const int evidence_below = std::find_if(recent_.begin(), recent_.end(), [](const TrackedRecognition& r) {
                                return r.refused;
                              })->first_new_id;
   ++kidnaps_detected_;
@@ -72,7 +72,7 @@ bool Localiser::on_tracking_recognition(bool refused, int recognised_template, i
 }
 
 std::optional<Commit> Localiser::on_localising_cycle(int template_id, double travelled_m, const ExperienceMap& map,
-                                                    const std::function<bool(int)>& recognises) {
+                                                    const std::function<Recognition(int)>& recognises) {
   if (!localising()) return std::nullopt;
   localising_m_ += travelled_m;
   const Pose2 dr = map.current_pose();
@@ -80,29 +80,36 @@ std::optional<Commit> Localiser::on_localising_cycle(int template_id, double tra
     const std::vector<Experience>& exps = map.experiences();
     const std::vector<int>& candidates = map.experiences_of(template_id);
     std::vector<bool> used(candidates.size(), false);
-    std::unordered_map<int, bool> recognised;  // by template, this cycle
-    const auto is_recognised = [&](int tid) {
-      if (tid == template_id) return true;
-      if (!recognises || tid < 0) return false;
-      const auto [it, fresh] = recognised.try_emplace(tid, false);
+    std::unordered_map<int, Recognition> recognised;  // by template, this cycle
+    const auto recognition = [&](int tid) {
+      if (tid == template_id) return Recognition::Recognised;
+      if (!recognises || tid < 0) return Recognition::None;
+      const auto [it, fresh] = recognised.try_emplace(tid, Recognition::None);
       if (fresh) it->second = recognises(tid);
       return it->second;
     };
-    // Around a candidate place, the nearest experience whose template the view is recognised as (-1: none).
-    const auto nearest_recognised = [&](const Pose2& p) {
-      int best = -1;
+    // Around a candidate place: the nearest experience whose template the view is recognised as
+    // (-1: none), and whether vision alone would take one there that touch objects to.
+    struct Around {
+      int recognised = -1;
+      bool seen_only = false;
+    };
+    const auto around = [&](const Pose2& p) {
+      Around a;
       double dbest = params_.radius;
       const size_t n = std::min(exps.size(), static_cast<size_t>(std::max(evidence_below_, 0)));
       for (size_t i = 0; i < n; ++i) {
         const Experience& e = exps[i];
         const double d = std::hypot(e.pose.x - p.x, e.pose.y - p.y);
-        if (e.retired || d > dbest || std::abs(angle_diff(e.pose.theta, p.theta)) > params_.heading) continue;
-        if (is_recognised(e.template_id)) {
-          best = static_cast<int>(i);
+        if (e.retired || d > params_.radius || std::abs(angle_diff(e.pose.theta, p.theta)) > params_.heading) continue;
+        const Recognition r = recognition(e.template_id);
+        if (r == Recognition::Recognised && d <= dbest) {
+          a.recognised = static_cast<int>(i);
           dbest = d;
         }
+        a.seen_only = a.seen_only || r == Recognition::SeenOnly;
       }
-      return best;
+      return a;
     };
     for (Hypothesis& h : hyps_) {
       const Pose2 p = pose_of(h, dr);
@@ -123,10 +130,13 @@ std::optional<Commit> Localiser::on_localising_cycle(int template_id, double tra
       } else {
         // Not the best template's place; another template the view is recognised as (a look-alike
         // learnt at another pass) is as good. The map knowing the place and holding nothing the view
-        // is recognised as is evidence against; a place never mapped says nothing either way.
-        anchor = nearest_recognised(p);
+        // is recognised as is evidence against, unless vision alone recognises it there and only
+        // touch objects (touch varies between passes: it withholds support, it does not contradict);
+        // a place never mapped says nothing either way.
+        const Around a = around(p);
+        anchor = a.recognised;
         if (anchor < 0) {
-          if (map.mapped_near(p, params_.radius, params_.heading, evidence_below_)) --h.score;
+          if (!a.seen_only && map.mapped_near(p, params_.radius, params_.heading, evidence_below_)) --h.score;
           continue;
         }
       }
@@ -211,7 +221,7 @@ Commit Localiser::commit(const Hypothesis& h, const ExperienceMap& map, bool gav
 void Localiser::serialise(std::vector<uint8_t>& out) const {
   bin::put<uint8_t>(out, static_cast<uint8_t>(state_));
   bin::put<uint32_t>(out, static_cast<uint32_t>(recent_.size()));
-  for (const Recognition& r : recent_) {
+  for (const TrackedRecognition& r : recent_) {
     bin::put<uint8_t>(out, r.refused ? 1 : 0);
     bin::put<int32_t>(out, r.first_new_id);
   }
@@ -238,7 +248,7 @@ void Localiser::deserialise(const std::vector<uint8_t>& in, size_t& pos, int num
   const auto recent = bin::get<uint32_t>(in, pos);
   if (recent > in.size()) throw std::runtime_error("checkpoint: recognition count is larger than the data");
   for (uint32_t i = 0; i < recent; ++i) {
-    Recognition r;
+    TrackedRecognition r;
     r.refused = bin::get<uint8_t>(in, pos) != 0;
     r.first_new_id = bin::get<int32_t>(in, pos);
     if (r.first_new_id < 0) throw std::runtime_error("checkpoint: bad recognition record");

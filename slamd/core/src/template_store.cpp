@@ -444,14 +444,14 @@ TemplateStore::Recogniser::Recogniser(const TemplateStore& store, const Query& q
   }
 }
 
-bool TemplateStore::Recogniser::operator()(int id) const {
-  if (id < 0 || id >= store_.size() || (!terms_.visual && !terms_.tactile)) return false;
+Recognition TemplateStore::Recogniser::operator()(int id) const {
+  if (id < 0 || id >= store_.size() || (!terms_.visual && !terms_.tactile)) return Recognition::None;
   const auto iu = static_cast<size_t>(id);
   if (terms_.visual && (cur_.empty() || store_.has_visual_[iu] == 0 ||
                         std::abs(static_cast<double>(store_.visual_mean_[iu]) - q_.visual->mean) > p_.prefilter_mean_diff)) {
-    return false;
+    return Recognition::None;
   }
-  if (terms_.tactile && (q_.tactile == nullptr || store_.has_tactile_[iu] == 0)) return false;
+  if (terms_.tactile && (q_.tactile == nullptr || store_.has_tactile_[iu] == 0)) return Recognition::None;
   double ev = 0.0, ep = 0.0, es = 0.0;
   if (terms_.visual) {
     ev = visual_distance(cur_.data(), store_.visual_.row(iu), store_.width_, store_.height_, p_.shift_max, p_.shift_step,
@@ -467,9 +467,13 @@ bool TemplateStore::Recogniser::operator()(int id) const {
   // Recognised if any of match()'s rules for this query takes it within τ.
   const Rules rules = rules_for(q_, terms_, p_);
   for (size_t j = 0; j < rules.count; ++j) {
-    if (rule_error(rules.rules[j], ev, ep, es, both_shapes, p_) <= tau_) return true;
+    if (rule_error(rules.rules[j], ev, ep, es, both_shapes, p_) <= tau_) return Recognition::Recognised;
   }
-  return false;
+  // Not recognised; with the fusion, whether vision alone would have taken it.
+  if (terms_.fused && terms_.visual && ev <= p_.threshold_visual) {
+    return Recognition::SeenOnly;
+  }
+  return Recognition::None;
 }
 
 void TemplateStore::restore_decay(double restore, double floor) {

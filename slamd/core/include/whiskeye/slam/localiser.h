@@ -10,8 +10,9 @@
 // hypothesis with an experience within `radius` (and `heading` of its own heading) of that
 // template, or of any template the view would be recognised as too, is supported (+1, and
 // re-anchored on that experience, which removes its drift); one where the map has experiences but
-// none the view is recognised as loses 1 (the place is known and looks otherwise); one in a place
-// never mapped keeps its score. Every experience of the template that supports no hypothesis starts one. The
+// none the view is recognised as loses 1 (the place is known and looks otherwise) — unless vision
+// alone would recognise one there and only touch objects (Recognition::SeenOnly: touch withholds
+// support, it does not contradict); one in a place never mapped keeps its score. Every experience of the template that supports no hypothesis starts one. The
 // best commits when its score reaches `commit_score` and leads every hypothesis elsewhere by
 // `commit_margin`. Pure: no I/O, time passed in.
 //
@@ -26,6 +27,7 @@
 
 #include "whiskeye/common/params.h"
 #include "whiskeye/common/se2.h"
+#include "whiskeye/slam/types.h"
 
 #include <cstdint>
 #include <deque>
@@ -103,11 +105,11 @@ class Localiser {
   bool on_tracking_recognition(bool refused, int recognised_template, int first_new_id, const ExperienceMap& map);
 
   // While localising: one cycle. template_id: the template recognised this cycle, or -1.
-  // travelled_m: distance travelled by odometry since the previous cycle. recognises(t): whether
-  // the cycle's view would be recognised as template t too (TemplateStore::Recogniser; empty: only
-  // template_id counts). Returns the commit that ends localising, if this cycle brings one.
+  // travelled_m: distance travelled by odometry since the previous cycle. recognises(t): how the
+  // cycle's view relates to template t (TemplateStore::Recogniser; empty: only template_id counts).
+  // Returns the commit that ends localising, if this cycle brings one.
   std::optional<Commit> on_localising_cycle(int template_id, double travelled_m, const ExperienceMap& map,
-                                            const std::function<bool(int)>& recognises = {});
+                                            const std::function<Recognition(int)>& recognises = {});
 
   void serialise(std::vector<uint8_t>& out) const;
   void deserialise(const std::vector<uint8_t>& in, size_t& pos, int num_experiences);
@@ -128,11 +130,11 @@ class Localiser {
   std::vector<Hypothesis> hyps_;
   // The last kidnap_window recognitions while tracking: refused or not, and the first experience
   // made at or after each.
-  struct Recognition {
+  struct TrackedRecognition {
     bool refused = false;
     int first_new_id = 0;
   };
-  std::deque<Recognition> recent_;
+  std::deque<TrackedRecognition> recent_;
   int evidence_below_ = std::numeric_limits<int>::max();  // experiences from this id on are no evidence
   double localising_m_ = 0.0;  // travelled since localising started
   int64_t kidnaps_detected_ = 0;

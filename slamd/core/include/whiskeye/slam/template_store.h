@@ -117,13 +117,14 @@ class TemplateStore {
   BestMatch match(const Query& q, const Terms& terms, const MatchParams& p) const;
 
   // Whether stored template `id` is one `q` would be recognised as by match()'s rules (the same
-  // terms, rules and prefilter) within `tau`: not only the best template but any that passes. The
-  // localiser asks it of the templates around each candidate place. One per cycle: the query is
-  // prepared once.
+  // terms, rules and prefilter) within `tau`: not only the best template but any that passes; with
+  // Terms::fused, SeenOnly for one that vision alone would take (V ≤ threshold_visual) where touch
+  // objects. The localiser asks it of the templates around each candidate place. One per cycle: the
+  // query is prepared once.
   class Recogniser {
    public:
     Recogniser(const TemplateStore& store, const Query& q, const Terms& terms, const MatchParams& p, double tau);
-    bool operator()(int id) const;
+    Recognition operator()(int id) const;
 
    private:
     const TemplateStore& store_;

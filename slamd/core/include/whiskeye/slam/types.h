@@ -99,6 +99,12 @@ struct MatchResult {
 };
 
 enum class EventType { SameExperience, NewExperience, Relocalise };
+
+// How the cycle's view relates to one stored template (TemplateStore::Recogniser): recognised by the
+// match's rules; seen only — vision alone would take it (V within threshold_visual) but touch objects
+// (ViTa's veto); or neither. Touch differs between passes of one place (the whisk's phase, a contact
+// or none), so its objection withholds support from a place but is no evidence against it.
+enum class Recognition : uint8_t { None, SeenOnly, Recognised };
 std::string to_string(EventType type);
 
 struct Event {
