@@ -9,6 +9,9 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
+#include <cmath>
+#include <cstring>
 #include <random>
 
 namespace whiskeye::slam {
@@ -109,9 +112,10 @@ TEST(VisualTemplate, AllPixelFormatsGiveTheSameTemplate) {
   }
 }
 
-// The pipeline as it was until 2026-12-04: the whole image converted with OpenCV, then cropped by
-// make_visual_template_from_grey. make_visual_template now converts only the crop, with its own
-// float conversion; the templates must be byte-identical (the demo's numbers must not move).
+// The template computed with OpenCV alone: the whole image converted to grey, to float, cropped and
+// shrunk by cv::resize(INTER_AREA); only the normalisation is make_visual_template_from_grey's (at
+// the template's size, where its shrink is the identity). make_visual_template converts only the
+// crop, with its own float conversion and area average: the templates must be byte-identical.
 VisualTemplate whole_image_reference(const ImageView& im, const VisualParams& p) {
   auto* data = const_cast<uint8_t*>(im.data.data());
   const auto stride = static_cast<size_t>(im.row_stride);
@@ -126,7 +130,48 @@ VisualTemplate whole_image_reference(const ImageView& im, const VisualParams& p)
   }
   cv::Mat grey;
   grey8.convertTo(grey, CV_32F, 1.0 / 255.0);
-  return make_visual_template_from_grey(grey.ptr<float>(), grey.cols, grey.rows, static_cast<int>(grey.step1()), p);
+  const int x0 = std::min(p.crop_x, im.width), y0 = std::min(p.crop_y, im.height);
+  const cv::Rect crop(x0, y0, p.crop_width == 0 ? im.width - x0 : std::min(p.crop_width, im.width - x0),
+                      p.crop_height == 0 ? im.height - y0 : std::min(p.crop_height, im.height - y0));
+  cv::Mat small;
+  cv::resize(grey(crop), small, cv::Size(p.template_width, p.template_height), 0, 0, cv::INTER_AREA);
+  VisualParams whole = p;
+  whole.crop_x = whole.crop_y = whole.crop_width = whole.crop_height = 0;
+  return make_visual_template_from_grey(small.ptr<float>(), small.cols, small.rows, static_cast<int>(small.step1()), whole);
+}
+
+// The area average gives cv::resize(INTER_AREA)'s floats bit for bit, for every size: shrinks by
+// non-integer factors (computed by area_shrink), whole factors, no change and enlargements (handed
+// to OpenCV), rows with padding.
+TEST(VisualTemplate, AreaShrinkGivesOpenCvsInterAreaFloatsBitForBit) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> value(0.0f, 1.0f);
+  std::uniform_int_distribution<int> size(1, 700);
+  int weighted = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    const int w = size(rng), h = size(rng) / 2 + 1;
+    int tw = std::max(1, w / std::uniform_int_distribution<int>(1, 23)(rng)), th = std::max(1, h / std::uniform_int_distribution<int>(1, 23)(rng));
+    if (trial % 10 == 0) tw += 3;  // an enlargement now and then
+    if (trial == 1) {
+      tw = 64;  // slam.yaml's 640x300 -> 64x40
+      th = 40;
+    }
+    const int width = trial == 1 ? 640 : w, height = trial == 1 ? 300 : h;
+    const int stride = width + trial % 5;
+    std::vector<float> src(static_cast<size_t>(stride) * static_cast<size_t>(height));
+    for (float& v : src) v = value(rng);
+    std::vector<float> got(static_cast<size_t>(tw) * static_cast<size_t>(th));
+    area_shrink(src.data(), width, height, stride, got.data(), tw, th);
+    cv::Mat want;
+    cv::resize(cv::Mat(height, width, CV_32FC1, src.data(), static_cast<size_t>(stride) * 4), want, cv::Size(tw, th), 0, 0,
+               cv::INTER_AREA);
+    ASSERT_TRUE(want.isContinuous());
+    ASSERT_EQ(0, std::memcmp(got.data(), want.ptr<float>(), got.size() * sizeof(float)))
+        << width << "x" << height << " -> " << tw << "x" << th;
+    const double fx = static_cast<double>(width) / tw, fy = static_cast<double>(height) / th;
+    if (fx >= 1.0 && fy >= 1.0 && (fx != std::floor(fx) || fy != std::floor(fy))) ++weighted;
+  }
+  EXPECT_GT(weighted, 200);  // most trials take the weighted path
 }
 
 TEST(VisualTemplate, ConvertingOnlyTheCropGivesTheTemplatesOfConvertingTheWholeImage) {

@@ -1,6 +1,6 @@
-// Visual template: every pixel format ends as a float greyscale image in [0, 1], which is cropped,
-// block-averaged (OpenCV INTER_AREA = exact area averaging, also for non-integer ratios) and
-// normalised. See visual_template.h.
+// Visual template: every pixel format ends as grey in [0, 1], which is cropped, area-averaged
+// (OpenCV INTER_AREA's arithmetic, also for non-integer ratios) and normalised. See
+// visual_template.h.
 #include "whiskeye/slam/visual_template.h"
 
 #include <opencv2/core.hpp>
@@ -9,7 +9,9 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <string>
+#include <vector>
 
 namespace whiskeye::slam {
 
@@ -77,78 +79,140 @@ const std::array<float, 256>& unit_grey() {
   return lut;
 }
 
-// The crop of `im` as a float grey image in [0, 1]. Only the crop is converted: every format's grey
-// value of a pixel depends on that pixel alone (YUYV: its Y byte; RGB/BGR: OpenCV's fixed-point
-// weights), so this equals converting the whole image and cropping it, which it did until
-// 2026-12-04 (docs/performance.md, "### Replay").
-cv::Mat crop_to_unit_grey(const ImageView& im, const VisualParams& p, const FrameDecoder* decoder) {
+// The crop of an image as 8-bit grey bytes: `bytes` is the crop's first grey byte, `step` the
+// distance between two grey bytes of a row, `row_step` between two rows. `storage` holds the
+// converted image when the format needs one (RGB, BGR, a decoded frame).
+struct GreyCrop {
+  cv::Rect rect;
+  const uint8_t* bytes = nullptr;
+  size_t step = 0;
+  size_t row_step = 0;
+  cv::Mat storage;
+};
+
+// Only the crop is converted: every format's grey value of a pixel depends on that pixel alone
+// (YUYV: its Y byte; RGB/BGR: OpenCV's fixed-point weights), so this equals converting the whole
+// image and cropping it.
+GreyCrop grey_crop(const ImageView& im, const VisualParams& p, const FrameDecoder* decoder) {
   // OpenCV wants a non-const pointer for a header over foreign data; it is only read.
   auto* data = const_cast<uint8_t*>(im.data.data());
   const auto stride = static_cast<size_t>(im.row_stride);
-  cv::Rect c;
-  const uint8_t* bytes = nullptr;  // the crop's first grey byte
-  size_t step = 0;                 // between two grey bytes of a row
-  size_t row_step = 0;             // between two rows
-  cv::Mat grey8;
+  GreyCrop g;
   switch (im.pixelformat) {
     case kPixGrey:
       check_raw(im, 1);
-      c = crop_rect(p, im.width, im.height);
-      bytes = data + static_cast<size_t>(c.y) * stride + static_cast<size_t>(c.x);
-      step = 1;
-      row_step = stride;
-      break;
+      g.rect = crop_rect(p, im.width, im.height);
+      g.bytes = data + static_cast<size_t>(g.rect.y) * stride + static_cast<size_t>(g.rect.x);
+      g.step = 1;
+      g.row_step = stride;
+      return g;
     case kPixYuyv:
       check_raw(im, 2);
-      c = crop_rect(p, im.width, im.height);
-      bytes = data + static_cast<size_t>(c.y) * stride + 2 * static_cast<size_t>(c.x);  // Y, U, Y, V: Y every other byte
-      step = 2;
-      row_step = stride;
-      break;
+      g.rect = crop_rect(p, im.width, im.height);
+      g.bytes = data + static_cast<size_t>(g.rect.y) * stride + 2 * static_cast<size_t>(g.rect.x);  // Y, U, Y, V
+      g.step = 2;
+      g.row_step = stride;
+      return g;
     case kPixRgb24:
     case kPixBgr24:
       check_raw(im, 3);
-      c = crop_rect(p, im.width, im.height);
-      cv::cvtColor(cv::Mat(im.height, im.width, CV_8UC3, data, stride)(c), grey8,
+      g.rect = crop_rect(p, im.width, im.height);
+      cv::cvtColor(cv::Mat(im.height, im.width, CV_8UC3, data, stride)(g.rect), g.storage,
                    im.pixelformat == kPixRgb24 ? cv::COLOR_RGB2GRAY : cv::COLOR_BGR2GRAY);
-      bytes = grey8.data;
-      step = 1;
-      row_step = grey8.step[0];
-      break;
+      g.bytes = g.storage.data;
+      g.step = 1;
+      g.row_step = g.storage.step[0];
+      return g;
     default:
       if (decoder != nullptr && im.pixelformat == decoder->pixelformat) {
         decoder->check(im);  // before allocating what the message claims
-        grey8.create(im.height, im.width, CV_8UC1);
-        decoder->decode(im, grey8.data, grey8.step[0]);
-        c = crop_rect(p, im.width, im.height);
-        bytes = grey8.ptr(c.y) + c.x;
-        step = 1;
-        row_step = grey8.step[0];
-        break;
+        g.storage.create(im.height, im.width, CV_8UC1);
+        decoder->decode(im, g.storage.data, g.storage.step[0]);
+        g.rect = crop_rect(p, im.width, im.height);
+        g.bytes = g.storage.ptr(g.rect.y) + g.rect.x;
+        g.step = 1;
+        g.row_step = g.storage.step[0];
+        return g;
       }
       throw InputError("image: unsupported pixel format '" + fourcc_text(im.pixelformat) + "'");
   }
-  const std::array<float, 256>& unit = unit_grey();
-  cv::Mat out(c.height, c.width, CV_32FC1);
-  for (int y = 0; y < c.height; ++y) {
-    const uint8_t* in = bytes + static_cast<size_t>(y) * row_step;
-    auto* o = out.ptr<float>(y);
-    for (int x = 0; x < c.width; ++x) o[x] = unit[in[static_cast<size_t>(x) * step]];
-  }
-  return out;
 }
 
-}  // namespace
+// One axis of an area average from `from` cells to `to`: for each destination cell, the source
+// cells it overlaps, in order, each with its share of the cell (overlap / cell width, as a float).
+// These are OpenCV's INTER_AREA weights for a shrink by a non-integer factor, computed the same
+// way (the scale as 1 / (to / from) in double, a part overlap under 1e-3 dropped), so that
+// `area_average` gives cv::resize's floats bit for bit.
+struct AreaAxis {
+  std::vector<int> begin;  // destination cell d's taps are [begin[d], begin[d + 1])
+  std::vector<int> source;
+  std::vector<float> share;
+};
 
-VisualTemplate make_visual_template_from_grey(const float* grey, int width, int height, int stride_floats,
-                                              const VisualParams& p) {
-  const cv::Rect crop = crop_rect(p, width, height);
-  const cv::Mat src(height, width, CV_32FC1, const_cast<float*>(grey), static_cast<size_t>(stride_floats) * 4);
-  cv::Mat small;
-  cv::resize(src(crop), small, cv::Size(p.template_width, p.template_height), 0, 0, cv::INTER_AREA);
+AreaAxis area_axis(int from, int to) {
+  const double scale = 1.0 / (static_cast<double>(to) / from);
+  AreaAxis a;
+  a.begin.reserve(static_cast<size_t>(to) + 1);
+  auto tap = [&a](int s, double w) {
+    a.source.push_back(s);
+    a.share.push_back(static_cast<float>(w));
+  };
+  for (int d = 0; d < to; ++d) {
+    a.begin.push_back(static_cast<int>(a.source.size()));
+    const double lo = d * scale, hi = lo + scale;
+    const double width = std::min(scale, from - lo);
+    int last = std::min(static_cast<int>(std::floor(hi)), from - 1);
+    const int first = std::min(static_cast<int>(std::ceil(lo)), last);
+    if (first - lo > 1e-3) tap(first - 1, (first - lo) / width);
+    for (int s = first; s < last; ++s) tap(s, 1.0 / width);
+    if (hi - last > 1e-3) tap(last, std::min(std::min(hi - last, 1.0), width) / width);
+  }
+  a.begin.push_back(static_cast<int>(a.source.size()));
+  return a;
+}
 
+// Whether cv::resize's INTER_AREA takes the weighted path `area_average` reproduces: a shrink on
+// both axes by a factor that is not a whole number on both (whole numbers take its block-sum path,
+// an enlargement its bilinear one).
+bool weighted_area_path(int from_w, int from_h, int to_w, int to_h) {
+  const double sx = 1.0 / (static_cast<double>(to_w) / from_w), sy = 1.0 / (static_cast<double>(to_h) / from_h);
+  if (sx < 1.0 || sy < 1.0) return false;
+  const auto whole = [](double s) { return std::abs(s - std::round(s)) < std::numeric_limits<double>::epsilon(); };
+  return !(whole(sx) && whole(sy));
+}
+
+// The area average of a from_w × from_h float image into to_w × to_h (`out`, row-major), with
+// cv::resize's arithmetic: each source row's horizontal sums in float, in source order, then the
+// rows weighted and summed in order. `row(y)` gives source row y (from_w floats).
+template <class Row>
+void area_average(int from_w, int from_h, int to_w, int to_h, Row&& row, float* out) {
+  const AreaAxis ax = area_axis(from_w, to_w), ay = area_axis(from_h, to_h);
+  std::vector<float> h(static_cast<size_t>(to_w));
+  for (int dy = 0; dy < to_h; ++dy) {
+    float* o = out + static_cast<size_t>(dy) * static_cast<size_t>(to_w);
+    for (int j = ay.begin[static_cast<size_t>(dy)]; j < ay.begin[static_cast<size_t>(dy) + 1]; ++j) {
+      const float* in = row(ay.source[static_cast<size_t>(j)]);
+      for (int dx = 0; dx < to_w; ++dx) {
+        float s = 0.0f;
+        for (int k = ax.begin[static_cast<size_t>(dx)]; k < ax.begin[static_cast<size_t>(dx) + 1]; ++k) {
+          s += in[ax.source[static_cast<size_t>(k)]] * ax.share[static_cast<size_t>(k)];
+        }
+        h[static_cast<size_t>(dx)] = s;
+      }
+      const float beta = ay.share[static_cast<size_t>(j)];
+      if (j == ay.begin[static_cast<size_t>(dy)]) {
+        for (int dx = 0; dx < to_w; ++dx) o[dx] = beta * h[static_cast<size_t>(dx)];
+      } else {
+        for (int dx = 0; dx < to_w; ++dx) o[dx] += beta * h[static_cast<size_t>(dx)];
+      }
+    }
+  }
+}
+
+// The template from its subsampled float pixels (`small`, width·height of `p`): normalised and
+// quantised.
+VisualTemplate finish_template(std::vector<float> v, const VisualParams& p) {
   const int n = p.template_width * p.template_height;
-  std::vector<float> v(small.begin<float>(), small.end<float>());
   if (p.global_normalisation > 0.0) {
     double sum = 0.0;
     for (float x : v) sum += x;
@@ -197,12 +261,54 @@ VisualTemplate make_visual_template_from_grey(const float* grey, int width, int 
   return t;
 }
 
+}  // namespace
+
+void area_shrink(const float* grey, int width, int height, int stride_floats, float* out, int out_width,
+                 int out_height) {
+  if (weighted_area_path(width, height, out_width, out_height)) {
+    area_average(width, height, out_width, out_height,
+                 [&](int y) { return grey + static_cast<size_t>(y) * static_cast<size_t>(stride_floats); }, out);
+    return;
+  }
+  const cv::Mat src(height, width, CV_32FC1, const_cast<float*>(grey), static_cast<size_t>(stride_floats) * 4);
+  cv::Mat dst(out_height, out_width, CV_32FC1, out);
+  cv::resize(src, dst, dst.size(), 0, 0, cv::INTER_AREA);
+}
+
+VisualTemplate make_visual_template_from_grey(const float* grey, int width, int height, int stride_floats,
+                                              const VisualParams& p) {
+  const cv::Rect crop = crop_rect(p, width, height);
+  std::vector<float> small(static_cast<size_t>(p.template_width) * static_cast<size_t>(p.template_height));
+  area_shrink(grey + static_cast<size_t>(crop.y) * static_cast<size_t>(stride_floats) + static_cast<size_t>(crop.x),
+              crop.width, crop.height, stride_floats, small.data(), p.template_width, p.template_height);
+  return finish_template(std::move(small), p);
+}
+
 VisualTemplate make_visual_template(const ImageView& image, const VisualParams& params, const FrameDecoder* decoder) {
-  const cv::Mat grey = crop_to_unit_grey(image, params, decoder);
+  const GreyCrop g = grey_crop(image, params, decoder);
+  const std::array<float, 256>& unit = unit_grey();
+  const int w = g.rect.width;
+  const auto grey_row = [&g, &unit, w](int y, float* out) {
+    const uint8_t* in = g.bytes + static_cast<size_t>(y) * g.row_step;
+    for (int x = 0; x < w; ++x) out[x] = unit[in[static_cast<size_t>(x) * g.step]];
+  };
+  if (weighted_area_path(w, g.rect.height, params.template_width, params.template_height)) {
+    // Row by row: only the rows the average reads are converted, into one buffer.
+    std::vector<float> buffer(static_cast<size_t>(w));
+    std::vector<float> small(static_cast<size_t>(params.template_width) * static_cast<size_t>(params.template_height));
+    area_average(w, g.rect.height, params.template_width, params.template_height,
+                 [&](int y) {
+                   grey_row(y, buffer.data());
+                   return static_cast<const float*>(buffer.data());
+                 },
+                 small.data());
+    return finish_template(std::move(small), params);
+  }
+  cv::Mat grey(g.rect.height, w, CV_32FC1);
+  for (int y = 0; y < g.rect.height; ++y) grey_row(y, grey.ptr<float>(y));
   VisualParams whole = params;  // the crop is all there is now
   whole.crop_x = whole.crop_y = whole.crop_width = whole.crop_height = 0;
-  return make_visual_template_from_grey(grey.ptr<float>(), grey.cols, grey.rows, static_cast<int>(grey.step1()),
-                                        whole);
+  return make_visual_template_from_grey(grey.ptr<float>(), grey.cols, grey.rows, static_cast<int>(grey.step1()), whole);
 }
 
 }  // namespace whiskeye::slam

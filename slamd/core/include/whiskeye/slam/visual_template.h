@@ -54,6 +54,13 @@ struct FrameDecoder {
 VisualTemplate make_visual_template(const ImageView& image, const VisualParams& params,
                                     const FrameDecoder* decoder = nullptr);
 
+// Shrinks a width × height float image (`stride_floats` between rows) into out_width × out_height
+// floats at `out` by area averaging, with the floats cv::resize(INTER_AREA) gives bit for bit; a
+// shrink by a non-integer factor (slam.yaml's 7.5 rows a template row) is computed here, row by
+// row, at a fraction of OpenCV's cost, every other case by cv::resize.
+void area_shrink(const float* grey, int width, int height, int stride_floats, float* out, int out_width,
+                 int out_height);
+
 // From an already greyscale float image in [0, 1] (tests, and the path every format ends in).
 VisualTemplate make_visual_template_from_grey(const float* grey, int width, int height, int stride_floats,
                                               const VisualParams& params);
