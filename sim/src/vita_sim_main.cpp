@@ -7,6 +7,7 @@
 #include "whiskeye/common/bus.h"
 #include "whiskeye/common/cli.h"
 #include "whiskeye/common/config_path.h"
+#include "whiskeye/figure/png_file.h"
 #include "whiskeye/sim/can_log.h"
 #include "whiskeye/sim/lcm_sink.h"
 #include "whiskeye/sim/bringup_cli.h"
@@ -14,7 +15,6 @@
 #include "whiskeye/sim/simulator.h"
 #include "whiskeye/sim/world_plots.h"
 #include "whiskeye/whiskerd/config.h"
-#include "png_file.h"
 
 #include <whiskeye/rcp/params.h>
 
@@ -307,7 +307,7 @@ int main(int argc, char** argv) {
         if (dir.empty() || s % every != 0) return;
         char name[64];
         std::snprintf(name, sizeof name, "/frame_%06lld.png", static_cast<long long>(s));
-        write_png(dir + name, g.data(), w, h, 1, static_cast<std::size_t>(w));
+        figure::write_png(dir + name, g.data(), w, h, 1, static_cast<std::size_t>(w));
       }
     } tap(lcm.get(), candump.get(), frames_dir, frames_every);
 

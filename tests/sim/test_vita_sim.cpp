@@ -175,7 +175,7 @@ TEST(VitaSim, FramesDirPngsHoldExactlyTheLoggedFramesAndThePlotsDecode) {
   ASSERT_EQ(vita_sim(arena() + " --plot-world " + world_png + " --plot-views " + views_png), 0);
   const cv::Mat world = cv::imread(world_png, cv::IMREAD_UNCHANGED);
   EXPECT_EQ(world.type(), CV_8UC3);
-  EXPECT_GT(world.cols, 600) << "6 m at 100 px a metre";
+  EXPECT_GT(world.cols, 660) << "the figure's square map and its legend";
   // Something other than the white background, in colour: the landmarks.
   cv::Mat channels[3];
   cv::split(world, channels);

@@ -1,7 +1,9 @@
-// What each plot shows, as FigurePanel items in the plot frame (figure.h draws and writes them).
+// What each plot shows, as FigurePanel items in the plot frame (figure.h draws and writes them; the
+// world under a run is drawn by world_plots.h, as vita-sim draws it).
 #include "plots.h"
 
-#include "figure.h"
+#include "whiskeye/figure/figure.h"
+#include "whiskeye/sim/world_plots.h"
 
 #include <algorithm>
 #include <cmath>
@@ -12,6 +14,13 @@
 namespace whiskeye::eval {
 
 namespace {
+
+using figure::Figure;
+using figure::FigurePanel;
+using figure::LegendEntry;
+using figure::Rgb;
+using figure::time_colour;
+using figure::Xy;
 
 const Rgb kGrey{170, 170, 170};     // ground truth
 const Rgb kBlue{30, 110, 200};      // links, sparse experiences
@@ -24,10 +33,6 @@ const Rgb kSearching{120, 60, 170}; // the path driven before the first correct 
 const Rgb kLocalisingBand{255, 220, 120};  // under the path while the run reported LOCALISING
 const Rgb kLocalisedPath{150, 210, 150};   // the path driven after the first correct localisation
 const Rgb kBlack{0, 0, 0};
-const Rgb kWall{105, 105, 105};
-const Rgb kSolid{80, 80, 80};
-// Visual landmarks by pattern: landmarks that look alike get one colour.
-const Rgb kPatternColours[] = {{140, 70, 170}, {0, 128, 128}, {150, 95, 40}, {200, 80, 150}, {110, 110, 20}};
 
 constexpr double kTrailBreak_m = 0.2;  // consecutive poses further apart: a jump (re-localisation), not a path
 
@@ -36,53 +41,6 @@ Xy at(const Pose2& p) { return {p.x, p.y}; }
 double seconds(int64_t from, int64_t to) { return static_cast<double>(to - from) * 1e-6; }
 
 bool has_truth(const EvalInput& input) { return !input.ground_truth.empty(); }
-
-// A label `by` metres from `p` along `dir` (a unit vector), anchored so that the text runs away
-// from p: right of it, left of it, or centred above or below it.
-void label(FigurePanel& panel, Xy p, Xy dir, double by, const std::string& text, Rgb colour) {
-  const bool sideways = std::abs(dir.x) > std::abs(dir.y);
-  const int anchor = sideways ? (dir.x > 0 ? -1 : 1) : 0;
-  // Text hangs from its baseline: below a point it needs its height more.
-  const double drop = !sideways && dir.y < 0 ? 0.1 : 0.0;
-  panel.text({p.x + by * dir.x, p.y + by * dir.y - drop}, text, colour, 13, "landmark-label", anchor);
-}
-
-// Walls, visual landmarks (coloured by pattern, labelled on the arena's side) and tactile landmarks
-// (labelled above or below), in the world frame.
-void draw_world(FigurePanel& panel, const sim::World& world) {
-  const Xy centre{world.trajectory.centre.x, world.trajectory.centre.y};
-  const auto towards_centre = [&](Xy p) {
-    const double dx = centre.x - p.x, dy = centre.y - p.y;
-    const double n = std::max(1e-9, std::hypot(dx, dy));
-    return Xy{dx / n, dy / n};
-  };
-  for (const sim::Panel& w : world.walls) {
-    panel.polyline({{w.from.x, w.from.y}, {w.to.x, w.to.y}}, kWall, 5, "wall", w.name);
-  }
-  for (const sim::Panel& l : world.landmarks) {
-    const std::size_t k = static_cast<std::size_t>(std::max(0, l.pattern)) % std::size(kPatternColours);
-    const std::string pattern = l.pattern >= 0 && static_cast<std::size_t>(l.pattern) < world.patterns.size()
-                                    ? world.patterns[static_cast<std::size_t>(l.pattern)].name
-                                    : "";
-    const std::string name = pattern.empty() ? l.name : l.name + " (" + pattern + ")";
-    panel.polyline({{l.from.x, l.from.y}, {l.to.x, l.to.y}}, kPatternColours[k], 10, "visual-landmark", name);
-    const Xy mid{0.5 * (l.from.x + l.to.x), 0.5 * (l.from.y + l.to.y)};
-    label(panel, mid, towards_centre(mid), 0.2, name, kPatternColours[k]);
-  }
-  for (const sim::Solid& s : world.solids) {
-    if (s.shape == sim::Solid::Shape::Circle) {
-      panel.disc({s.centre.x, s.centre.y}, s.radius, kSolid, "tactile-landmark", s.name);
-    } else {
-      std::vector<Xy> pts;
-      for (const sim::Point2& q : s.vertices) pts.push_back({q.x, q.y});
-      panel.polygon(pts, kSolid, "tactile-landmark", s.name);
-    }
-    // Above an object beyond the centre's north, else below it: clear of the map and of the wall
-    // landmarks' labels, which run along the walls.
-    const Xy in = towards_centre({s.centre.x, s.centre.y});
-    label(panel, {s.centre.x, s.centre.y}, {0.0, -in.y > 0.5 ? 1.0 : -1.0}, s.radius + 0.1, s.name, kSolid);
-  }
-}
 
 // This log's ground truth in [from, to], one polyline per stretch between kidnaps.
 std::vector<std::vector<Xy>> truth_path(const GroundTruth& gt, int64_t from, int64_t to) {
@@ -131,16 +89,13 @@ void draw_experience_map(FigurePanel& panel, const EvalInput& input, const Pose2
 
 // The world (if any) and the ground truth (if any): what every plot of a run starts with.
 void draw_scene(FigurePanel& panel, const EvalInput& input, const PlotScene& scene, const Placement& placement) {
-  if (scene.world != nullptr) draw_world(panel, *scene.world);
+  if (scene.world != nullptr) sim::draw_world(panel, *scene.world);
   if (has_truth(input)) draw_ground_truth(panel, input);
   panel.set_frame(placement.frame);
 }
 
 void world_legend(Figure& fig, const PlotScene& scene) {
-  if (scene.world == nullptr) return;
-  fig.legend({LegendEntry::Kind::Line, kWall, 5, "wall"});
-  fig.legend({LegendEntry::Kind::Line, kPatternColours[1], 8, "visual landmark (one colour per pattern)"});
-  fig.legend({LegendEntry::Kind::Dot, kSolid, 6, "tactile landmark"});
+  if (scene.world != nullptr) sim::world_legend(fig);
 }
 
 void truth_legend(Figure& fig, const EvalInput& input) {
@@ -442,7 +397,7 @@ std::vector<std::string> plot_run(const std::string& dir, const PlotRun& run, co
     Figure fig(run.label + ": localisation after each kidnap or session start");
     for (const Localisation& l : result.localisation->instants) {
       FigurePanel& panel = fig.add_panel(localisation_title(l, origin));
-      if (scene.world != nullptr) draw_world(panel, *scene.world);
+      if (scene.world != nullptr) sim::draw_world(panel, *scene.world);
       draw_ground_truth(panel, input);
       draw_localisation(panel, input, l);
     }

@@ -2,9 +2,10 @@
 // SVG text writer. Layout: a title band; panels side by side, each a square data area with metre
 // ticks, a grid and its own title; the legend (and colour bar) in a column right of the panels, so
 // it never hides data.
-#include "figure.h"
+#include "whiskeye/figure/figure.h"
 
-#include <opencv2/imgcodecs.hpp>
+#include "whiskeye/figure/png_file.h"
+
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -16,7 +17,7 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace whiskeye::eval {
+namespace whiskeye::figure {
 
 // ---- FigurePanel ----
 
@@ -160,13 +161,7 @@ class RasterPainter : public Painter {
                 cv::FONT_HERSHEY_SIMPLEX, scale, bgr(c), thick, cv::LINE_AA);
   }
   void save(const std::string& path) const {
-    bool ok = false;
-    try {
-      ok = cv::imwrite(path, image_);
-    } catch (const cv::Exception& e) {
-      throw std::runtime_error("cannot write " + path + ": " + e.what());
-    }
-    if (!ok) throw std::runtime_error("cannot write " + path);
+    figure::write_png(path, image_.data, image_.cols, image_.rows, image_.channels(), image_.step[0]);
   }
 
  private:
@@ -505,4 +500,4 @@ void Figure::write_svg(const std::string& path) const {
   p.save(path);
 }
 
-}  // namespace whiskeye::eval
+}  // namespace whiskeye::figure

@@ -1,7 +1,7 @@
-// A small vector figure for vita-eval's plots: one or more panels side by side, each a list of
-// drawing items in world coordinates (metres) with equal scale on both axes, metre axes with ticks
-// and a grid, one legend and an optional colour bar; written as PNG (OpenCV raster) and as SVG from
-// the same items, so the two always show the same thing.
+// A small vector figure for vita-eval's plots and vita-sim's map of a world: one or more panels side
+// by side, each a list of drawing items in world coordinates (metres) with equal scale on both axes,
+// metre axes with ticks and a grid, one legend and an optional colour bar; written as PNG (OpenCV
+// raster, zlib file: png_file.h) and as SVG from the same items, so the two always show the same thing.
 //
 // The SVG writer is our own (figure.cpp, ~100 lines): no vector-graphics library (Cairo, an SVG
 // library) is among the project's Debian dependencies, OpenCV writes rasters only, and the plots need
@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-namespace whiskeye::eval {
+namespace whiskeye::figure {
 
 struct Rgb {
   int r = 0;
@@ -109,4 +109,4 @@ class Figure {
   bool share_axes_ = true;
 };
 
-}  // namespace whiskeye::eval
+}  // namespace whiskeye::figure

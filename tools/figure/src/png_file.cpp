@@ -1,5 +1,5 @@
 // PNG files with zlib (see png_file.h): one IDAT chunk, every row with filter 0 (none).
-#include "png_file.h"
+#include "whiskeye/figure/png_file.h"
 
 #include <zlib.h>
 
@@ -8,7 +8,7 @@
 #include <stdexcept>
 #include <vector>
 
-namespace whiskeye::sim {
+namespace whiskeye::figure {
 
 namespace {
 
@@ -74,4 +74,4 @@ void write_png(const std::string& path, const uint8_t* pixels, int width, int he
   if (!file) throw std::runtime_error(path + ": cannot write the PNG");
 }
 
-}  // namespace whiskeye::sim
+}  // namespace whiskeye::figure
