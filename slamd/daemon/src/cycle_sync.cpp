@@ -166,7 +166,7 @@ std::string CycleSynchroniser::add_odometry(const odometry_t& odometry) {
   return {};
 }
 
-std::string CycleSynchroniser::add_whisk_cycle(const whisk_cycle_t& cycle) {
+std::string CycleSynchroniser::add_whisk_cycle(whisk_cycle_t cycle) {
   if (cycle.utime_end <= last_cycle_end() && cycle.utime_end > consumed_until_ &&
       own_time_was_corrupt(2, cycle.utime_end, last_cycle_end())) {
     std::erase_if(pending_, [&](const whisk_cycle_t& c) { return c.utime_end >= cycle.utime_end; });
@@ -179,7 +179,7 @@ std::string CycleSynchroniser::add_whisk_cycle(const whisk_cycle_t& cycle) {
   }
   if (std::string why = check_jump(2, cycle.utime_end, "WHISK_CYCLE"); !why.empty()) return why;
   advance_data_time(cycle.utime_end);
-  pending_.push_back(cycle);
+  pending_.push_back(std::move(cycle));
   return {};
 }
 
@@ -191,10 +191,10 @@ bool CycleSynchroniser::ready(const whisk_cycle_t& cycle) const {
   return camera_settled && odometry_settled;
 }
 
-SyncedCycle CycleSynchroniser::assemble(const whisk_cycle_t& cycle) {
-  SyncedCycle out;
-  out.whisk = cycle;
+SyncedCycle CycleSynchroniser::assemble(whisk_cycle_t&& cycle) {
   const int64_t end = cycle.utime_end;
+  SyncedCycle out;
+  out.whisk = std::move(cycle);
   const int64_t tolerance = seconds_to_utime(params_.camera_tolerance_s);
   const CameraFrame* best = nullptr;
   for (const auto& f : frames_) {
@@ -220,7 +220,7 @@ SyncedCycle CycleSynchroniser::assemble(const whisk_cycle_t& cycle) {
 std::vector<SyncedCycle> CycleSynchroniser::take_ready() {
   std::vector<SyncedCycle> out = std::exchange(restarted_, {});
   while (!pending_.empty() && ready(pending_.front())) {
-    out.push_back(assemble(pending_.front()));
+    out.push_back(assemble(std::move(pending_.front())));
     pending_.pop_front();
   }
   return out;
@@ -229,7 +229,7 @@ std::vector<SyncedCycle> CycleSynchroniser::take_ready() {
 std::vector<SyncedCycle> CycleSynchroniser::flush() {
   std::vector<SyncedCycle> out = std::exchange(restarted_, {});
   while (!pending_.empty()) {
-    out.push_back(assemble(pending_.front()));
+    out.push_back(assemble(std::move(pending_.front())));
     pending_.pop_front();
   }
   return out;

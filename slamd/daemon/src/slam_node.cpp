@@ -44,7 +44,7 @@ SlamNode::SlamNode(Bus& in, Bus& out, std::unique_ptr<slam::VitaSlam> slam, cons
       decode_message(data, msg, &reason);  // sets the reason when it fails
     }
     if (!reason.empty()) return decode_errors_.record(info.channel, reason);
-    on_whisk_cycle(msg);
+    on_whisk_cycle(std::move(msg));
   });
 }
 
@@ -98,12 +98,13 @@ void SlamNode::on_camera(std::span<const uint8_t> data, const MessageInfo& info)
   process(sync_.take_ready());
 }
 
-void SlamNode::on_whisk_cycle(const whisk_cycle_t& msg) {
+void SlamNode::on_whisk_cycle(whisk_cycle_t msg) {
   const std::string err = check_whisk_cycle(msg);
   if (!err.empty()) return reject(kWhisk, err);
-  if (const std::string why = sync_.add_whisk_cycle(msg); !why.empty()) return reject(kWhisk, why);
+  const int64_t seq = msg.cycle;
+  if (const std::string why = sync_.add_whisk_cycle(std::move(msg)); !why.empty()) return reject(kWhisk, why);
   accepted(kWhisk);
-  sequence(kWhisk, msg.cycle);
+  sequence(kWhisk, seq);
   process(sync_.take_ready());
 }
 

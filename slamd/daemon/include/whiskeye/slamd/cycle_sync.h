@@ -81,7 +81,7 @@ class CycleSynchroniser {
   std::string add_camera(CameraFrame frame);
   std::string add_camera(const image_t& image) { return add_camera(camera_frame(image)); }
   std::string add_odometry(const odometry_t& odometry);
-  std::string add_whisk_cycle(const whisk_cycle_t& cycle);
+  std::string add_whisk_cycle(whisk_cycle_t cycle);
 
   // Cycles whose inputs are complete, oldest first.
   std::vector<SyncedCycle> take_ready();
@@ -93,7 +93,7 @@ class CycleSynchroniser {
 
  private:
   bool ready(const whisk_cycle_t& cycle) const;
-  SyncedCycle assemble(const whisk_cycle_t& cycle);
+  SyncedCycle assemble(whisk_cycle_t&& cycle);
   void advance_data_time(int64_t utime);
   // A sample time far from data time, awaiting confirmation that the clock (or the recording) moved.
   struct Step {

@@ -74,7 +74,7 @@ class SlamNode {
  private:
   void on_camera(std::span<const uint8_t> data, const MessageInfo& info);
   void on_odometry(const odometry_t& msg);
-  void on_whisk_cycle(const whisk_cycle_t& msg);
+  void on_whisk_cycle(whisk_cycle_t msg);
   void process(std::vector<SyncedCycle> cycles);
   void process_one(const SyncedCycle& cycle);
   void publish_map(int64_t utime);
