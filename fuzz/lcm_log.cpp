@@ -1,7 +1,8 @@
 // Fuzz target: the LCM log reader (common's LogReader, which `slamd --replay` and vita-eval use):
 // event headers, resynchronisation after damage, and the damage report. The input is also read as a
 // file in chunks (LogReader::Access::kStreamed, from a memfd, the chunk size taken from the input's
-// first byte) and must give exactly what the whole input in memory gives.
+// first byte), also with the first event's channel deferred (LogReader::defer), and must give exactly
+// what the whole input in memory gives.
 // Seeds: fuzz/corpus/lcm_log, a few events of a simulator log (fuzz_make_seeds).
 #include "whiskeye/common/bus.h"
 
@@ -20,10 +21,14 @@ namespace {
 
 using Events = std::vector<std::tuple<int64_t, std::string, std::vector<uint8_t>>>;
 
-Events read_all(LogReader& reader) {
+// `deferred`: the channel whose large events' data the reader defers; their rest is read first.
+Events read_all(LogReader& reader, const std::string& deferred = "") {
   Events events;
   LogReader::EventView ev;
-  while (reader.next(ev)) events.emplace_back(ev.utime, std::string(ev.channel), std::vector<uint8_t>(ev.data.begin(), ev.data.end()));
+  while (reader.next(ev)) {
+    if (!deferred.empty() && ev.channel == deferred) reader.read_rest(ev.owner);
+    events.emplace_back(ev.utime, std::string(ev.channel), std::vector<uint8_t>(ev.data.begin(), ev.data.end()));
+  }
   return events;
 }
 
@@ -59,6 +64,14 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       d.truncated_tail != damage.truncated_tail || d.wild_times != damage.wild_times ||
       streamed.progress() != reader.progress()) {
     std::abort();
+  }
+  // With the data of the first event's channel deferred past its first bytes (a replay's camera
+  // frames), the same events.
+  if (!events.empty()) {
+    const std::string channel = std::get<1>(events.front());
+    LogReader deferring(path, LogReader::Access::kStreamed, size > 0 ? 1 + data[0] : 1);
+    deferring.defer(channel, size > 1 ? data[1] % 64 : 0);
+    if (read_all(deferring, channel) != events || deferring.damage().skipped_bytes != damage.skipped_bytes) std::abort();
   }
   // The messages name the file; what follows the name is the same.
   const std::string memory_prefix = "fuzz.lcmlog: ", file_prefix = path + ": ";

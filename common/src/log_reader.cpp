@@ -27,6 +27,16 @@ class LogReader::Source {
   virtual std::size_t search_window() const = 0;
   // How many bytes from `at` a view gives without reading (0: none of them are held).
   virtual std::size_t held(std::size_t at) const = 0;
+  // Like view(at, len), but of those bytes only the first `ready` (≤ len) need be read now; the
+  // rest is read by read_rest() of the view's owner. The view is shared into `owner` at once.
+  virtual const uint8_t* view_deferred(std::size_t at, std::size_t len, std::size_t ready,
+                                       std::shared_ptr<const void>& owner) {
+    const uint8_t* v = view(at, len);
+    (void)ready;
+    share(owner);
+    return v;
+  }
+  virtual void read_rest(const std::shared_ptr<const void>&) {}
 
  protected:
   std::size_t size_ = 0;
@@ -91,23 +101,46 @@ class StreamSource final : public LogReader::Source {
       next->filled = current_->start + current_->filled - at;
       std::memcpy(next->bytes.get(), current_->bytes.get() + (at - current_->start), next->filled);
     }
-    while (next->filled < want) {
-      const ssize_t got = ::pread(fd_, next->bytes.get() + next->filled, want - next->filled,
-                                  static_cast<off_t>(at + next->filled));
-      if (got < 0 && errno == EINTR) continue;
-      if (got < 0) throw std::runtime_error(path_ + ": cannot read the LCM log: " + std::strerror(errno));
-      if (got == 0) {
-        throw std::runtime_error(path_ + ": the LCM log got shorter while being read (" + std::to_string(at + next->filled) +
-                                 " of " + std::to_string(size_) + " bytes)");
-      }
-      next->filled += static_cast<std::size_t>(got);
-    }
+    fill(*next, want);
+    next->length = want;
     if (current_) keep_free(std::move(current_));
     current_ = std::move(next);
     return current_->bytes.get();
   }
   void share(std::shared_ptr<const void>& owner) const override {
     if (owner != current_) owner = current_;
+  }
+  const uint8_t* view_deferred(std::size_t at, std::size_t len, std::size_t ready,
+                               std::shared_ptr<const void>& owner) override {
+    if (held(at) >= len) {
+      share(owner);
+      return current_->bytes.get() + (at - current_->start);
+    }
+    // A chunk of the event's own: what the current one holds of it copied over, then read up to `ready`.
+    std::shared_ptr<Chunk> next = take_free(len);
+    next->start = at;
+    next->filled = 0;
+    if (current_ && at >= current_->start && at < current_->start + current_->filled) {
+      next->filled = std::min(current_->start + current_->filled - at, len);
+      std::memcpy(next->bytes.get(), current_->bytes.get() + (at - current_->start), next->filled);
+    }
+    fill(*next, std::max(ready, next->filled));
+    next->length = len;
+    deferred_.push_back(next);
+    std::erase_if(deferred_, [](const std::weak_ptr<Chunk>& d) { return d.expired(); });
+    if (current_) keep_free(std::move(current_));
+    current_ = std::move(next);
+    share(owner);
+    return current_->bytes.get();
+  }
+  void read_rest(const std::shared_ptr<const void>& owner) override {
+    for (const std::weak_ptr<Chunk>& d : deferred_) {
+      const std::shared_ptr<Chunk> c = d.lock();
+      if (c && c.get() == owner.get()) {
+        if (c->filled < c->length) fill(*c, c->length);
+        return;
+      }
+    }
   }
   std::size_t search_window() const override { return std::max<std::size_t>(chunk_bytes_, 8); }
   std::size_t held(std::size_t at) const override {
@@ -121,7 +154,22 @@ class StreamSource final : public LogReader::Source {
     std::size_t capacity = 0;
     std::size_t start = 0;   // file offset of bytes[0]
     std::size_t filled = 0;  // bytes read
+    std::size_t length = 0;  // bytes it stands for: more than `filled` while a deferred event's rest is unread
   };
+
+  // Reads the chunk's bytes up to `upto` (from the file at its start).
+  void fill(Chunk& c, std::size_t upto) {
+    while (c.filled < upto) {
+      const ssize_t got = ::pread(fd_, c.bytes.get() + c.filled, upto - c.filled, static_cast<off_t>(c.start + c.filled));
+      if (got < 0 && errno == EINTR) continue;
+      if (got < 0) throw std::runtime_error(path_ + ": cannot read the LCM log: " + std::strerror(errno));
+      if (got == 0) {
+        throw std::runtime_error(path_ + ": the LCM log got shorter while being read (" + std::to_string(c.start + c.filled) +
+                                 " of " + std::to_string(size_) + " bytes)");
+      }
+      c.filled += static_cast<std::size_t>(got);
+    }
+  }
   static constexpr std::size_t kKeptChunks = 16;  // chunks kept for reuse
 
   // A chunk of at least `bytes` nobody holds: a kept one, or a new one.
@@ -152,6 +200,7 @@ class StreamSource final : public LogReader::Source {
   std::string path_;
   std::shared_ptr<Chunk> current_;
   std::vector<std::shared_ptr<Chunk>> kept_;
+  std::vector<std::weak_ptr<Chunk>> deferred_;  // chunks of deferred events, while a view holds them
 };
 
 using lcm_log::kEventHeaderBytes;
@@ -296,16 +345,28 @@ bool LogReader::next(EventView& event) {
     damage_.skipped_bytes += at - pos_;
     pos_ = at;
   }
-  // The event and the header after it in one view. The events ahead are only looked at, not
-  // consumed.
   const std::size_t next_at = pos_ + total;
   const std::size_t next_header = next_at < size ? header_bytes(size, next_at) : 0;
-  const uint8_t* h = src.view(pos_, total + next_header);
-  const lcm_log::EventHeader header = lcm_log::read_event_header(h);
+  const lcm_log::EventHeader header = lcm_log::read_event_header(src.view(pos_, kEventHeaderBytes));
   const auto channel_len = static_cast<std::size_t>(header.channel_bytes);
   const auto data_len = static_cast<std::size_t>(header.data_bytes);
+  const uint8_t* e = nullptr;  // the event, once it is shared into event.owner
+  const uint8_t* next_h = nullptr;
+  if (!deferred_channel_.empty() && data_len > read_first_ && src.held(pos_) < total) {
+    // A large event not read yet: its header, channel and first data bytes now, the rest when its
+    // channel is not the deferred one or read_rest() asks for it.
+    e = src.view_deferred(pos_, total, kEventHeaderBytes + channel_len + read_first_, event.owner);
+    if (std::string_view(reinterpret_cast<const char*>(e + kEventHeaderBytes), channel_len) != deferred_channel_) {
+      src.read_rest(event.owner);
+    }
+    if (next_header != 0) next_h = src.view(next_at, next_header);
+  } else {
+    // The event and the header after it in one view. The events ahead are only looked at, not
+    // consumed.
+    const uint8_t* h = src.view(pos_, total + next_header);
+    if (next_header != 0) next_h = h + total;
+  }
   event.utime = header.utime;
-  const uint8_t* next_h = next_header == 0 ? nullptr : h + total;
   // A time far from both neighbours while they agree with each other is a flipped bit: not a clock
   // step (the events after a step agree with it) nor a lone message in a pause (its neighbours do
   // not agree). The first and the last event have one neighbour: only a day off is damage there (the
@@ -345,14 +406,23 @@ bool LogReader::next(EventView& event) {
   }
   last_utime_ = event.utime;
   have_last_utime_ = true;
-  // Inside the view made above, unless the first event's look two ahead moved on (then read again).
-  const uint8_t* e = src.view(pos_, total);
+  if (e == nullptr) {
+    // Inside the view made above, unless the first event's look two ahead moved on (then read again).
+    e = src.view(pos_, total);
+    src.share(event.owner);
+  }
   event.channel = std::string_view(reinterpret_cast<const char*>(e + kEventHeaderBytes), channel_len);
   event.data = std::span<const uint8_t>(e + kEventHeaderBytes + channel_len, data_len);
-  src.share(event.owner);
   pos_ += total;
   return true;
 }
+
+void LogReader::defer(std::string channel, std::size_t read_first) {
+  deferred_channel_ = std::move(channel);
+  read_first_ = read_first;
+}
+
+void LogReader::read_rest(const std::shared_ptr<const void>& owner) { source_->read_rest(owner); }
 
 std::string LogReader::Damage::summary() const {
   if (!damaged()) return "";

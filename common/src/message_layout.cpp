@@ -14,9 +14,8 @@ namespace {
 // Every message starts with its type's 8-byte fingerprint.
 constexpr std::size_t kFingerprintBytes = 8;
 
-// image_t: fingerprint, utime, seq (8 each), width, height, row_stride, pixelformat, size (4 each),
-// then `size` bytes.
-constexpr std::size_t kImageHeaderBytes = kFingerprintBytes + 8 + 8 + 5 * 4;
+constexpr std::size_t kImageHeaderBytes = kCameraFrameHeaderBytes;
+static_assert(kImageHeaderBytes == kFingerprintBytes + 8 + 8 + 5 * 4);
 
 // whisk_cycle_t: fingerprint, then utime, cycle, utime_start, utime_end (8 each); then num_whiskers,
 // num_samples, num_missing (4 each); then per sample utime (8), valid (1), phase (1), and per sample

@@ -4,7 +4,9 @@
 
 #include "whiskeye/common/bus.h"
 #include "whiskeye/common/clock.h"
+#include "whiskeye/common/log_reader.h"
 #include "whiskeye/common/log_throttle.h"
+#include "whiskeye/common/message_layout.h"
 #include "whiskeye/common/utime.h"
 
 #include <cstdint>
@@ -54,6 +56,10 @@ int run_replay(const Parameters& cfg, const Options& o) {
   open_store(store, o.state_dir, o.checkpoint_keep, o.localise);
   SlamNode node(in, out, make_slam(cfg, o, store ? &*store : nullptr), cfg.node, errors);
   node.set_logger(warn_line);
+  // A camera frame's pixels are read only if a cycle takes the frame (one in five on the arena):
+  // its header now, for the checks, the rest on demand.
+  reader.defer(cfg.node.channels.camera, kCameraFrameHeaderBytes);
+  node.set_pixel_reader([&reader](const std::shared_ptr<const void>& owner) { reader.read_rest(owner); });
   if (o.timing) node.set_latency_clock(monotonic_us);
   int64_t checkpointed_cycles = -1;
   LogThrottle throttle;

@@ -151,7 +151,10 @@ void SlamNode::process_one(const SyncedCycle& cycle) {
   const slam::WhiskCycleInput whisk = to_core(cycle.whisk);
   const bool contact = has_contact(cycle.whisk);
   slam::ImageView view{};
-  if (cycle.image) view = to_core(*cycle.image);
+  if (cycle.image) {
+    if (read_pixels_) read_pixels_(cycle.image->owner);
+    view = to_core(*cycle.image);
+  }
   slam::CycleInput input;
   input.utime = cycle.whisk.utime_end;
   input.cycle = cycle.whisk.cycle;

@@ -87,6 +87,15 @@ class LogReader {
     std::shared_ptr<const void> owner;
   };
   bool next(EventView& event);
+  // kStreamed: the events of `channel` whose data exceeds `read_first` bytes are handed out with only
+  // their first `read_first` bytes of data read (a camera frame's header); the view spans the whole
+  // data, and read_rest(owner) reads the rest when it is wanted. A replay reads the pixels of the
+  // frames a cycle takes, not of every frame (docs/performance.md, "### Replay"). kMapped: nothing
+  // to defer, every byte is there.
+  void defer(std::string channel, std::size_t read_first);
+  // Reads the data a deferred event's view (`owner`, the view's owner) still lacks; does nothing for
+  // any other owner, or one read already. Throws std::runtime_error as next() does.
+  void read_rest(const std::shared_ptr<const void>& owner);
   // Fraction of the file read, 0..1 (for progress bars).
   double progress() const;
   struct Damage {
@@ -105,6 +114,8 @@ class LogReader {
  private:
   std::string path_;
   std::unique_ptr<Source> source_;
+  std::string deferred_channel_;  // empty: nothing deferred
+  std::size_t read_first_ = 0;
   std::size_t pos_ = 0;
   int64_t last_utime_ = 0;
   bool have_last_utime_ = false;

@@ -61,6 +61,10 @@ std::string sample_time_error(const char* channel, int64_t utime);
 
 // --- CAMERA (image_t) ---
 
+// The bytes of an encoded image_t before its pixels: fingerprint, utime, seq (8 each), width,
+// height, row_stride, pixelformat, size (4 each). All a frame's checks read.
+inline constexpr std::size_t kCameraFrameHeaderBytes = 44;
+
 // A camera frame: image_t's fields, with the pixels as a view kept valid by `owner` (a replayed
 // log's mapping, or one copy of a live message), so buffering and handing out frames never copies
 // pixels.

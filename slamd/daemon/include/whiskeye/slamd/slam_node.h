@@ -55,6 +55,11 @@ class SlamNode {
   // `clock` (default: the monotonic clock).
   void set_logger(Logger logger) { logger_ = std::move(logger); }
   void set_log_clock(std::function<int64_t()> monotonic_us) { log_clock_ = std::move(monotonic_us); }
+  // A replay that reads a camera frame's pixels only when a cycle takes it (LogReader::defer):
+  // `read_pixels(owner)` is called with the frame's owner before its pixels are used.
+  void set_pixel_reader(std::function<void(const std::shared_ptr<const void>& owner)> read_pixels) {
+    read_pixels_ = std::move(read_pixels);
+  }
   // Wall-clock latency measurement of each cycle (live). Off: latencies stay 0 (deterministic output).
   void set_latency_clock(std::function<int64_t()> monotonic_us) { clock_ = std::move(monotonic_us); }
 
@@ -102,6 +107,7 @@ class SlamNode {
   std::function<int64_t()> log_clock_;
   LogThrottle throttle_;
   std::function<int64_t()> clock_;
+  std::function<void(const std::shared_ptr<const void>&)> read_pixels_;
   NodeCounters counters_;
   SequenceGaps gaps_[kInputs];
 
