@@ -51,14 +51,17 @@ struct WhiskerTrace {
   std::vector<int64_t> utime;
 };
 
+using WhiskerTraces = std::array<WhiskerTrace, kNumWhiskers>;
+
 // The samples of whisker w that count as contact; empty when below min_contact_samples. The x
 // deflection is first corrected for the whisking-speed term (drag/inertia bends a moving whisker
 // against its motion: x −= −speed_gain·θ̇), with θ̇ from central differences of the valid samples.
-WhiskerTrace contact_samples(const WhiskCycleInput& cycle, int w, const TactileParams& p) {
+// `valid`: a buffer for the whisker's valid samples.
+WhiskerTrace contact_samples(const WhiskCycleInput& cycle, int w, const TactileParams& p,
+                             std::vector<const WhiskSample*>& valid) {
   WhiskerTrace t;
   const auto i = static_cast<size_t>(w);
-  std::vector<const WhiskSample*> valid;
-  valid.reserve(cycle.samples.size());
+  valid.clear();
   for (const WhiskSample& s : cycle.samples) {
     if (s.valid && std::isfinite(s.theta[i]) && std::isfinite(s.deflection_x[i]) && std::isfinite(s.deflection_y[i])) {
       valid.push_back(&s);
@@ -89,6 +92,15 @@ WhiskerTrace contact_samples(const WhiskCycleInput& cycle, int w, const TactileP
   return t;
 }
 
+// Every whisker's contact samples: what both the contact estimates and the SDA read.
+WhiskerTraces contact_traces(const WhiskCycleInput& cycle, const TactileParams& p) {
+  WhiskerTraces traces;
+  std::vector<const WhiskSample*> valid;
+  valid.reserve(cycle.samples.size());
+  for (int w = 0; w < kNumWhiskers; ++w) traces[static_cast<size_t>(w)] = contact_samples(cycle, w, p, valid);
+  return traces;
+}
+
 int bin_of(double v, double lo, double hi) {
   const int b = static_cast<int>(std::floor((v - lo) / (hi - lo) * kPfhBinsPerDim));
   return std::clamp(b, 0, kPfhBinsPerDim - 1);
@@ -96,11 +108,13 @@ int bin_of(double v, double lo, double hi) {
 
 }  // namespace
 
-std::vector<ContactEstimate> estimate_contacts(const WhiskCycleInput& cycle, const RobotGeometry& geometry,
+namespace {
+
+std::vector<ContactEstimate> estimate_contacts(const WhiskerTraces& traces, const RobotGeometry& geometry,
                                                const TactileParams& p) {
   std::vector<ContactEstimate> out;
   for (int w = 0; w < kNumWhiskers; ++w) {
-    const WhiskerTrace t = contact_samples(cycle, w, p);
+    const WhiskerTrace& t = traces[static_cast<size_t>(w)];
     if (t.theta.empty()) continue;
     const WhiskerGeometry& g = geometry.whiskers[static_cast<size_t>(w)];
     ContactEstimate c;
@@ -142,6 +156,27 @@ std::vector<ContactEstimate> estimate_contacts(const WhiskCycleInput& cycle, con
     out.push_back(c);
   }
   return out;
+}
+
+std::array<float, kSdaSize> compute_sda(const WhiskerTraces& traces) {
+  std::array<float, kSdaSize> sda{};
+  for (int w = 0; w < kNumWhiskers; ++w) {
+    const WhiskerTrace& t = traces[static_cast<size_t>(w)];
+    if (t.magnitude.empty()) continue;
+    const size_t imax =
+        static_cast<size_t>(std::max_element(t.magnitude.begin(), t.magnitude.end()) - t.magnitude.begin());
+    const double dt = static_cast<double>(t.utime[imax] - t.utime[0]) * 1e-6;
+    if (imax == 0 || dt <= 0.0) continue;
+    sda[static_cast<size_t>(w)] = static_cast<float>((t.magnitude[imax] - t.magnitude[0]) / dt);
+  }
+  return sda;
+}
+
+}  // namespace
+
+std::vector<ContactEstimate> estimate_contacts(const WhiskCycleInput& cycle, const RobotGeometry& geometry,
+                                               const TactileParams& p) {
+  return estimate_contacts(contact_traces(cycle, p), geometry, p);
 }
 
 std::array<double, kPfhBins> compute_pfh(const std::vector<Vec3>& pts, const Vec3& viewpoint, int neighbours) {
@@ -223,23 +258,14 @@ std::array<double, kPfhBins> compute_point_histogram(const std::vector<Vec3>& pt
 }
 
 std::array<float, kSdaSize> compute_sda(const WhiskCycleInput& cycle, const TactileParams& p) {
-  std::array<float, kSdaSize> sda{};
-  for (int w = 0; w < kNumWhiskers; ++w) {
-    const WhiskerTrace t = contact_samples(cycle, w, p);
-    if (t.magnitude.empty()) continue;
-    const size_t imax =
-        static_cast<size_t>(std::max_element(t.magnitude.begin(), t.magnitude.end()) - t.magnitude.begin());
-    const double dt = static_cast<double>(t.utime[imax] - t.utime[0]) * 1e-6;
-    if (imax == 0 || dt <= 0.0) continue;
-    sda[static_cast<size_t>(w)] = static_cast<float>((t.magnitude[imax] - t.magnitude[0]) / dt);
-  }
-  return sda;
+  return compute_sda(contact_traces(cycle, p));
 }
 
 TactileTemplate make_tactile_template(const WhiskCycleInput& cycle, const RobotGeometry& geometry,
                                       const TactileParams& p) {
   TactileTemplate t;
-  const std::vector<ContactEstimate> contacts = estimate_contacts(cycle, geometry, p);
+  const WhiskerTraces traces = contact_traces(cycle, p);
+  const std::vector<ContactEstimate> contacts = estimate_contacts(traces, geometry, p);
   t.num_contacts = static_cast<int>(contacts.size());
   std::vector<Vec3> pts;
   pts.reserve(contacts.size());
@@ -249,7 +275,7 @@ TactileTemplate make_tactile_template(const WhiskCycleInput& cycle, const RobotG
   for (int i = 0; i < kPfhBins; ++i) {
     t.pfh[static_cast<size_t>(i)] = static_cast<uint16_t>(std::lround(std::clamp(h[static_cast<size_t>(i)], 0.0, 1.0) * 65535.0));
   }
-  t.sda = compute_sda(cycle, p);
+  t.sda = compute_sda(traces);
   t.sensed = 0;
   for (const WhiskSample& s : cycle.samples) {
     if (!s.valid) continue;
