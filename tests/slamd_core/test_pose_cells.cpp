@@ -5,6 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <vector>
+
 namespace whiskeye::slam {
 namespace {
 
@@ -117,6 +120,34 @@ TEST(PoseCells, StaysASinglePacketOverTenThousandSteps) {
   double total = 0.0;
   for (float v : pc.activity()) total += v;
   EXPECT_NEAR(total, 1.0, 1e-4);
+}
+
+// The network keeps track of where its activity lies (which rows and layers to compute) across
+// steps, translations, rotations and injections. A network restored from a checkpoint knows none of
+// that and scans every cell: the two must compute the same activity, bit for bit, at every step.
+TEST(PoseCells, WhatItKnowsOfWhereActivityLiesNeverChangesTheActivity) {
+  PoseCells pc = settled();
+  PoseCells fresh{PoseCellParams{}};
+  std::vector<uint8_t> state, fresh_state;
+  for (int i = 0; i < 600; ++i) {
+    const double ph = i * 0.05;
+    const double vx = 0.3 * std::cos(0.3 * ph), vy = 0.2 * std::sin(0.7 * ph), omega = 1.5 * std::sin(0.2 * ph);
+    state.clear();
+    pc.serialise(state);
+    size_t pos = 0;
+    fresh.deserialise(state, pos);
+    if (i % 37 == 5) {
+      pc.inject(i % 21, (3 * i) % 21, i % 36, 0.05);
+      fresh.inject(i % 21, (3 * i) % 21, i % 36, 0.05);
+    }
+    pc.step(vx, vy, omega, 0.1);
+    fresh.step(vx, vy, omega, 0.1);
+    state.clear();
+    fresh_state.clear();
+    pc.serialise(state);
+    fresh.serialise(fresh_state);
+    ASSERT_EQ(state, fresh_state) << "step " << i;
+  }
 }
 
 TEST(PoseCells, RepeatedInjectionMovesTheBestEstimate) {

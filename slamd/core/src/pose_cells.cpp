@@ -82,12 +82,13 @@ void PoseCells::build_kernels() {
   }
 }
 
-PoseCells::Support PoseCells::support_of(const std::vector<float>& g) const {
+PoseCells::Support PoseCells::support_of(const std::vector<float>& g, const std::vector<uint8_t>* layers) const {
   Support s;
   s.x.assign(static_cast<size_t>(n_), 0);
   s.y.assign(static_cast<size_t>(n_), 0);
   s.t.assign(static_cast<size_t>(nt_), 0);
   for (int t = 0; t < nt_; ++t) {
+    if (layers != nullptr && (*layers)[static_cast<size_t>(t)] == 0) continue;
     for (int y = 0; y < n_; ++y) {
       const float* row = &g[idx(t, y, 0)];
       uint8_t any = 0;
@@ -180,7 +181,8 @@ PoseCells::Support PoseCells::convolve(const std::vector<float>& src, std::vecto
 }
 
 void PoseCells::dynamics() {
-  if (support_dirty_) support_ = support_of(p_);
+  // A translation moves activity within its layer: the layers that held it still hold it all.
+  if (support_dirty_) support_ = support_of(p_, t_mask_valid_ ? &support_.t : nullptr);
   const Support region = dilate(dilate(support_, params_.exc_radius), params_.inh_radius);
   const Support se = convolve(p_, e_, exc_kernel_, params_.exc_radius, support_, region);
   convolve(e_, i_, inh_kernel_, params_.inh_radius, se, region);

@@ -79,7 +79,8 @@ class PoseCells {
   };
   void dynamics();
   void argmax(int& x, int& y, int& t) const;
-  Support support_of(const std::vector<float>& g) const;
+  // `layers`: when given, the θ layers that may hold activity (the others are known to be zero).
+  Support support_of(const std::vector<float>& g, const std::vector<uint8_t>* layers = nullptr) const;
   Support dilate(const Support& s, int r) const;
   // dst = separable kernel * src over the rows of `region` (⊇ the result's support); src is zero
   // outside `s`; returns the result's support.
