@@ -147,6 +147,7 @@ struct AreaAxis {
   std::vector<int> begin;  // destination cell d's taps are [begin[d], begin[d + 1])
   std::vector<int> source;
   std::vector<float> share;
+  int whole = 0;  // > 0: every cell d is the `whole` source cells from d·whole on, with one share
 };
 
 AreaAxis area_axis(int from, int to) {
@@ -168,6 +169,11 @@ AreaAxis area_axis(int from, int to) {
     if (hi - last > 1e-3) tap(last, std::min(std::min(hi - last, 1.0), width) / width);
   }
   a.begin.push_back(static_cast<int>(a.source.size()));
+  const int r = from / to;
+  if (r * to == from && static_cast<int>(a.source.size()) == from &&
+      std::all_of(a.share.begin(), a.share.end(), [&a](float w) { return w == a.share.front(); })) {
+    a.whole = r;  // then source[k] == k: cell d's taps are d·r … d·r + r − 1
+  }
   return a;
 }
 
@@ -183,21 +189,37 @@ bool weighted_area_path(int from_w, int from_h, int to_w, int to_h) {
 
 // The area average of a from_w × from_h float image into to_w × to_h (`out`, row-major), with
 // cv::resize's arithmetic: each source row's horizontal sums in float, in source order, then the
-// rows weighted and summed in order. `row(y)` gives source row y (from_w floats).
+// rows weighted and summed in order. `row(y, buffer, place)` writes source row y's pixel x to
+// buffer[place[x]] (from_w floats). When every destination column is r whole source columns (slam.yaml's
+// 640 → 64), `place` puts the row in tap-major order, the k-th pixel of every column side by side,
+// so the column sums run over contiguous floats, a vector at a time, in the same order.
 template <class Row>
 void area_average(int from_w, int from_h, int to_w, int to_h, Row&& row, float* out) {
   const AreaAxis ax = area_axis(from_w, to_w), ay = area_axis(from_h, to_h);
+  std::vector<int> place(static_cast<size_t>(from_w));
+  for (int x = 0; x < from_w; ++x) place[static_cast<size_t>(x)] = ax.whole > 0 ? (x % ax.whole) * to_w + x / ax.whole : x;
+  std::vector<float> buffer(static_cast<size_t>(from_w));
   std::vector<float> h(static_cast<size_t>(to_w));
   for (int dy = 0; dy < to_h; ++dy) {
     float* o = out + static_cast<size_t>(dy) * static_cast<size_t>(to_w);
     for (int j = ay.begin[static_cast<size_t>(dy)]; j < ay.begin[static_cast<size_t>(dy) + 1]; ++j) {
-      const float* in = row(ay.source[static_cast<size_t>(j)]);
-      for (int dx = 0; dx < to_w; ++dx) {
-        float s = 0.0f;
-        for (int k = ax.begin[static_cast<size_t>(dx)]; k < ax.begin[static_cast<size_t>(dx) + 1]; ++k) {
-          s += in[ax.source[static_cast<size_t>(k)]] * ax.share[static_cast<size_t>(k)];
+      row(ay.source[static_cast<size_t>(j)], buffer.data(), place.data());
+      const float* in = buffer.data();
+      if (ax.whole > 0) {
+        const float w = ax.share.front();
+        for (int dx = 0; dx < to_w; ++dx) h[static_cast<size_t>(dx)] = 0.0f + in[dx] * w;
+        for (int k = 1; k < ax.whole; ++k) {
+          const float* tap = in + static_cast<size_t>(k) * static_cast<size_t>(to_w);
+          for (int dx = 0; dx < to_w; ++dx) h[static_cast<size_t>(dx)] += tap[dx] * w;
         }
-        h[static_cast<size_t>(dx)] = s;
+      } else {
+        for (int dx = 0; dx < to_w; ++dx) {
+          float s = 0.0f;
+          for (int k = ax.begin[static_cast<size_t>(dx)]; k < ax.begin[static_cast<size_t>(dx) + 1]; ++k) {
+            s += in[ax.source[static_cast<size_t>(k)]] * ax.share[static_cast<size_t>(k)];
+          }
+          h[static_cast<size_t>(dx)] = s;
+        }
       }
       const float beta = ay.share[static_cast<size_t>(j)];
       if (j == ay.begin[static_cast<size_t>(dy)]) {
@@ -266,8 +288,13 @@ VisualTemplate finish_template(std::vector<float> v, const VisualParams& p) {
 void area_shrink(const float* grey, int width, int height, int stride_floats, float* out, int out_width,
                  int out_height) {
   if (weighted_area_path(width, height, out_width, out_height)) {
-    area_average(width, height, out_width, out_height,
-                 [&](int y) { return grey + static_cast<size_t>(y) * static_cast<size_t>(stride_floats); }, out);
+    area_average(
+        width, height, out_width, out_height,
+        [&](int y, float* buffer, const int* place) {
+          const float* in = grey + static_cast<size_t>(y) * static_cast<size_t>(stride_floats);
+          for (int x = 0; x < width; ++x) buffer[place[x]] = in[x];
+        },
+        out);
     return;
   }
   const cv::Mat src(height, width, CV_32FC1, const_cast<float*>(grey), static_cast<size_t>(stride_floats) * 4);
@@ -288,24 +315,24 @@ VisualTemplate make_visual_template(const ImageView& image, const VisualParams& 
   const GreyCrop g = grey_crop(image, params, decoder);
   const std::array<float, 256>& unit = unit_grey();
   const int w = g.rect.width;
-  const auto grey_row = [&g, &unit, w](int y, float* out) {
-    const uint8_t* in = g.bytes + static_cast<size_t>(y) * g.row_step;
-    for (int x = 0; x < w; ++x) out[x] = unit[in[static_cast<size_t>(x) * g.step]];
-  };
   if (weighted_area_path(w, g.rect.height, params.template_width, params.template_height)) {
-    // Row by row: only the rows the average reads are converted, into one buffer.
-    std::vector<float> buffer(static_cast<size_t>(w));
+    // Row by row: only the rows the average reads are converted, straight into its buffer.
     std::vector<float> small(static_cast<size_t>(params.template_width) * static_cast<size_t>(params.template_height));
-    area_average(w, g.rect.height, params.template_width, params.template_height,
-                 [&](int y) {
-                   grey_row(y, buffer.data());
-                   return static_cast<const float*>(buffer.data());
-                 },
-                 small.data());
+    area_average(
+        w, g.rect.height, params.template_width, params.template_height,
+        [&g, &unit, w](int y, float* buffer, const int* place) {
+          const uint8_t* in = g.bytes + static_cast<size_t>(y) * g.row_step;
+          for (int x = 0; x < w; ++x) buffer[place[x]] = unit[in[static_cast<size_t>(x) * g.step]];
+        },
+        small.data());
     return finish_template(std::move(small), params);
   }
   cv::Mat grey(g.rect.height, w, CV_32FC1);
-  for (int y = 0; y < g.rect.height; ++y) grey_row(y, grey.ptr<float>(y));
+  for (int y = 0; y < g.rect.height; ++y) {
+    const uint8_t* in = g.bytes + static_cast<size_t>(y) * g.row_step;
+    auto* out = grey.ptr<float>(y);
+    for (int x = 0; x < w; ++x) out[x] = unit[in[static_cast<size_t>(x) * g.step]];
+  }
   VisualParams whole = params;  // the crop is all there is now
   whole.crop_x = whole.crop_y = whole.crop_width = whole.crop_height = 0;
   return make_visual_template_from_grey(grey.ptr<float>(), grey.cols, grey.rows, static_cast<int>(grey.step1()), whole);
