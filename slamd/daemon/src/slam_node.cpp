@@ -36,7 +36,12 @@ SlamNode::SlamNode(Bus& in, Bus& out, std::unique_ptr<slam::VitaSlam> slam, cons
   // the message's length (a negative count throws, a huge one allocates gigabytes): check them first,
   // against the length, then against the contract.
   in.subscribe_raw(params_.channels.cycle, [this](std::span<const uint8_t> data, const MessageInfo& info) {
+    // Decoded into a processed cycle's message when there is one: its vectors' storage is reused.
     whisk_cycle_t msg;
+    if (!spare_cycles_.empty()) {
+      msg = std::move(spare_cycles_.back());
+      spare_cycles_.pop_back();
+    }
     std::string reason = whisk_cycle_size_error(data);
     if (reason.empty()) {
       // Decodable, but counts outside the contract: rejected before the decoder allocates for them.
@@ -143,12 +148,17 @@ void SlamNode::on_odometry(const odometry_t& msg) {
 }
 
 void SlamNode::process(std::vector<SyncedCycle> cycles) {
-  for (const auto& c : cycles) process_one(c);
+  constexpr std::size_t kSpareCycles = 4;
+  for (auto& c : cycles) {
+    process_one(c);
+    if (spare_cycles_.size() < kSpareCycles) spare_cycles_.push_back(std::move(c.whisk));
+  }
 }
 
 void SlamNode::process_one(const SyncedCycle& cycle) {
   const int64_t t0 = clock_ ? clock_() : 0;
-  const slam::WhiskCycleInput whisk = to_core(cycle.whisk);
+  to_core(cycle.whisk, whisk_input_);
+  const slam::WhiskCycleInput& whisk = whisk_input_;
   const bool contact = has_contact(cycle.whisk);
   slam::ImageView view{};
   if (cycle.image) {

@@ -9,6 +9,11 @@ namespace whiskeye::slamd {
 
 slam::WhiskCycleInput to_core(const whisk_cycle_t& m) {
   slam::WhiskCycleInput in;
+  to_core(m, in);
+  return in;
+}
+
+void to_core(const whisk_cycle_t& m, slam::WhiskCycleInput& in) {
   in.cycle = m.cycle;
   in.utime_start = m.utime_start;
   in.utime_end = m.utime_end;
@@ -24,7 +29,6 @@ slam::WhiskCycleInput to_core(const whisk_cycle_t& m) {
       out.contact[w] = m.contact[s][w] != 0;
     }
   }
-  return in;
 }
 
 slam::OdometrySample to_core(const odometry_t& m) { return {m.utime, m.vx, m.vy, m.omega}; }

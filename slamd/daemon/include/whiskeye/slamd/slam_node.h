@@ -108,6 +108,10 @@ class SlamNode {
   LogThrottle throttle_;
   std::function<int64_t()> clock_;
   std::function<void(const std::shared_ptr<const void>&)> read_pixels_;
+  // Storage kept from cycle to cycle (a cycle is 24 x 500 samples): processed messages to decode the
+  // next ones into, and the core's copy of the cycle in hand.
+  std::vector<whisk_cycle_t> spare_cycles_;
+  slam::WhiskCycleInput whisk_input_;
   NodeCounters counters_;
   SequenceGaps gaps_[kInputs];
 

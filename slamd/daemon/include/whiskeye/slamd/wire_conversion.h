@@ -21,6 +21,8 @@ namespace whiskeye::slamd {
 // ---- wire → core ----
 
 slam::WhiskCycleInput to_core(const whisk_cycle_t& m);
+// The same into `in`, every field written, its samples' storage reused.
+void to_core(const whisk_cycle_t& m, slam::WhiskCycleInput& in);
 slam::OdometrySample to_core(const odometry_t& m);
 // A view of the frame's pixels (valid while the frame is).
 slam::ImageView to_core(const CameraFrame& f);
