@@ -24,7 +24,8 @@ BAD = {
     "bench": [["--bogus"], ["--filter"], ["--repetitions", "x"], ["--only", "no-such-bench"], ["--table"],
               ["--table", "/no/such.json"], ["--table", "/etc/hostname"]],
     "replay-speed": [["--bogus"], ["--runs", "0"], ["--mode", "x"], ["--log", "/no/such/log"],
-                     ["--camera-format", "png"], ["--camera-format", "mjpeg", "--log", "/etc/hostname"]],
+                     ["--camera-format", "png"], ["--camera-format", "mjpeg", "--log", "/etc/hostname"],
+                     ["--suite-world", "x"], ["--suite-seed", "-1"], ["--suite-world", "1", "--log", "/etc/hostname"]],
 }
 
 
