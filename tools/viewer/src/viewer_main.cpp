@@ -1,17 +1,18 @@
 // whiskeye-viewer: a web page of what the robot is doing, served by this daemon. Live, it subscribes to
 // the stack's channels over LCM (on the robot, or fed by lcm-logplayer) and pushes what changed to each
 // browser by Server-Sent Events; with --log FILE it serves a recorded log with a time slider. Wiring
-// only: the HTTP API is ViewerServer, what is shown ViewerState, the log LogTimeline.
+// only: the HTTP API is ViewerServer, what is shown ViewerState, the log LogTimeline, the options
+// viewer_options.h.
 // Read-only: it publishes nothing and opens no file but its --log. Exit 2 on a bad command line, 1 when
 // it cannot start (LCM, the address, the log).
+#include "viewer_options.h"
+
 #include "whiskeye/common/bus.h"
 #include "whiskeye/common/channels.h"
 #include "whiskeye/common/cli.h"
 #include "whiskeye/common/clock.h"
 #include "whiskeye/common/service.h"
 #include "whiskeye/viewer/viewer_server.h"
-
-#include <CLI/CLI.hpp>
 
 #include <csignal>
 #include <cstdio>
@@ -26,20 +27,12 @@ using namespace whiskeye::viewer;
 volatile std::sig_atomic_t g_signal = 0;
 void on_signal(int sig) { g_signal = sig; }
 
-struct Options {
-  std::string listen = "127.0.0.1:8088";
-  std::string lcm_url;
-  std::string log;
-  ServerOptions server;
-  int update_ms = 100;
-};
-
 int fail(const std::string& why) {
   std::fprintf(stderr, "whiskeye-viewer: %s\n", why.c_str());
   return 1;
 }
 
-int run(Options& o) {
+int run(ViewerOptions& o) {
   if (!parse_listen(o.listen, o.server)) throw cli::UsageError("--listen " + o.listen + ": expected ADDR:PORT");
   std::unique_ptr<LogTimeline> timeline;
   if (!o.log.empty()) {
@@ -107,21 +100,8 @@ int main(int argc, char** argv) {
   cli::Program program("whiskeye-viewer",
                        "whiskeye-viewer: a web page of the robot's map, pose, camera, whiskers, events and daemons' "
                        "status, live over LCM or from a recorded log (docs/viewer.md)");
-  CLI::App& app = program.app();
-  Options o;
-  app.add_option("--listen", o.listen, "ADDR:PORT to serve the page on (default 127.0.0.1:8088: this host only; port 0: any free one)");
-  app.add_option("--allow-host", o.server.allow_hosts,
-                 "a further name or address the page may be opened by (a Host header), e.g. a name that reaches the robot "
-                 "through a proxy; repeatable (default: only the names and addresses it serves on)");
-  program.add_lcm_url(o.lcm_url);
-  app.add_option("--log", o.log, "serve this recorded LCM log with a time slider instead of live LCM traffic")
-      ->check(CLI::ExistingFile);
-  app.add_option("--max-clients", o.server.max_clients, "live pages served at once; more are refused (default 8)")
-      ->check(CLI::Range(1, 64));
-  app.add_option("--queue", o.server.queue, "updates queued per page before a slow one skips to the current state (default 64)")
-      ->check(CLI::Range(1, 10000));
-  app.add_option("--update-ms", o.update_ms, "how often pages are sent what changed, ms (default 100)")
-      ->check(CLI::Range(20, 10000));
+  ViewerOptions o;
+  add_viewer_options(program, o);
   return program.run(argc, argv, [&] {
     if (!o.log.empty() && !o.lcm_url.empty()) {
       throw cli::UsageError("--log and --lcm-url exclude each other (a log is read, not received)");
