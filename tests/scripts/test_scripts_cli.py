@@ -58,6 +58,26 @@ class Scripts(unittest.TestCase):
                     self.assertTrue(r.stderr.startswith(f"{name}: "), r.stderr)
 
 
+class FuzzSeeds(unittest.TestCase):
+    # The inputs of past findings live apart from the generated seeds: --make-seeds, which remakes
+    # fuzz/corpus/ from scratch, must not lose them, and every run must start from them.
+    def test_make_seeds_leaves_the_regression_inputs_alone_and_every_run_reads_them(self):
+        root = os.path.dirname(SCRIPTS)
+        with open(os.path.join(SCRIPTS, "fuzz")) as f:
+            text = f.read()
+        make_seeds = text[text.index('if [ "$make_seeds" = 1 ]'):]
+        make_seeds = make_seeds[:make_seeds.index("exit 0")]
+        self.assertIn("rm -rf fuzz/corpus", make_seeds)
+        self.assertNotIn("regressions", make_seeds)
+        self.assertIn('seeds+=("fuzz/regressions/$t")', text)
+        targets = text[text.index("targets_all=("):].split(")")[0].split("(")[1].split()
+        regressions = os.path.join(root, "fuzz", "regressions")
+        self.assertTrue(os.listdir(regressions))
+        for target in os.listdir(regressions):
+            self.assertIn(target, targets, f"fuzz/regressions/{target}/ is no target's")
+            self.assertTrue(os.listdir(os.path.join(regressions, target)), target)
+
+
 class InstallDepsProfiles(unittest.TestCase):
     def test_the_demo_profile_is_the_build_and_libraries_without_what_only_the_tests_need(self):
         demo = run("install-deps", ["--demo", "--list"])
