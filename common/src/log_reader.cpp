@@ -295,6 +295,7 @@ LogReader::~LogReader() = default;
 bool LogReader::next(LogEvent& event) {
   EventView view;
   if (!next(view)) return false;
+  if (!deferred_channel_.empty()) source_->read_rest(view.owner);  // a copy is of the whole event
   event.utime = view.utime;
   event.channel.assign(view.channel);
   event.data.assign(view.data.begin(), view.data.end());

@@ -399,6 +399,14 @@ TEST(LogFiles, ADeferredEventsRestIsReadOnlyWhenAskedFor) {
   EXPECT_EQ(camera.data[599'999], 7);
   EXPECT_FALSE(in.next(small));
   EXPECT_FALSE(in.damage().damaged());
+  // A copied event (LogEvent) is always whole.
+  LogReader copying(path, LogReader::Access::kStreamed, 4096);
+  copying.defer("CAMERA", 16);
+  LogEvent e;
+  ASSERT_TRUE(copying.next(e));
+  ASSERT_TRUE(copying.next(e));
+  ASSERT_EQ(e.channel, "CAMERA");
+  EXPECT_TRUE(std::all_of(e.data.begin() + 16, e.data.end(), [](uint8_t b) { return b == 7; }));
 }
 
 // A replay keeps a view's owner for as long as it needs the bytes (slamd keeps camera frames until a
