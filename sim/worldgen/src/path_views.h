@@ -12,7 +12,9 @@ namespace whiskeye::sim::worldgen {
 
 // Tactile landmarks stand at most this far along the path from their centre (for spacing them).
 inline constexpr double kObjectHalfLength = 0.15;
-// Whiskers reach at most this far from the head (robot.yaml's longest is 0.17 m).
+// How far from the head the generator takes the whiskers to reach: its own figure, not read from
+// the robot geometry (robot.yaml's longest whisker is 0.1717 m, its farthest tip 0.2155 m from the
+// head's origin); either of those would redraw every generated world.
 inline constexpr double kReach = 0.20;
 
 // Polar angle (deg) that `m` metres of the head's path span.
