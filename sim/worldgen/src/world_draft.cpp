@@ -252,7 +252,9 @@ void draw_layout(Rng& rng, const GeneratorOptions& o, Draft& d) {
   const double bias = rng.uniform(o.odometry_bias_scale);
   const double noise = rng.uniform(o.odometry_noise_scale);
   d.bias_vy = 0.002 * bias * (rng.chance(0.5) ? 1.0 : -1.0);
-  d.bias_omega = 0.002 * rng.uniform(o.odometry_bias_scale) * (rng.chance(0.5) ? 1.0 : -1.0);
+  // One draw a statement: the operands of * are unsequenced, and compilers order the calls differently.
+  const double bias_omega = rng.uniform(o.odometry_bias_scale);
+  d.bias_omega = 0.002 * bias_omega * (rng.chance(0.5) ? 1.0 : -1.0);
   d.sigma_v = 0.005 * noise;
   d.sigma_omega = 0.003 * noise;
   d.camera_noise = rng.uniform(o.camera_noise);
