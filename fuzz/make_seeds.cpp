@@ -7,6 +7,7 @@
 #include "whiskeye/slamd/slam_node.h"
 
 #include "whiskeye/common/bus.h"
+#include "whiskeye/common/log_reader.h"
 #include "whiskeye/common/robot_geometry.h"
 #include "whiskeye/slam/vita_slam.h"
 
@@ -96,7 +97,7 @@ void add_log_event(std::vector<uint8_t>& out, int64_t n, int64_t utime, const st
   const auto be = [&](uint64_t v, int bytes) {
     for (int i = bytes - 1; i >= 0; --i) out.push_back(static_cast<uint8_t>(v >> (8 * i)));
   };
-  be(0xEDA1DA01u, 4);
+  be(lcm_log::kSyncWord, 4);
   be(static_cast<uint64_t>(n), 8);
   be(static_cast<uint64_t>(utime), 8);
   be(channel.size(), 4);
@@ -173,7 +174,11 @@ int main(int argc, char** argv) {
     std::vector<uint8_t> garbage;
     add_log_event(garbage, 0, small_events.front().utime, small_events.front().channel, small_events.front().data);
     const std::size_t first = garbage.size();
-    for (int i = 0; i < 2048; ++i) garbage.insert(garbage.end(), {0xED, 0xA1, 0xDA, 0x01});
+    constexpr uint32_t sync = lcm_log::kSyncWord;
+    for (int i = 0; i < 2048; ++i) {
+      garbage.insert(garbage.end(), {static_cast<uint8_t>(sync >> 24), static_cast<uint8_t>(sync >> 16),
+                                     static_cast<uint8_t>(sync >> 8), static_cast<uint8_t>(sync)});
+    }
     garbage.insert(garbage.end(), log.begin() + static_cast<std::ptrdiff_t>(first), log.end());
     write_file(out_dir / "lcm_log" / "seed-sync-garbage", garbage);
   }
