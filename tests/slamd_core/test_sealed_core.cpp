@@ -9,6 +9,7 @@
 #include <whiskeye/common/jpeg_markers.h>
 #include <whiskeye/common/latency_stats.h>
 #include <whiskeye/common/log_throttle.h>
+#include <whiskeye/common/odometry_limits.h>
 #include <whiskeye/common/params.h>
 #include <whiskeye/common/robot_geometry.h>
 #include <whiskeye/common/se2.h>

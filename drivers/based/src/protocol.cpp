@@ -1,4 +1,5 @@
 // Robotino REST bodies and URL, parsed and formatted with nlohmann-json; no I/O.
+#include "whiskeye/common/odometry_limits.h"
 #include "whiskeye/based/protocol.h"
 
 #include <nlohmann/json.hpp>
@@ -48,11 +49,10 @@ bool parse_base_url(std::string_view url, BaseUrl& out, std::string& error) {
 namespace {
 
 // Bounds of a plausible reply (a Robotino drives at under 1 m/s): beyond them the tracker's
-// re-anchoring would overflow or lose precision and every later sample would be wrong.
+// re-anchoring would overflow or lose precision and every later sample would be wrong. Speeds: the
+// limits of odometry_limits.h, which slamd applies too.
 constexpr double kMaxPosition = 1e5;              // m
 constexpr double kMaxHeading = 1e6;               // rad, in case the firmware does not wrap it
-constexpr double kMaxSpeed = 20.0;                // m/s
-constexpr double kMaxTurnRate = 50.0;             // rad/s
 
 // A short description of an element for an error line: a scalar as it is, a string cut to 40
 // characters, a container by its size (dump() recurses once per level: a deeply nested reply
@@ -107,7 +107,8 @@ bool parse_odometry_reply(std::string_view body, OdometrySample& out, std::strin
       return false;
     }
   }
-  static const double kLimits[6] = {kMaxPosition, kMaxPosition, kMaxHeading, kMaxSpeed, kMaxSpeed, kMaxTurnRate};
+  static const double kLimits[6] = {kMaxPosition, kMaxPosition, kMaxHeading, kMaxOdometrySpeed, kMaxOdometrySpeed,
+                                    kMaxOdometryTurnRate};
   for (std::size_t i = 0; i < 6; ++i) {
     if (std::abs(v[i]) > kLimits[i]) {
       error = std::string("odometry reply element ") + kNames[i] + " = " + nlohmann::json(v[i]).dump() +

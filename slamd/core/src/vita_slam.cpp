@@ -1,6 +1,8 @@
 // ViTa-SLAM cycle (Algorithm 1) and checkpoints. See vita_slam.h.
 #include "whiskeye/slam/vita_slam.h"
 
+#include "whiskeye/common/odometry_limits.h"
+
 #include "binary_io.h"
 
 #include <algorithm>
@@ -79,7 +81,7 @@ void VitaSlam::integrate_odometry(const std::vector<OdometrySample>& odometry) {
     // A sample no base can produce is skipped before it takes the clock: the next good one
     // integrates the whole interval (and the pose cells' sub-steps stay bounded).
     const bool usable = std::isfinite(o.vx) && std::isfinite(o.vy) && std::isfinite(o.omega) &&
-                        std::hypot(o.vx, o.vy) <= kMaxSpeed && std::abs(o.omega) <= kMaxTurnRate;
+                        std::hypot(o.vx, o.vy) <= kMaxOdometrySpeed && std::abs(o.omega) <= kMaxOdometryTurnRate;
     if (!usable) {
       ++stats_.odometry_rejected;
       continue;

@@ -2,6 +2,7 @@
 #include "message_checks.h"
 
 #include "whiskeye/common/message_layout.h"
+#include "whiskeye/common/odometry_limits.h"
 #include "whiskeye/common/se2.h"
 #include "whiskeye/common/whisker_array.h"
 #include "whiskeye/slam/vita_slam.h"
@@ -79,7 +80,7 @@ std::string check_odometry(const odometry_t& m) {
   if (std::abs(m.theta) > kPi + 1e-9) {
     return "ODOMETRY: theta " + std::to_string(m.theta) + " rad is not in (-pi, pi]";
   }
-  if (std::hypot(m.vx, m.vy) > slam::kMaxSpeed || std::abs(m.omega) > slam::kMaxTurnRate) {
+  if (std::hypot(m.vx, m.vy) > kMaxOdometrySpeed || std::abs(m.omega) > kMaxOdometryTurnRate) {
     return "ODOMETRY: velocity (" + std::to_string(m.vx) + ", " + std::to_string(m.vy) + " m/s, " +
            std::to_string(m.omega) + " rad/s) beyond any base's";
   }

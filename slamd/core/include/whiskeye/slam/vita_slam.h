@@ -65,15 +65,12 @@ struct SlamParams {
 // are ParamErrors naming the key.
 void load(const ParamNode& node, SlamParams& p);
 
-// Odometry beyond these is a corrupt sample, not motion (a Robotino drives at most ~1 m/s).
-constexpr double kMaxSpeed = 20.0;      // m/s
-constexpr double kMaxTurnRate = 50.0;   // rad/s
 
 struct SlamStats {
   int64_t cycles = 0;
   int64_t bad_images = 0;           // frames refused (InputError); the cycle went on without vision
   int64_t empty_whisk_cycles = 0;   // whisk cycles without a valid sample; went on without touch
-  int64_t odometry_rejected = 0;    // samples out of order, non-finite or faster than kMaxSpeed: skipped
+  int64_t odometry_rejected = 0;    // samples out of order, non-finite or faster than kMaxOdometrySpeed: skipped
   int64_t odometry_gaps = 0;        // dt > max_odometry_dt, clamped; or time back by more (a clock step)
 };
 
