@@ -9,8 +9,10 @@
 //   resume      write again
 //   quit        close the device and exit (also at the end of the input)
 // Every frame written, damaged or not, takes the next number. One line on stdout per command and a
-// summary at the end.
+// summary at the end. --pause-after N pauses by itself once N frames are written ("paused after N
+// frames"), as if told "pause": a reader then opens a ring that holds no frame written since.
 //   mjpeg_loopback_writer --device /dev/video10 [--width 640 --height 480 --fps 10 --first-number N]
+//                         [--pause-after N]
 #include <fcntl.h>
 #include <linux/videodev2.h>
 #include <poll.h>
@@ -61,11 +63,13 @@ int main(int argc, char** argv) {
   int width = 640, height = 480;
   double fps = 10;
   uint32_t number = 0;
+  long pause_after = -1;
   app.add_option("--device", device)->required();
   app.add_option("--first-number", number, "of the first frame (a writer started again goes on counting)");
   app.add_option("--width", width);
   app.add_option("--height", height);
   app.add_option("--fps", fps);
+  app.add_option("--pause-after", pause_after, "frames written before pausing by itself");
   CLI11_PARSE(app, argc, argv);
 
   const int fd = ::open(device.c_str(), O_RDWR);
@@ -140,6 +144,10 @@ int main(int argc, char** argv) {
     // v4l2loopback takes one write() as one frame.
     if (::write(fd, frame.data(), frame.size()) != static_cast<ssize_t>(frame.size())) die("write");
     ++number;
+    if (number - first_number == pause_after) {
+      paused = true;
+      std::cout << "paused after " << pause_after << " frames" << std::endl;
+    }
   }
   ::close(fd);
   std::cout << "wrote " << number - first_number << " frames: good=" << written_good << " cut=" << written_cut

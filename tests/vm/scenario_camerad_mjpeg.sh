@@ -32,17 +32,24 @@ check v4l2loopback_device_appears test -c /dev/video10
 [ -c /dev/video10 ] || exit 0  # nothing below can run; the failures above say why
 
 # The writer reads its commands from a FIFO the scenario holds open (fd 3) until it sends quit.
-# start_writer LOG FIRST_NUMBER: the writer's pid in $writer.
+# start_writer LOG FIRST_NUMBER [WRITER_ARGS...]: the writer's pid in $writer.
 start_writer() {
   rm -f /tmp/writer.cmd
   mkfifo /tmp/writer.cmd
-  "$WRITER" --device /dev/video10 --fps 10 --first-number "$2" < /tmp/writer.cmd > "$1" 2>&1 &
+  "$WRITER" --device /dev/video10 --fps 10 --first-number "$2" "${@:3}" < /tmp/writer.cmd > "$1" 2>&1 &
   writer=$!
   exec 3> /tmp/writer.cmd
 }
 say() { echo "$1" >&3 || echo "the writer is gone: '$1' not sent"; }
-start_writer "$RESULTS_DIR/writer.log" 0
+# camerad joins a writer that has gone round the ring and paused. v4l2loopback 0.12.7 re-initialises
+# every buffer when a reader asks for buffers (VIDIOC_REQBUFS: sequence 0, bytesused the format's
+# sizeimage), so camerad's first DQBUF hands it frame 11 followed by the rest of the longer frame 3
+# that buffer held before: damaged bytes under a number that is not the frame's. camerad must give it
+# back as a buffer from before its session, neither a frame nor damage. Paused, no write can refill
+# the buffer first: without the pause it depends on when camerad opens (a busy host: late).
+start_writer "$RESULTS_DIR/writer.log" 0 --pause-after 12
 check writer_sets_mjpeg_on_the_device wait_for "$RESULTS_DIR/writer.log" "writing 640x480 MJPG" 30
+check writer_pauses_after_going_round_the_ring wait_for "$RESULTS_DIR/writer.log" "paused after 12 frames" 30
 
 cat > /tmp/camerad_mjpeg.yaml <<'YAML'
 camera: {match_card: WhiskEye-MJPEG, width: 640, height: 480, fps: 10, formats: [MJPG], buffers: 8,
@@ -55,6 +62,9 @@ cam_pid=$!
 check_pid=$!
 check camerad_negotiates_640x480_mjpg_on_the_loopback_device \
   wait_for "$log" "streaming /dev/video10 640x480 MJPG at 10 fps, 8 buffers" 60
+check camerad_skips_the_buffer_v4l2loopback_reinitialised_before_its_stream \
+  wait_for "$log" "skipping a buffer from before the stream started" 3
+say resume
 
 probe() { "$PROBE" --driver camerad --seconds "${2:-2}" > "/tmp/status_$1.txt"; cp "/tmp/status_$1.txt" "$RESULTS_DIR/status_$1.txt"; }
 counter() { probe_value "/tmp/status_$1.txt" "$2"; }
@@ -74,22 +84,13 @@ grew() {
        "(overwritten_frames $(counter "$2" overwritten_frames))"
   return 1
 }
-# grew_at_most PROBE_BEFORE PROBE_AFTER N: ... went up by at most N (frames torn at a seam of the
-# stream, which the writer did not damage).
-grew_at_most() {
-  local before after
-  before=$(damaged "$1") after=$(damaged "$2")
-  [ $((after - before)) -ge 0 ] && [ $((after - before)) -le "$3" ] && return 0
-  echo "damaged frames (corrupt_frames - overwritten_frames) went from $before to $after, expected +0..$3" \
-       "(overwritten_frames $(counter "$2" overwritten_frames))"
-  return 1
-}
 
 sleep 3
 probe streaming
 clean_stream() {
   has streaming 'state=1' && has streaming 'frames=([1-9][0-9]+)' && [ "$(damaged streaming)" = 0 ] ||
-    { echo "damaged frames: $(damaged streaming)"; return 1; }
+    { echo "damaged frames: $(damaged streaming) (corrupt_frames $(counter streaming corrupt_frames)," \
+           "overwritten_frames $(counter streaming overwritten_frames))"; return 1; }
 }
 check camerad_is_ok_and_counts_no_damaged_frame_in_a_clean_stream clean_stream
 
@@ -158,13 +159,10 @@ probe back
 check camerad_is_ok_on_the_recreated_device has back 'state=1'
 check camerad_status_counts_the_loss_and_the_reopen \
   bash -c "[ $(counter back device_lost) -ge 1 ] && [ $(counter back reopens) -ge 1 ] && [ $(counter back open_failures) -ge 1 ]"
-# Across the writer's stop, the removal and the re-creation the writer damaged nothing, but a seam
-# may deliver one torn frame: v4l2loopback 0.12.7 hands a reader a buffer the new writer is still
-# filling (its JPEG header already there, the rest not: "damaged JPEG data after its header", seen
-# in 1 of 3 runs; the sequence number re-check cannot see it, the sequence moving only once the
-# write is done). camerad counts it, rightly: a frame it could not use. One per seam (the writer
-# stopping, the new one starting) at most; the six the writer damaged were counted exactly above.
-check camerad_counts_no_more_damaged_frames_than_the_seams_can_tear grew_at_most garbage back 2
+# Across the writer's stop, the removal and the re-creation the writer damaged nothing. camerad
+# reopens the new device while the new writer streams, so its first buffer is again one
+# v4l2loopback re-initialised (above), whose bytes may read as damaged: skipped, not counted.
+check camerad_counts_no_damaged_frame_across_the_writers_stop_and_the_new_device grew garbage back 0
 
 kill -TERM $check_pid
 check_rc=0

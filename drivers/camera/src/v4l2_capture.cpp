@@ -36,6 +36,11 @@ int64_t clock_us(clockid_t id) {
   return static_cast<int64_t>(t.tv_sec) * 1000000 + t.tv_nsec / 1000;
 }
 
+// A buffer's timestamp in microseconds, on whichever clock the driver stamps with.
+int64_t stamp_us(const v4l2_buffer& b) {
+  return static_cast<int64_t>(b.timestamp.tv_sec) * 1000000 + b.timestamp.tv_usec;
+}
+
 std::string card_of(const v4l2_capability& cap) {
   return std::string(reinterpret_cast<const char*>(cap.card)) + " / " + reinterpret_cast<const char*>(cap.driver);
 }
@@ -88,6 +93,11 @@ FrameCheck check_mjpeg(std::span<const uint8_t> frame, uint32_t width, uint32_t 
     return FrameCheck::kJpegWrongSize;
   }
   return FrameCheck::kUsable;
+}
+
+bool from_before_session(uint32_t sequence, int64_t timestamp_us, int64_t buffers_requested_us,
+                         std::size_t dequeued_before, std::size_t ring) {
+  return sequence == 0 && timestamp_us > 0 && timestamp_us <= buffers_requested_us && dequeued_before < ring;
 }
 
 std::string format_problem(const NegotiatedFormat& f, const std::vector<uint32_t>& wanted) {
@@ -282,6 +292,7 @@ void Capture::map_buffers(unsigned count) {
   req.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
   req.memory = V4L2_MEMORY_MMAP;
   if (xioctl(fd_, VIDIOC_REQBUFS, &req) < 0) fail("REQBUFS");
+  buffers_requested_us_ = clock_us(CLOCK_MONOTONIC);
   if (req.count < 2) throw CaptureError(device_ + ": only " + std::to_string(req.count) + " buffer(s)", false);
   buffers_.resize(req.count);
   for (unsigned i = 0; i < req.count; ++i) {
@@ -348,6 +359,14 @@ Capture::Result Capture::next(FrameView& frame, int timeout_ms) {
     return Result::kError;
   }
   pending_.push_back(b.index);  // lent to the caller (or skipped): back to the driver at the next call
+  if (from_before_session(b.sequence, stamp_us(b), buffers_requested_us_, dequeued_++, buffers_.size())) {
+    if (!from_before_logged_) {
+      log_("camerad: " + device_ + ": skipping a buffer from before the stream started (sequence 0, stamped " +
+           "before camerad asked for its buffers, as v4l2loopback re-initialises them): not a frame, not damage");
+      from_before_logged_ = true;
+    }
+    return next(frame, timeout_ms);  // gives it back first; at most `ring` such buffers a session
+  }
   const auto* data = static_cast<const uint8_t*>(buffers_[b.index].start);
   FrameCheck c = check_frame(b.flags, b.bytesused, buffers_[b.index].length, pixelformat_, stride_, height_);
   if (c == FrameCheck::kUsable && pixelformat_ == kMJPG) c = check_mjpeg({data, b.bytesused}, width_, height_);
@@ -367,7 +386,7 @@ Capture::Result Capture::next(FrameView& frame, int timeout_ms) {
   frame.stride = stride_;
   frame.pixelformat = pixelformat_;
   frame.sequence = b.sequence;
-  const int64_t ts = static_cast<int64_t>(b.timestamp.tv_sec) * 1000000 + b.timestamp.tv_usec;
+  const int64_t ts = stamp_us(b);
   if ((b.flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) == V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC && ts > 0) {
     frame.utime = monotonic_to_utime(ts, clock_us(CLOCK_MONOTONIC), clock_us(CLOCK_REALTIME));
   } else {

@@ -2,8 +2,10 @@
 // tests/vm/scenario_camerad.sh).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <set>
 #include <string>
+#include <vector>
 
 #include "mjpeg_pattern.h"
 #include "whiskeye/camera/v4l2_capture.h"
@@ -128,6 +130,42 @@ TEST(V4l2FrameCheck, AnMjpegFrameCutShortOrWithGarbageAfterItsHeaderIsSkipped) {
   garbage.insert(garbage.end(), {0xff, 0xd9});
   EXPECT_EQ(check_mjpeg(garbage, 640, 480), FrameCheck::kJpegDamagedData);
   EXPECT_EQ(check_mjpeg(std::vector<uint8_t>(614400, 0x80), 640, 480), FrameCheck::kJpegNoStartMarker);
+}
+
+// The first buffer v4l2loopback 0.12.7 hands a reader that joined its writer with 12 frames written
+// (vm.camerad_mjpeg, seen in a guest): VIDIOC_REQBUFS re-initialised it (sequence 0, bytesused the
+// format's sizeimage, stamped then), so it holds frame 11 followed by the rest of the longer frame 3
+// the ring held there before, and zeros. Its bytes read as damage; it is no frame of the session.
+TEST(V4l2Session, TheBufferV4l2loopbackReinitialisedAtTheReadersRequestIsNoFrameOfTheSession) {
+  const std::vector<uint8_t> older = whiskeye::test::mjpeg_pattern_jpeg(640, 480, 3);
+  const std::vector<uint8_t> newest = whiskeye::test::mjpeg_pattern_jpeg(640, 480, 11);
+  ASSERT_GT(older.size(), newest.size());
+  std::vector<uint8_t> buffer(1228800, 0);  // sizeimage of 640x480 MJPG in v4l2loopback
+  std::copy(older.begin(), older.end(), buffer.begin());
+  std::copy(newest.begin(), newest.end(), buffer.begin());
+  EXPECT_EQ(check_frame(0, buffer.size(), buffer.size(), kMJPG, 0, 480), FrameCheck::kUsable);
+  EXPECT_EQ(check_mjpeg(buffer, 640, 480), FrameCheck::kJpegDamagedData) << "what camerad counted as damage";
+
+  const int64_t requested_us = 11'749'984;  // CLOCK_MONOTONIC when VIDIOC_REQBUFS returned
+  EXPECT_TRUE(from_before_session(0, requested_us - 171, requested_us, 0, 8));
+  EXPECT_TRUE(from_before_session(0, requested_us, requested_us, 0, 8)) << "stamped within the same microsecond";
+  // The writer had written only two frames: both positions the reader takes first were re-initialised.
+  EXPECT_TRUE(from_before_session(0, requested_us - 171, requested_us, 1, 8));
+}
+
+TEST(V4l2Session, AFrameFilledAfterTheSessionAskedForItsBuffersIsOne) {
+  const int64_t requested_us = 11'749'984;
+  // A vb2 driver (UVC, vivid) numbers from 0 at STREAMON and stamps a buffer when it fills it.
+  EXPECT_FALSE(from_before_session(0, requested_us + 40'000, requested_us, 0, 8));
+  // v4l2loopback's next frames carry the writer's position and the time of the write.
+  EXPECT_FALSE(from_before_session(19, requested_us + 62'756, requested_us, 1, 8));
+  // A driver that leaves the timestamp 0, or stamps from the epoch, never.
+  EXPECT_FALSE(from_before_session(0, 0, requested_us, 0, 8));
+  EXPECT_FALSE(from_before_session(0, 1'700'000'000'000'000, requested_us, 0, 8));
+  // A driver stamping with a clock of its own loses at most its first ring of frames numbered 0.
+  EXPECT_TRUE(from_before_session(0, 5'000, requested_us, 7, 8));
+  EXPECT_FALSE(from_before_session(0, 5'000, requested_us, 8, 8));
+  EXPECT_FALSE(from_before_session(1, 5'000, requested_us, 0, 8));
 }
 
 TEST(V4l2Requeue, BufferWhoseQbufFailsIsKeptAndRetried) {

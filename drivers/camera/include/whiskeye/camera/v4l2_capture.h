@@ -56,6 +56,20 @@ FrameCheck check_frame(uint32_t buffer_flags, std::size_t bytesused, std::size_t
 // decoder refuses it (decode errors in SLAM_STATUS).
 FrameCheck check_mjpeg(std::span<const uint8_t> frame, uint32_t width, uint32_t height);
 
+// Whether a dequeued buffer holds no frame of this session. v4l2loopback 0.12.7 re-initialises every
+// buffer of its ring when a reader asks for buffers (VIDIOC_REQBUFS: sequence 0, bytesused the
+// format's sizeimage, stamped at that moment) while its writer goes on filling them one by one, so a
+// reader joining a running writer is first handed the newest frame written before it asked, under a
+// number, time and size that are not that frame's: a whole JPEG followed by an older, longer frame's
+// last bytes, which check_mjpeg() rightly calls damaged. Such a buffer has sequence 0, a timestamp
+// (microseconds, CLOCK_MONOTONIC as v4l2loopback stamps) no later than `buffers_requested_us`, when
+// the session's VIDIOC_REQBUFS returned, and is among the session's first `ring` dequeued ones
+// (`dequeued_before` came earlier). A vb2 driver (UVC, vivid) fills and stamps a buffer only after
+// STREAMON, so none of its frames is such a buffer; a timestamp of 0 (none) or from the epoch
+// (CLOCK_REALTIME) never is; a driver with its own clock loses at most its frame numbered 0.
+bool from_before_session(uint32_t sequence, int64_t timestamp_us, int64_t buffers_requested_us,
+                         std::size_t dequeued_before, std::size_t ring);
+
 // What the driver settled on when asked for a format (VIDIOC_S_FMT's answer).
 inline constexpr uint32_t kFieldNone = 1;  // V4L2_FIELD_NONE: progressive (checked in the source)
 struct NegotiatedFormat {
@@ -152,7 +166,9 @@ class Capture {
   // counted in corrupt_frames() (last_skip() says why). kError: dequeuing failed while the device
   // is still there (last_error() says how); the caller counts it and should not retry at once.
   enum class Result { kFrame, kTimeout, kGone, kSkipped, kError };
-  // Waits up to timeout_ms for the next frame. The view stays valid until the next call.
+  // Waits up to timeout_ms for the next frame. The view stays valid until the next call. A buffer
+  // holding no frame of this session (from_before_session()) goes straight back to the driver, is
+  // logged once and counted nowhere, and the wait goes on: it is neither a frame nor damage.
   Result next(FrameView& frame, int timeout_ms);
 
   const std::string& device() const { return device_; }
@@ -201,6 +217,9 @@ class Capture {
   std::vector<uint32_t> pending_;
   // True if buffer `index` holds another frame than `sequence` (QUERYBUF); counts it if so.
   bool overwritten(uint32_t index, uint32_t sequence);
+  int64_t buffers_requested_us_ = 0;  // CLOCK_MONOTONIC when VIDIOC_REQBUFS returned
+  std::size_t dequeued_ = 0;          // buffers dequeued since open
+  bool from_before_logged_ = false;
   int64_t corrupt_frames_ = 0;
   int64_t overwritten_frames_ = 0;
   int64_t requeue_failures_ = 0;
