@@ -29,10 +29,9 @@ class LogReader::Source {
   virtual std::size_t held(std::size_t at) const = 0;
   // Like view(at, len), but of those bytes only the first `ready` (≤ len) need be read now; the
   // rest is read by read_rest() of the view's owner. The view is shared into `owner` at once.
-  virtual const uint8_t* view_deferred(std::size_t at, std::size_t len, std::size_t ready,
+  virtual const uint8_t* view_deferred(std::size_t at, std::size_t len, std::size_t /*ready*/,
                                        std::shared_ptr<const void>& owner) {
     const uint8_t* v = view(at, len);
-    (void)ready;
     share(owner);
     return v;
   }
@@ -89,22 +88,9 @@ class StreamSource final : public LogReader::Source {
   StreamSource& operator=(const StreamSource&) = delete;
 
   const uint8_t* view(std::size_t at, std::size_t len) override {
-    if (current_ && at >= current_->start && at + len <= current_->start + current_->filled) {
-      return current_->bytes.get() + (at - current_->start);
-    }
+    if (current_ && held(at) >= len) return current_->bytes.get() + (at - current_->start);
     const std::size_t want = std::min(std::max(chunk_bytes_, len), size_ - at);
-    std::shared_ptr<Chunk> next = take_free(want);
-    next->start = at;
-    next->filled = 0;
-    if (current_ && at >= current_->start && at < current_->start + current_->filled) {
-      // The part already read (the rest of an event whose end the old chunk lacks) is copied over.
-      next->filled = current_->start + current_->filled - at;
-      std::memcpy(next->bytes.get(), current_->bytes.get() + (at - current_->start), next->filled);
-    }
-    fill(*next, want);
-    next->length = want;
-    if (current_) keep_free(std::move(current_));
-    current_ = std::move(next);
+    start_chunk(at, want, want);
     return current_->bytes.get();
   }
   void share(std::shared_ptr<const void>& owner) const override {
@@ -112,26 +98,14 @@ class StreamSource final : public LogReader::Source {
   }
   const uint8_t* view_deferred(std::size_t at, std::size_t len, std::size_t ready,
                                std::shared_ptr<const void>& owner) override {
-    if (held(at) >= len) {
-      share(owner);
-      return current_->bytes.get() + (at - current_->start);
+    if (held(at) < len) {
+      // A chunk of the event's own, read up to `ready`.
+      start_chunk(at, len, ready);
+      std::erase_if(deferred_, [](const std::weak_ptr<Chunk>& d) { return d.expired(); });
+      deferred_.push_back(current_);
     }
-    // A chunk of the event's own: what the current one holds of it copied over, then read up to `ready`.
-    std::shared_ptr<Chunk> next = take_free(len);
-    next->start = at;
-    next->filled = 0;
-    if (current_ && at >= current_->start && at < current_->start + current_->filled) {
-      next->filled = std::min(current_->start + current_->filled - at, len);
-      std::memcpy(next->bytes.get(), current_->bytes.get() + (at - current_->start), next->filled);
-    }
-    fill(*next, std::max(ready, next->filled));
-    next->length = len;
-    deferred_.push_back(next);
-    std::erase_if(deferred_, [](const std::weak_ptr<Chunk>& d) { return d.expired(); });
-    if (current_) keep_free(std::move(current_));
-    current_ = std::move(next);
     share(owner);
-    return current_->bytes.get();
+    return current_->bytes.get() + (at - current_->start);
   }
   void read_rest(const std::shared_ptr<const void>& owner) override {
     for (const std::weak_ptr<Chunk>& d : deferred_) {
@@ -156,6 +130,20 @@ class StreamSource final : public LogReader::Source {
     std::size_t filled = 0;  // bytes read
     std::size_t length = 0;  // bytes it stands for: more than `filled` while a deferred event's rest is unread
   };
+
+  // Makes a chunk of `length` bytes from file offset `at` the current one, with its first `ready`
+  // bytes (at least) read: the part the old current chunk holds is copied over (the rest of an event
+  // whose end the old chunk lacks), the rest read from the file.
+  void start_chunk(std::size_t at, std::size_t length, std::size_t ready) {
+    std::shared_ptr<Chunk> next = take_free(length);
+    next->start = at;
+    next->filled = std::min(held(at), length);
+    if (next->filled > 0) std::memcpy(next->bytes.get(), current_->bytes.get() + (at - current_->start), next->filled);
+    fill(*next, ready);
+    next->length = length;
+    if (current_) keep_free(std::move(current_));
+    current_ = std::move(next);
+  }
 
   // Reads the chunk's bytes up to `upto` (from the file at its start).
   void fill(Chunk& c, std::size_t upto) {
