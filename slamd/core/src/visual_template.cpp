@@ -10,6 +10,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <string>
 #include <vector>
 
@@ -314,28 +315,24 @@ VisualTemplate make_visual_template_from_grey(const float* grey, int width, int 
 VisualTemplate make_visual_template(const ImageView& image, const VisualParams& params, const FrameDecoder* decoder) {
   const GreyCrop g = grey_crop(image, params, decoder);
   const std::array<float, 256>& unit = unit_grey();
-  const int w = g.rect.width;
-  if (weighted_area_path(w, g.rect.height, params.template_width, params.template_height)) {
-    // Row by row: only the rows the average reads are converted, straight into its buffer.
-    std::vector<float> small(static_cast<size_t>(params.template_width) * static_cast<size_t>(params.template_height));
-    area_average(
-        w, g.rect.height, params.template_width, params.template_height,
-        [&g, &unit, w](int y, float* buffer, const int* place) {
-          const uint8_t* in = g.bytes + static_cast<size_t>(y) * g.row_step;
-          for (int x = 0; x < w; ++x) buffer[place[x]] = unit[in[static_cast<size_t>(x) * g.step]];
-        },
-        small.data());
-    return finish_template(std::move(small), params);
-  }
-  cv::Mat grey(g.rect.height, w, CV_32FC1);
-  for (int y = 0; y < g.rect.height; ++y) {
+  const int w = g.rect.width, h = g.rect.height;
+  // Row y of the crop as floats in [0, 1], its pixel x at out[place[x]].
+  const auto grey_row = [&g, &unit, w](int y, float* out, const int* place) {
     const uint8_t* in = g.bytes + static_cast<size_t>(y) * g.row_step;
-    auto* out = grey.ptr<float>(y);
-    for (int x = 0; x < w; ++x) out[x] = unit[in[static_cast<size_t>(x) * g.step]];
+    for (int x = 0; x < w; ++x) out[place[x]] = unit[in[static_cast<size_t>(x) * g.step]];
+  };
+  std::vector<float> small(static_cast<size_t>(params.template_width) * static_cast<size_t>(params.template_height));
+  if (weighted_area_path(w, h, params.template_width, params.template_height)) {
+    // Row by row: only the rows the average reads are converted, straight into its buffer.
+    area_average(w, h, params.template_width, params.template_height, grey_row, small.data());
+  } else {
+    std::vector<int> in_order(static_cast<size_t>(w));
+    std::iota(in_order.begin(), in_order.end(), 0);
+    std::vector<float> grey(static_cast<size_t>(w) * static_cast<size_t>(h));
+    for (int y = 0; y < h; ++y) grey_row(y, &grey[static_cast<size_t>(y) * static_cast<size_t>(w)], in_order.data());
+    area_shrink(grey.data(), w, h, w, small.data(), params.template_width, params.template_height);
   }
-  VisualParams whole = params;  // the crop is all there is now
-  whole.crop_x = whole.crop_y = whole.crop_width = whole.crop_height = 0;
-  return make_visual_template_from_grey(grey.ptr<float>(), grey.cols, grey.rows, static_cast<int>(grey.step1()), whole);
+  return finish_template(std::move(small), params);
 }
 
 }  // namespace whiskeye::slam
