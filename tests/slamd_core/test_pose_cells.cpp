@@ -6,6 +6,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <random>
+#include <string>
 #include <vector>
 
 namespace whiskeye::slam {
@@ -147,6 +151,106 @@ TEST(PoseCells, WhatItKnowsOfWhereActivityLiesNeverChangesTheActivity) {
     pc.serialise(state);
     fresh.serialise(fresh_state);
     ASSERT_EQ(state, fresh_state) << "step " << i;
+  }
+}
+
+// The dynamics written plainly: every cell, every tap, the rows and layers nothing reaches too.
+// Kernels as the model defines them (1-D Gaussians normalised to 1).
+std::vector<float> gaussian(int r, double sigma) {
+  std::vector<float> k(static_cast<size_t>(2 * r + 1));
+  double sum = 0.0;
+  for (int i = -r; i <= r; ++i) sum += std::exp(-0.5 * i * i / (sigma * sigma));
+  for (int i = -r; i <= r; ++i) k[static_cast<size_t>(i + r)] = static_cast<float>(std::exp(-0.5 * i * i / (sigma * sigma)) / sum);
+  return k;
+}
+
+std::vector<float> plain_dynamics(const std::vector<float>& p, const PoseCellParams& prm) {
+  const int n = prm.dim_xy, nt = prm.dim_theta;
+  const auto at = [n](int t, int y, int x) { return (static_cast<size_t>(t) * n + static_cast<size_t>(y)) * n + static_cast<size_t>(x); };
+  const auto wrap = [](int i, int m) { return ((i % m) + m) % m; };
+  // Along x, then y, then θ: out = Σ_j k[j]·in[i + j − r], wrapped, taps in order, from +0.
+  const auto convolve = [&](const std::vector<float>& src, const std::vector<float>& k, int r) {
+    std::vector<float> a(src.size()), b(src.size()), c(src.size());
+    for (int t = 0; t < nt; ++t) {
+      for (int y = 0; y < n; ++y) {
+        for (int x = 0; x < n; ++x) {
+          float s = 0.0f;
+          for (int j = 0; j <= 2 * r; ++j) s += k[static_cast<size_t>(j)] * src[at(t, y, wrap(x + j - r, n))];
+          a[at(t, y, x)] = s;
+        }
+      }
+    }
+    for (int t = 0; t < nt; ++t) {
+      for (int y = 0; y < n; ++y) {
+        for (int x = 0; x < n; ++x) {
+          float s = 0.0f;
+          for (int j = 0; j <= 2 * r; ++j) s += k[static_cast<size_t>(j)] * a[at(t, wrap(y + j - r, n), x)];
+          b[at(t, y, x)] = s;
+        }
+      }
+    }
+    for (int t = 0; t < nt; ++t) {
+      for (int y = 0; y < n; ++y) {
+        for (int x = 0; x < n; ++x) {
+          float s = 0.0f;
+          for (int j = 0; j <= 2 * r; ++j) s += k[static_cast<size_t>(j)] * b[at(wrap(t + j - r, nt), y, x)];
+          c[at(t, y, x)] = s;
+        }
+      }
+    }
+    return c;
+  };
+  const std::vector<float> e = convolve(p, gaussian(prm.exc_radius, prm.exc_sigma), prm.exc_radius);
+  const std::vector<float> i = convolve(e, gaussian(prm.inh_radius, prm.inh_sigma), prm.inh_radius);
+  const auto g = static_cast<float>(prm.global_inhibition);
+  std::vector<float> q(p.size());
+  double total = 0.0;
+  for (int t = 0; t < nt; ++t) {
+    for (int y = 0; y < n; ++y) {
+      float row_sum = 0.0f;
+      for (int x = 0; x < n; ++x) {
+        const float v = e[at(t, y, x)] - i[at(t, y, x)];
+        q[at(t, y, x)] = v >= g ? v - g : 0.0f;
+        row_sum += q[at(t, y, x)];
+      }
+      total += row_sum;
+    }
+  }
+  EXPECT_GT(total, 0.0);
+  const auto inv = static_cast<float>(1.0 / total);
+  for (float& v : q) v *= inv;
+  return q;
+}
+
+// The network computes only where activity can be, a run of rows at a time, in vector-width spans:
+// every step must equal the plain full-grid dynamics to the bit. Activity scattered over the grid
+// and across its edges, on grids smaller than the kernels and the default one.
+TEST(PoseCells, DynamicsEqualThePlainFullGridComputationToTheBit) {
+  struct Grid {
+    int n, nt, exc_r, inh_r;
+  };
+  for (const Grid& grid : {Grid{21, 36, 3, 2}, Grid{5, 4, 3, 2}, Grid{8, 6, 10, 7}, Grid{13, 9, 2, 1}}) {
+    SCOPED_TRACE("grid " + std::to_string(grid.n) + "x" + std::to_string(grid.n) + "x" + std::to_string(grid.nt) +
+                 ", radii " + std::to_string(grid.exc_r) + " and " + std::to_string(grid.inh_r));
+    PoseCellParams prm;
+    prm.dim_xy = grid.n;
+    prm.dim_theta = grid.nt;
+    prm.exc_radius = grid.exc_r;
+    prm.inh_radius = grid.inh_r;
+    PoseCells pc{prm};
+    std::mt19937 rng(static_cast<uint32_t>(grid.n * 100 + grid.nt));
+    std::uniform_int_distribution<int> cell(-2, 40);
+    std::uniform_real_distribution<double> energy(0.01, 0.5);
+    for (int step = 0; step < 40; ++step) {
+      // Every few steps some energy somewhere, often near (and wrapped across) an edge.
+      if (step % 5 == 0) {
+        for (int k = 0; k < 1 + step % 3; ++k) pc.inject(cell(rng), cell(rng), cell(rng), energy(rng));
+      }
+      const std::vector<float> expected = plain_dynamics(pc.activity(), prm);
+      pc.settle();
+      ASSERT_EQ(pc.activity().size(), expected.size());
+      ASSERT_EQ(std::memcmp(pc.activity().data(), expected.data(), expected.size() * sizeof(float)), 0) << "step " << step;
+    }
   }
 }
 

@@ -102,7 +102,7 @@ class PoseCells {
   std::vector<float> p_, a_, b_, e_, i_;
   std::vector<float> exc_kernel_, inh_kernel_;  // 1-D, normalised
   std::vector<float> layer_;                     // one x-y sheet of scratch
-  std::vector<float> row_;                       // one padded x row of scratch
+  std::vector<float> row_, sum_;                 // scratch of the x pass: padded rows and their sums
   std::vector<float> cos_xy_, sin_xy_, cos_t_, sin_t_;  // circular-mean tables
   static constexpr int kPad = 16;  // ≥ any kernel radius (load() caps radii at 10)
   std::vector<int> wrap_xy_, wrap_t_;  // i + kPad → i mod n, for i in [−kPad, n + kPad)
