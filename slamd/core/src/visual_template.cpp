@@ -7,10 +7,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <limits>
-#include <numeric>
 #include <string>
 #include <vector>
 
@@ -66,18 +64,6 @@ cv::Rect crop_rect(const VisualParams& p, int width, int height) {
                      ") lies outside the " + std::to_string(width) + "x" + std::to_string(height) + " image");
   }
   return {x0, y0, cw, ch};
-}
-
-// 8-bit grey to [0, 1] exactly as cv::Mat::convertTo(CV_32F, 1.0 / 255) computes it: the byte as a
-// float times the scale as a float (OpenCV's cvt_32f; its b term is 0).
-const std::array<float, 256>& unit_grey() {
-  static const std::array<float, 256> lut = [] {
-    std::array<float, 256> l{};
-    const auto scale = static_cast<float>(1.0 / 255.0);
-    for (int v = 0; v < 256; ++v) l[static_cast<size_t>(v)] = static_cast<float>(v) * scale;
-    return l;
-  }();
-  return lut;
 }
 
 // The crop of an image as 8-bit grey bytes: `bytes` is the crop's first grey byte, `step` the
@@ -190,37 +176,40 @@ bool weighted_area_path(int from_w, int from_h, int to_w, int to_h) {
 
 // The area average of a from_w × from_h float image into to_w × to_h (`out`, row-major), with
 // cv::resize's arithmetic: each source row's horizontal sums in float, in source order, then the
-// rows weighted and summed in order. `row(y, buffer, place)` writes source row y's pixel x to
-// buffer[place[x]] (from_w floats). When every destination column is r whole source columns (slam.yaml's
-// 640 → 64), `place` puts the row in tap-major order, the k-th pixel of every column side by side,
-// so the column sums run over contiguous floats, a vector at a time, in the same order.
+// rows weighted and summed in order. `row(y, buffer)` writes source row y (from_w floats). A source
+// row on the border of two destination rows is read and summed once, for both.
 template <class Row>
 void area_average(int from_w, int from_h, int to_w, int to_h, Row&& row, float* out) {
   const AreaAxis ax = area_axis(from_w, to_w), ay = area_axis(from_h, to_h);
-  std::vector<int> place(static_cast<size_t>(from_w));
-  for (int x = 0; x < from_w; ++x) place[static_cast<size_t>(x)] = ax.whole > 0 ? (x % ax.whole) * to_w + x / ax.whole : x;
   std::vector<float> buffer(static_cast<size_t>(from_w));
   std::vector<float> h(static_cast<size_t>(to_w));
+  int summed = -1;  // the source row whose sums `h` holds
   for (int dy = 0; dy < to_h; ++dy) {
     float* o = out + static_cast<size_t>(dy) * static_cast<size_t>(to_w);
     for (int j = ay.begin[static_cast<size_t>(dy)]; j < ay.begin[static_cast<size_t>(dy) + 1]; ++j) {
-      row(ay.source[static_cast<size_t>(j)], buffer.data(), place.data());
-      const float* in = buffer.data();
-      if (ax.whole > 0) {
-        const float w = ax.share.front();
-        for (int dx = 0; dx < to_w; ++dx) h[static_cast<size_t>(dx)] = 0.0f + in[dx] * w;
-        for (int k = 1; k < ax.whole; ++k) {
-          const float* tap = in + static_cast<size_t>(k) * static_cast<size_t>(to_w);
-          for (int dx = 0; dx < to_w; ++dx) h[static_cast<size_t>(dx)] += tap[dx] * w;
-        }
-      } else {
-        for (int dx = 0; dx < to_w; ++dx) {
-          float s = 0.0f;
-          for (int k = ax.begin[static_cast<size_t>(dx)]; k < ax.begin[static_cast<size_t>(dx) + 1]; ++k) {
-            s += in[ax.source[static_cast<size_t>(k)]] * ax.share[static_cast<size_t>(k)];
+      const int y = ay.source[static_cast<size_t>(j)];
+      if (y != summed) {
+        row(y, buffer.data());
+        const float* in = buffer.data();
+        if (ax.whole > 0) {
+          // Every destination column is `whole` source columns with one share (slam.yaml's 640 → 64).
+          const float w = ax.share.front();
+          for (int dx = 0; dx < to_w; ++dx) {
+            const float* c = in + static_cast<size_t>(dx) * static_cast<size_t>(ax.whole);
+            float s = 0.0f + c[0] * w;
+            for (int k = 1; k < ax.whole; ++k) s += c[k] * w;
+            h[static_cast<size_t>(dx)] = s;
           }
-          h[static_cast<size_t>(dx)] = s;
+        } else {
+          for (int dx = 0; dx < to_w; ++dx) {
+            float s = 0.0f;
+            for (int k = ax.begin[static_cast<size_t>(dx)]; k < ax.begin[static_cast<size_t>(dx) + 1]; ++k) {
+              s += in[ax.source[static_cast<size_t>(k)]] * ax.share[static_cast<size_t>(k)];
+            }
+            h[static_cast<size_t>(dx)] = s;
+          }
         }
+        summed = y;
       }
       const float beta = ay.share[static_cast<size_t>(j)];
       if (j == ay.begin[static_cast<size_t>(dy)]) {
@@ -291,9 +280,9 @@ void area_shrink(const float* grey, int width, int height, int stride_floats, fl
   if (weighted_area_path(width, height, out_width, out_height)) {
     area_average(
         width, height, out_width, out_height,
-        [&](int y, float* buffer, const int* place) {
+        [&](int y, float* buffer) {
           const float* in = grey + static_cast<size_t>(y) * static_cast<size_t>(stride_floats);
-          for (int x = 0; x < width; ++x) buffer[place[x]] = in[x];
+          std::copy_n(in, width, buffer);
         },
         out);
     return;
@@ -314,22 +303,28 @@ VisualTemplate make_visual_template_from_grey(const float* grey, int width, int 
 
 VisualTemplate make_visual_template(const ImageView& image, const VisualParams& params, const FrameDecoder* decoder) {
   const GreyCrop g = grey_crop(image, params, decoder);
-  const std::array<float, 256>& unit = unit_grey();
   const int w = g.rect.width, h = g.rect.height;
-  // Row y of the crop as floats in [0, 1], its pixel x at out[place[x]].
-  const auto grey_row = [&g, &unit, w](int y, float* out, const int* place) {
+  // Row y of the crop as floats in [0, 1], the byte as a float times 1/255 as a float, exactly as
+  // cv::Mat::convertTo(CV_32F, 1.0 / 255) computes it (OpenCV's cvt_32f; its b term is 0). One loop
+  // per grey step (grey, YUYV) so that each vectorises.
+  const auto scale = static_cast<float>(1.0 / 255.0);
+  const auto grey_row = [&g, w, scale](int y, float* out) {
     const uint8_t* in = g.bytes + static_cast<size_t>(y) * g.row_step;
-    for (int x = 0; x < w; ++x) out[place[x]] = unit[in[static_cast<size_t>(x) * g.step]];
+    if (g.step == 1) {
+      for (int x = 0; x < w; ++x) out[x] = static_cast<float>(in[x]) * scale;
+    } else if (g.step == 2) {
+      for (int x = 0; x < w; ++x) out[x] = static_cast<float>(in[2 * static_cast<size_t>(x)]) * scale;
+    } else {
+      for (int x = 0; x < w; ++x) out[x] = static_cast<float>(in[static_cast<size_t>(x) * g.step]) * scale;
+    }
   };
   std::vector<float> small(static_cast<size_t>(params.template_width) * static_cast<size_t>(params.template_height));
   if (weighted_area_path(w, h, params.template_width, params.template_height)) {
     // Row by row: only the rows the average reads are converted, straight into its buffer.
     area_average(w, h, params.template_width, params.template_height, grey_row, small.data());
   } else {
-    std::vector<int> in_order(static_cast<size_t>(w));
-    std::iota(in_order.begin(), in_order.end(), 0);
     std::vector<float> grey(static_cast<size_t>(w) * static_cast<size_t>(h));
-    for (int y = 0; y < h; ++y) grey_row(y, &grey[static_cast<size_t>(y) * static_cast<size_t>(w)], in_order.data());
+    for (int y = 0; y < h; ++y) grey_row(y, &grey[static_cast<size_t>(y) * static_cast<size_t>(w)]);
     area_shrink(grey.data(), w, h, w, small.data(), params.template_width, params.template_height);
   }
   return finish_template(std::move(small), params);
