@@ -139,16 +139,16 @@ PoseCells::Support PoseCells::support_of(const std::vector<float>& g, const std:
 }
 
 PoseCells::Support PoseCells::dilate(const Support& s, int r) const {
-  auto dil = [r](const std::vector<uint8_t>& m) {
+  auto dil = [r](const std::vector<uint8_t>& m, const std::vector<int>& wrap) {
     const int n = static_cast<int>(m.size());
     std::vector<uint8_t> out(m.size(), 0);
     for (int i = 0; i < n; ++i) {
       if (m[static_cast<size_t>(i)] == 0) continue;
-      for (int k = -r; k <= r; ++k) out[static_cast<size_t>(((i + k) % n + n) % n)] = 1;
+      for (int k = -r; k <= r; ++k) out[static_cast<size_t>(wrap[static_cast<size_t>(kPad + i + k)])] = 1;
     }
     return out;
   };
-  return {dil(s.x), dil(s.y), dil(s.t)};
+  return {dil(s.x, wrap_xy_), dil(s.y, wrap_xy_), dil(s.t, wrap_t_)};
 }
 
 PoseCells::Support PoseCells::convolve(const std::vector<float>& src, std::vector<float>& dst,
@@ -388,7 +388,24 @@ void PoseCells::relocate(double x, double y, double theta) {
 }
 
 void PoseCells::argmax(int& x, int& y, int& t) const {
-  const size_t m = static_cast<size_t>(std::max_element(p_.begin(), p_.end()) - p_.begin());
+  // The first largest cell. When the occupied layers are known, only they are scanned: the others
+  // are zero, and the activity (normalised to sum 1) has a cell above zero in an occupied layer.
+  size_t m = 0;
+  if (t_mask_valid_) {
+    const size_t sheet = static_cast<size_t>(n_) * static_cast<size_t>(n_);
+    float best = -1.0f;
+    for (int l = 0; l < nt_; ++l) {
+      if (support_.t[static_cast<size_t>(l)] == 0) continue;
+      const auto first = p_.begin() + static_cast<std::ptrdiff_t>(idx(l, 0, 0));
+      const auto it = std::max_element(first, first + static_cast<std::ptrdiff_t>(sheet));
+      if (*it > best) {
+        best = *it;
+        m = static_cast<size_t>(it - p_.begin());
+      }
+    }
+  } else {
+    m = static_cast<size_t>(std::max_element(p_.begin(), p_.end()) - p_.begin());
+  }
   x = static_cast<int>(m % static_cast<size_t>(n_));
   y = static_cast<int>((m / static_cast<size_t>(n_)) % static_cast<size_t>(n_));
   t = static_cast<int>(m / (static_cast<size_t>(n_) * static_cast<size_t>(n_)));

@@ -53,19 +53,28 @@ struct WhiskerTrace {
 
 using WhiskerTraces = std::array<WhiskerTrace, kNumWhiskers>;
 
+// Which whiskers a sample measured (bit w: valid, and whisker w's three values finite).
+uint32_t measured(const WhiskSample& s) {
+  if (!s.valid) return 0;
+  uint32_t m = 0;
+  for (size_t w = 0; w < static_cast<size_t>(kNumWhiskers); ++w) {
+    const bool ok = std::isfinite(s.theta[w]) && std::isfinite(s.deflection_x[w]) && std::isfinite(s.deflection_y[w]);
+    m |= static_cast<uint32_t>(ok) << w;
+  }
+  return m;
+}
+
 // The samples of whisker w that count as contact; empty when below min_contact_samples. The x
 // deflection is first corrected for the whisking-speed term (drag/inertia bends a moving whisker
 // against its motion: x −= −speed_gain·θ̇), with θ̇ from central differences of the valid samples.
-// `valid`: a buffer for the whisker's valid samples.
+// `masks`: measured() of every sample; `valid`: a buffer for the whisker's valid samples.
 WhiskerTrace contact_samples(const WhiskCycleInput& cycle, int w, const TactileParams& p,
-                             std::vector<const WhiskSample*>& valid) {
+                             const std::vector<uint32_t>& masks, std::vector<const WhiskSample*>& valid) {
   WhiskerTrace t;
   const auto i = static_cast<size_t>(w);
   valid.clear();
-  for (const WhiskSample& s : cycle.samples) {
-    if (s.valid && std::isfinite(s.theta[i]) && std::isfinite(s.deflection_x[i]) && std::isfinite(s.deflection_y[i])) {
-      valid.push_back(&s);
-    }
+  for (size_t k = 0; k < cycle.samples.size(); ++k) {
+    if ((masks[k] >> i) & 1u) valid.push_back(&cycle.samples[k]);
   }
   for (size_t k = 0; k < valid.size(); ++k) {
     const WhiskSample& s = *valid[k];
@@ -92,12 +101,20 @@ WhiskerTrace contact_samples(const WhiskCycleInput& cycle, int w, const TactileP
   return t;
 }
 
-// Every whisker's contact samples: what both the contact estimates and the SDA read.
-WhiskerTraces contact_traces(const WhiskCycleInput& cycle, const TactileParams& p) {
+// Every whisker's contact samples: what both the contact estimates and the SDA read. `sensed`, when
+// given: the whiskers some sample measured (bit w).
+WhiskerTraces contact_traces(const WhiskCycleInput& cycle, const TactileParams& p, uint32_t* sensed = nullptr) {
+  std::vector<uint32_t> masks(cycle.samples.size());
+  uint32_t any = 0;
+  for (size_t k = 0; k < masks.size(); ++k) {
+    masks[k] = measured(cycle.samples[k]);
+    any |= masks[k];
+  }
+  if (sensed != nullptr) *sensed = any;
   WhiskerTraces traces;
   std::vector<const WhiskSample*> valid;
   valid.reserve(cycle.samples.size());
-  for (int w = 0; w < kNumWhiskers; ++w) traces[static_cast<size_t>(w)] = contact_samples(cycle, w, p, valid);
+  for (int w = 0; w < kNumWhiskers; ++w) traces[static_cast<size_t>(w)] = contact_samples(cycle, w, p, masks, valid);
   return traces;
 }
 
@@ -264,7 +281,7 @@ std::array<float, kSdaSize> compute_sda(const WhiskCycleInput& cycle, const Tact
 TactileTemplate make_tactile_template(const WhiskCycleInput& cycle, const RobotGeometry& geometry,
                                       const TactileParams& p) {
   TactileTemplate t;
-  const WhiskerTraces traces = contact_traces(cycle, p);
+  const WhiskerTraces traces = contact_traces(cycle, p, &t.sensed);
   const std::vector<ContactEstimate> contacts = estimate_contacts(traces, geometry, p);
   t.num_contacts = static_cast<int>(contacts.size());
   std::vector<Vec3> pts;
@@ -276,15 +293,6 @@ TactileTemplate make_tactile_template(const WhiskCycleInput& cycle, const RobotG
     t.pfh[static_cast<size_t>(i)] = static_cast<uint16_t>(std::lround(std::clamp(h[static_cast<size_t>(i)], 0.0, 1.0) * 65535.0));
   }
   t.sda = compute_sda(traces);
-  t.sensed = 0;
-  for (const WhiskSample& s : cycle.samples) {
-    if (!s.valid) continue;
-    for (size_t w = 0; w < static_cast<size_t>(kNumWhiskers); ++w) {
-      if (std::isfinite(s.theta[w]) && std::isfinite(s.deflection_x[w]) && std::isfinite(s.deflection_y[w])) {
-        t.sensed |= 1u << w;
-      }
-    }
-  }
   return t;
 }
 
