@@ -1,8 +1,8 @@
 // Fuzz target: the LCM log reader (common's LogReader, which `slamd --replay` and vita-eval use):
 // event headers, resynchronisation after damage, and the damage report. The input is also read as a
 // file in chunks (LogReader::Access::kStreamed, from a memfd, the chunk size taken from the input's
-// first byte), also with the first event's channel deferred (LogReader::defer), and must give exactly
-// what the whole input in memory gives.
+// first byte), also with the first event's channel deferred (LogReader::defer, its data read in two
+// parts), and must give exactly what the whole input in memory gives.
 // Seeds: fuzz/corpus/lcm_log, a few events of a simulator log (fuzz_make_seeds).
 #include "whiskeye/common/bus.h"
 
@@ -26,7 +26,11 @@ Events read_all(LogReader& reader, const std::string& deferred = "") {
   Events events;
   LogReader::EventView ev;
   while (reader.next(ev)) {
-    if (!deferred.empty() && ev.channel == deferred) reader.read_rest(ev.owner);
+    if (!deferred.empty() && ev.channel == deferred) {
+      // A part first (a crop's rows), then the rest: together the whole data.
+      reader.read_rest(ev.owner, ev.data.first(ev.data.size() / 2));
+      reader.read_rest(ev.owner);
+    }
     events.emplace_back(ev.utime, std::string(ev.channel), std::vector<uint8_t>(ev.data.begin(), ev.data.end()));
   }
   return events;

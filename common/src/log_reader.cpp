@@ -35,7 +35,9 @@ class LogReader::Source {
     share(owner);
     return v;
   }
-  virtual void read_rest(const std::shared_ptr<const void>&) {}
+  // Reads what a deferred view (`owner`'s) lacks up to `end` (one past the last byte wanted; nullptr:
+  // the view's end).
+  virtual void read_rest(const std::shared_ptr<const void>&, const uint8_t* /*end*/) {}
 
  protected:
   std::size_t size_ = 0;
@@ -107,11 +109,15 @@ class StreamSource final : public LogReader::Source {
     share(owner);
     return current_->bytes.get() + (at - current_->start);
   }
-  void read_rest(const std::shared_ptr<const void>& owner) override {
+  void read_rest(const std::shared_ptr<const void>& owner, const uint8_t* end) override {
     for (const std::weak_ptr<Chunk>& d : deferred_) {
       const std::shared_ptr<Chunk> c = d.lock();
       if (c && c.get() == owner.get()) {
-        if (c->filled < c->length) fill(*c, c->length);
+        const uint8_t* begin = c->bytes.get();
+        // Compared as addresses, so an `end` outside the chunk means its whole length, not UB.
+        const auto at = reinterpret_cast<std::uintptr_t>(begin), to = reinterpret_cast<std::uintptr_t>(end);
+        const std::size_t upto = end == nullptr || to < at || to - at > c->length ? c->length : to - at;
+        if (c->filled < upto) fill(*c, upto);
         return;
       }
     }
@@ -283,7 +289,7 @@ LogReader::~LogReader() = default;
 bool LogReader::next(LogEvent& event) {
   EventView view;
   if (!next(view)) return false;
-  if (!deferred_channel_.empty()) source_->read_rest(view.owner);  // a copy is of the whole event
+  if (!deferred_channel_.empty()) source_->read_rest(view.owner, nullptr);  // a copy is of the whole event
   event.utime = view.utime;
   event.channel.assign(view.channel);
   event.data.assign(view.data.begin(), view.data.end());
@@ -346,7 +352,7 @@ bool LogReader::next(EventView& event) {
     // channel is not the deferred one or read_rest() asks for it.
     e = src.view_deferred(pos_, total, kEventHeaderBytes + channel_len + read_first_, event.owner);
     if (std::string_view(reinterpret_cast<const char*>(e + kEventHeaderBytes), channel_len) != deferred_channel_) {
-      src.read_rest(event.owner);
+      src.read_rest(event.owner, nullptr);
     }
     if (next_header != 0) next_h = src.view(next_at, next_header);
   } else {
@@ -411,7 +417,11 @@ void LogReader::defer(std::string channel, std::size_t read_first) {
   read_first_ = read_first;
 }
 
-void LogReader::read_rest(const std::shared_ptr<const void>& owner) { source_->read_rest(owner); }
+void LogReader::read_rest(const std::shared_ptr<const void>& owner) { source_->read_rest(owner, nullptr); }
+
+void LogReader::read_rest(const std::shared_ptr<const void>& owner, std::span<const uint8_t> wanted) {
+  source_->read_rest(owner, wanted.data() + wanted.size());
+}
 
 std::string LogReader::Damage::summary() const {
   if (!damaged()) return "";

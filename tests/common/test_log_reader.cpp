@@ -391,12 +391,25 @@ TEST(LogFiles, ADeferredEventsRestIsReadOnlyWhenAskedFor) {
   in.read_rest(other.owner);  // not deferred: nothing to do
   EXPECT_TRUE(std::all_of(camera.data.begin(), camera.data.begin() + 16, [](uint8_t b) { return b == 2; }))
       << "the first 16 bytes were read with the header";
+  // A part first (the rows a crop uses): read now, from the file as it is then; the file then
+  // changes again, and the rest is read as it is at the second request.
+  in.read_rest(camera.owner, camera.data.first(200'000));
+  EXPECT_TRUE(std::all_of(camera.data.begin() + 4096, camera.data.begin() + 200'000, [](uint8_t b) { return b == 7; }))
+      << "the part asked for is read when asked for";
+  {
+    std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(static_cast<std::streamoff>(data_at));
+    const std::vector<char> changed(600'000, 9);
+    f.write(changed.data(), static_cast<std::streamsize>(changed.size()));
+  }
+  in.read_rest(camera.owner, camera.data.first(100'000));  // within what was read: nothing to do
   in.read_rest(camera.owner);
-  // Past what the reader had in hand when the event came (its 4 kB chunk), the bytes are read now.
-  EXPECT_TRUE(std::all_of(camera.data.begin() + 4096, camera.data.end(), [](uint8_t b) { return b == 7; }))
+  EXPECT_TRUE(std::all_of(camera.data.begin() + 4096, camera.data.begin() + 200'000, [](uint8_t b) { return b == 7; }))
+      << "bytes read are not read again";
+  EXPECT_TRUE(std::all_of(camera.data.begin() + 200'000, camera.data.end(), [](uint8_t b) { return b == 9; }))
       << "the rest is read when asked for, from the file as it is then";
   in.read_rest(camera.owner);  // read already: nothing more happens
-  EXPECT_EQ(camera.data[599'999], 7);
+  EXPECT_EQ(camera.data[599'999], 9);
   EXPECT_FALSE(in.next(small));
   EXPECT_FALSE(in.damage().damaged());
   // A copied event (LogEvent) is always whole.
@@ -406,7 +419,7 @@ TEST(LogFiles, ADeferredEventsRestIsReadOnlyWhenAskedFor) {
   ASSERT_TRUE(copying.next(e));
   ASSERT_TRUE(copying.next(e));
   ASSERT_EQ(e.channel, "CAMERA");
-  EXPECT_TRUE(std::all_of(e.data.begin() + 16, e.data.end(), [](uint8_t b) { return b == 7; }));
+  EXPECT_TRUE(std::all_of(e.data.begin() + 16, e.data.end(), [](uint8_t b) { return b == 9; }));
 }
 
 // A replay keeps a view's owner for as long as it needs the bytes (slamd keeps camera frames until a

@@ -181,6 +181,45 @@ TEST_F(SlamNodeTest, KeepsTheOwnerOfSharedCameraFramesInsteadOfCopying) {
   EXPECT_EQ(node_->counters().cycles_without_camera, 0);
 }
 
+// A replay reads a camera frame's pixels only when a cycle takes the frame, and only the part the
+// SLAM reads: the rows down to the crop's bottom in a mode that uses vision, none in tactile mode.
+TEST(SlamNodePixels, AReplayIsAskedForTheRowsTheCropReadsAndForNoneInTactileMode) {
+  for (const slam::Mode mode : {slam::Mode::Vita, slam::Mode::Visual, slam::Mode::Tactile}) {
+    SCOPED_TRACE(static_cast<int>(mode));
+    slam::SlamParams p;
+    p.mode = mode;
+    p.visual.crop_y = 10;
+    p.visual.crop_height = 290;
+    MemoryBus in, out;
+    DecodeErrors errors;
+    SlamNode node(in, out, std::make_unique<slam::VitaSlam>(p, default_robot_geometry()), NodeParams{}, errors);
+    std::vector<std::size_t> wanted;
+    node.set_pixel_reader([&wanted](const std::shared_ptr<const void>& owner, std::span<const uint8_t> part) {
+      EXPECT_NE(owner, nullptr);
+      wanted.push_back(part.size());
+    });
+    for (int sec = 0; sec < 3; ++sec) {
+      for (int k = 1; k <= 50; ++k) {
+        const int64_t t = kT0 + sec * kS + k * 20'000;
+        odometry_t o{};
+        o.utime = t;
+        publish(in, "ODOMETRY", o);
+        if (k % 10 == 0) publish(in, "CAMERA", stripes(t, 8 + 16 * sec));
+        if (k == 50) publish(in, "WHISK_CYCLE", free_cycle(sec, t));
+      }
+    }
+    node.flush();
+    EXPECT_EQ(node.counters().cycles, 3);
+    if (mode == slam::Mode::Tactile) {
+      EXPECT_TRUE(wanted.empty());
+    } else {
+      // One frame a cycle; rows 0..299 of 640 bytes, not the frame's 480.
+      EXPECT_EQ(wanted, std::vector<std::size_t>(3, 300u * 640u));
+      EXPECT_EQ(node.slam().stats().bad_images, 0);
+    }
+  }
+}
+
 TEST_F(SlamNodeTest, AWhiskCycleWhoseCountsDoNotFitItsLengthIsADecodeErrorNotACrash) {
   stream({8});
   node_->flush();

@@ -205,6 +205,13 @@ TEST(VisualTemplate, ConvertingOnlyTheCropGivesTheTemplatesOfConvertingTheWholeI
           EXPECT_EQ(got.pixels, want.pixels) << "format " << format << " crop " << p.crop_x << "," << p.crop_y << " " << p.crop_width << "x"
                                       << p.crop_height;
           EXPECT_EQ(got.mean, want.mean);
+          // The rows a replay reads of the frame (visual_rows) give the same template.
+          const ImageView part = visual_rows(im, p);
+          EXPECT_EQ(part.height, p.crop_height == 0 || p.crop_y + p.crop_height >= h ? h : p.crop_y + p.crop_height);
+          EXPECT_EQ(part.data.data(), im.data.data());
+          const VisualTemplate from_part = make_visual_template(part, p);
+          EXPECT_EQ(from_part.pixels, got.pixels);
+          EXPECT_EQ(from_part.mean, got.mean);
           ++compared;
         }
         const ImageView im = view(jpeg, w, h, 0, kPixMjpeg);
@@ -223,6 +230,31 @@ TEST(VisualTemplate, ConvertingOnlyTheCropGivesTheTemplatesOfConvertingTheWholeI
     } catch (const InputError& e) {
       EXPECT_STREQ(e.what(), "image: crop (700, 0) lies outside the 640x480 image");
     }
+  }
+}
+
+// What visual_rows leaves whole: a compressed frame, a crop to the image's edge, and a frame whose
+// data is short, which must still be refused with the whole frame's numbers.
+TEST(VisualTemplate, VisualRowsKeepsTheWholeFrameWhereTheCropCannotSayWhichRowsAreRead) {
+  const std::vector<uint8_t> bytes(640 * 480 * 2, 100);
+  VisualParams p;
+  p.crop_height = 300;
+  const ImageView yuyv = view(bytes, 640, 480, 1280, kPixYuyv);
+  EXPECT_EQ(visual_rows(yuyv, p).height, 300);
+  EXPECT_EQ(visual_rows(yuyv, p).data.size(), 300u * 1280u);
+  const ImageView jpeg = view(bytes, 640, 480, 0, kPixMjpeg);
+  EXPECT_EQ(visual_rows(jpeg, p).data.size(), bytes.size());
+  p.crop_height = 0;
+  EXPECT_EQ(visual_rows(yuyv, p).height, 480);
+  p.crop_height = 300;
+  const std::vector<uint8_t> short_data(640 * 479 * 2, 100);
+  const ImageView cut = view(short_data, 640, 480, 1280, kPixYuyv);
+  EXPECT_EQ(visual_rows(cut, p).height, 480);
+  try {
+    make_visual_template(visual_rows(cut, p), p);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), "image: 613120 bytes of data, 614400 needed for 640x480 YUYV");
   }
 }
 

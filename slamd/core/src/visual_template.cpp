@@ -36,7 +36,23 @@ std::string fourcc_text(uint32_t f) {
   return s;
 }
 
-void check_raw(const ImageView& im, int bytes_per_pixel) {
+// Bytes per pixel of the uncompressed formats the core reads; 0 for any other.
+int raw_bytes_per_pixel(uint32_t fourcc) {
+  switch (fourcc) {
+    case kPixGrey:
+      return 1;
+    case kPixYuyv:
+      return 2;
+    case kPixRgb24:
+    case kPixBgr24:
+      return 3;
+    default:
+      return 0;
+  }
+}
+
+void check_raw(const ImageView& im) {
+  const int bytes_per_pixel = raw_bytes_per_pixel(im.pixelformat);
   if (im.width <= 0 || im.height <= 0) {
     throw InputError("image: bad size " + std::to_string(im.width) + "x" + std::to_string(im.height));
   }
@@ -87,14 +103,14 @@ GreyCrop grey_crop(const ImageView& im, const VisualParams& p, const FrameDecode
   GreyCrop g;
   switch (im.pixelformat) {
     case kPixGrey:
-      check_raw(im, 1);
+      check_raw(im);
       g.rect = crop_rect(p, im.width, im.height);
       g.bytes = data + static_cast<size_t>(g.rect.y) * stride + static_cast<size_t>(g.rect.x);
       g.step = 1;
       g.row_step = stride;
       return g;
     case kPixYuyv:
-      check_raw(im, 2);
+      check_raw(im);
       g.rect = crop_rect(p, im.width, im.height);
       g.bytes = data + static_cast<size_t>(g.rect.y) * stride + 2 * static_cast<size_t>(g.rect.x);  // Y, U, Y, V
       g.step = 2;
@@ -102,7 +118,7 @@ GreyCrop grey_crop(const ImageView& im, const VisualParams& p, const FrameDecode
       return g;
     case kPixRgb24:
     case kPixBgr24:
-      check_raw(im, 3);
+      check_raw(im);
       g.rect = crop_rect(p, im.width, im.height);
       cv::cvtColor(cv::Mat(im.height, im.width, CV_8UC3, data, stride)(g.rect), g.storage,
                    im.pixelformat == kPixRgb24 ? cv::COLOR_RGB2GRAY : cv::COLOR_BGR2GRAY);
@@ -193,12 +209,13 @@ void area_average(int from_w, int from_h, int to_w, int to_h, Row&& row, float* 
         const float* in = buffer.data();
         if (ax.whole > 0) {
           // Every destination column is `whole` source columns with one share (slam.yaml's 640 → 64).
+          // Tap by tap over all columns (strided loads the compiler vectorises), each column's taps in order.
           const float w = ax.share.front();
-          for (int dx = 0; dx < to_w; ++dx) {
-            const float* c = in + static_cast<size_t>(dx) * static_cast<size_t>(ax.whole);
-            float s = 0.0f + c[0] * w;
-            for (int k = 1; k < ax.whole; ++k) s += c[k] * w;
-            h[static_cast<size_t>(dx)] = s;
+          const size_t r = static_cast<size_t>(ax.whole);
+          float* hs = h.data();
+          for (size_t dx = 0; dx < static_cast<size_t>(to_w); ++dx) hs[dx] = 0.0f + in[dx * r] * w;
+          for (size_t k = 1; k < r; ++k) {
+            for (size_t dx = 0; dx < static_cast<size_t>(to_w); ++dx) hs[dx] += in[dx * r + k] * w;
           }
         } else {
           for (int dx = 0; dx < to_w; ++dx) {
@@ -274,6 +291,22 @@ VisualTemplate finish_template(std::vector<float> v, const VisualParams& p) {
 }
 
 }  // namespace
+
+ImageView visual_rows(const ImageView& image, const VisualParams& params) {
+  const int bytes_per_pixel = raw_bytes_per_pixel(image.pixelformat);
+  if (bytes_per_pixel == 0 || params.crop_height == 0 || image.width <= 0 || image.height <= 0 ||
+      image.row_stride < static_cast<int64_t>(image.width) * bytes_per_pixel) {
+    return image;
+  }
+  // An image whose data is short, or a crop beyond it, keeps every row, and so its error.
+  const int64_t whole = static_cast<int64_t>(image.row_stride) * (image.height - 1) + static_cast<int64_t>(image.width) * bytes_per_pixel;
+  const int64_t bottom = static_cast<int64_t>(params.crop_y) + params.crop_height;
+  if (static_cast<int64_t>(image.data.size()) < whole || bottom >= image.height) return image;
+  ImageView part = image;
+  part.height = static_cast<int>(bottom);
+  part.data = image.data.first(std::min(image.data.size(), static_cast<size_t>(bottom) * static_cast<size_t>(image.row_stride)));
+  return part;
+}
 
 void area_shrink(const float* grey, int width, int height, int stride_floats, float* out, int out_width,
                  int out_height) {

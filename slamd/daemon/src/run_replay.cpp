@@ -59,7 +59,9 @@ int run_replay(const Parameters& cfg, const Options& o) {
   // A camera frame's pixels are read only if a cycle takes the frame (one in five on the arena):
   // its header now, for the checks, the rest on demand.
   reader.defer(cfg.node.channels.camera, kCameraFrameHeaderBytes);
-  node.set_pixel_reader([&reader](const std::shared_ptr<const void>& owner) { reader.read_rest(owner); });
+  node.set_pixel_reader([&reader](const std::shared_ptr<const void>& owner, std::span<const uint8_t> wanted) {
+    reader.read_rest(owner, wanted);
+  });
   if (o.timing) node.set_latency_clock(monotonic_us);
   int64_t checkpointed_cycles = -1;
   LogThrottle throttle;

@@ -5,6 +5,8 @@
 #include "whiskeye/slamd/mjpeg_decode.h"
 #include "whiskeye/slamd/wire_conversion.h"
 
+#include "whiskeye/slam/visual_template.h"
+
 #include "whiskeye/common/clock.h"
 #include "whiskeye/common/se2.h"
 #include "whiskeye/common/utime.h"
@@ -160,10 +162,12 @@ void SlamNode::process_one(const SyncedCycle& cycle) {
   to_core(cycle.whisk, whisk_input_);
   const slam::WhiskCycleInput& whisk = whisk_input_;
   const bool contact = has_contact(cycle.whisk);
+  // The frame's pixels the SLAM reads (the rows down to the crop's bottom; none in tactile mode),
+  // and only those: a replay reads no more of them from the log.
   slam::ImageView view{};
-  if (cycle.image) {
-    if (read_pixels_) read_pixels_(cycle.image->owner);
-    view = to_core(*cycle.image);
+  if (cycle.image && slam::uses_visual(slam_->params().mode)) {
+    view = slam::visual_rows(to_core(*cycle.image), slam_->params().visual);
+    if (read_pixels_) read_pixels_(cycle.image->owner, view.data);
   }
   slam::CycleInput input;
   input.utime = cycle.whisk.utime_end;

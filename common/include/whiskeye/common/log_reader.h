@@ -96,6 +96,10 @@ class LogReader {
   // Reads the data a deferred event's view (`owner`, the view's owner) still lacks; does nothing for
   // any other owner, or one read already. Throws std::runtime_error as next() does.
   void read_rest(const std::shared_ptr<const void>& owner);
+  // Reads only what `wanted` (the first bytes of a deferred event's view, e.g. the rows of a frame
+  // that a crop uses) lacks; read_rest(owner) reads the rest later. An end outside the view means
+  // the whole view.
+  void read_rest(const std::shared_ptr<const void>& owner, std::span<const uint8_t> wanted);
   // Fraction of the file read, 0..1 (for progress bars).
   double progress() const;
   struct Damage {

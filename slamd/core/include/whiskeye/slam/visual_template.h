@@ -54,6 +54,11 @@ struct FrameDecoder {
 VisualTemplate make_visual_template(const ImageView& image, const VisualParams& params,
                                     const FrameDecoder* decoder = nullptr);
 
+// The part of `image` make_visual_template reads with `params`: of an uncompressed image, its rows
+// down to the crop's bottom one (the same image with fewer rows, which gives the same template); a
+// compressed one whole. A replay reads only these bytes of a frame from the log.
+ImageView visual_rows(const ImageView& image, const VisualParams& params);
+
 // Shrinks a width × height float image (`stride_floats` between rows) into out_width × out_height
 // floats at `out` by area averaging, with the floats cv::resize(INTER_AREA) gives bit for bit; a
 // shrink by a non-integer factor (slam.yaml's 7.5 rows a template row) is computed here, row by

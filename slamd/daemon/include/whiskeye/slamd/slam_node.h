@@ -27,6 +27,7 @@
 #include <deque>
 #include <functional>
 #include <memory>
+#include <span>
 #include <string>
 
 namespace whiskeye::slamd {
@@ -56,10 +57,10 @@ class SlamNode {
   void set_logger(Logger logger) { logger_ = std::move(logger); }
   void set_log_clock(std::function<int64_t()> monotonic_us) { log_clock_ = std::move(monotonic_us); }
   // A replay that reads a camera frame's pixels only when a cycle takes it (LogReader::defer):
-  // `read_pixels(owner)` is called with the frame's owner before its pixels are used.
-  void set_pixel_reader(std::function<void(const std::shared_ptr<const void>& owner)> read_pixels) {
-    read_pixels_ = std::move(read_pixels);
-  }
+  // `read_pixels(owner, wanted)` is called with the frame's owner and the part of its pixels the
+  // SLAM will read (slam::visual_rows; none in tactile mode) before they are used.
+  using PixelReader = std::function<void(const std::shared_ptr<const void>& owner, std::span<const uint8_t> wanted)>;
+  void set_pixel_reader(PixelReader read_pixels) { read_pixels_ = std::move(read_pixels); }
   // Wall-clock latency measurement of each cycle (live). Off: latencies stay 0 (deterministic output).
   void set_latency_clock(std::function<int64_t()> monotonic_us) { clock_ = std::move(monotonic_us); }
 
@@ -107,7 +108,7 @@ class SlamNode {
   std::function<int64_t()> log_clock_;
   LogThrottle throttle_;
   std::function<int64_t()> clock_;
-  std::function<void(const std::shared_ptr<const void>&)> read_pixels_;
+  PixelReader read_pixels_;
   // Storage kept from cycle to cycle (a cycle is 24 x 500 samples): processed messages to decode the
   // next ones into, and the core's copy of the cycle in hand.
   std::vector<whisk_cycle_t> spare_cycles_;
