@@ -5,7 +5,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
+#include <limits>
 #include <random>
+#include <string>
 
 namespace whiskeye::slam {
 namespace {
@@ -47,6 +50,46 @@ TEST(ContactEstimation, RemovesTheWhiskingSpeedTerm) {
   }
   p.speed_gain = 0.0;
   EXPECT_GT(estimate_contacts(cycle, g, p).size(), truth.size());
+}
+
+// A cycle whose every sample measured every whisker is computed sample by sample, all whiskers side
+// by side; any other cycle whisker by whisker over its valid samples. A lost sample (valid 0) or a
+// whisker not measured in one (NaN) leaves the other samples' traces alone, so inserting such a
+// sample must give the same template to the bit, with and without the speed term and flags.
+TEST(ContactEstimation, AllMeasuredCyclesGiveWhatTheWhiskerByWhiskerPathGives) {
+  const RobotGeometry g = default_robot_geometry();
+  const std::vector<test::SyntheticContact> truth = {{2, 0.15, 0.04}, {13, 0.05, 0.06}, {21, 0.25, 0.12}, {7, -0.1, 0.08}};
+  const WhiskCycleInput cycle = test::whisk_cycle(g, truth, 0.003, 14, 0, 500, 0.01);
+  const auto same = [](const TactileTemplate& a, const TactileTemplate& b) {
+    return a.num_contacts == b.num_contacts && a.pfh == b.pfh && a.sensed == b.sensed &&
+           std::memcmp(a.sda.data(), b.sda.data(), sizeof(float) * a.sda.size()) == 0;
+  };
+  for (const double speed_gain : {0.0, 0.01}) {
+    for (const bool flags : {false, true}) {
+      TactileParams p;
+      p.speed_gain = speed_gain;
+      p.use_contact_flags = flags;
+      const TactileTemplate fast = make_tactile_template(cycle, g, p);
+      ASSERT_GT(fast.num_contacts, 2);
+      for (const size_t at : {size_t{0}, size_t{137}, cycle.samples.size()}) {
+        SCOPED_TRACE("speed gain " + std::to_string(speed_gain) + ", flags " + std::to_string(flags) + ", at " + std::to_string(at));
+        WhiskCycleInput lost = cycle;
+        WhiskSample gap = cycle.samples[std::min(at, cycle.samples.size() - 1)];
+        gap.valid = false;
+        lost.samples.insert(lost.samples.begin() + static_cast<std::ptrdiff_t>(at), gap);
+        EXPECT_TRUE(same(make_tactile_template(lost, g, p), fast)) << "a lost sample";
+        // Every whisker NaN in one sample: no whisker measured it, so the sensed mask stays.
+        WhiskCycleInput unmeasured = cycle;
+        WhiskSample nan = gap;
+        nan.valid = true;
+        nan.theta.fill(std::numeric_limits<float>::quiet_NaN());
+        nan.deflection_x.fill(std::numeric_limits<float>::quiet_NaN());
+        nan.deflection_y.fill(std::numeric_limits<float>::quiet_NaN());
+        unmeasured.samples.insert(unmeasured.samples.begin() + static_cast<std::ptrdiff_t>(at), nan);
+        EXPECT_TRUE(same(make_tactile_template(unmeasured, g, p), fast)) << "a sample measuring no whisker";
+      }
+    }
+  }
 }
 
 TEST(ContactEstimation, NoiseBelowTheFloorIsNoContact) {
