@@ -25,7 +25,8 @@ BAD = {
               ["--table", "/no/such.json"], ["--table", "/etc/hostname"]],
     "replay-speed": [["--bogus"], ["--runs", "0"], ["--mode", "x"], ["--log", "/no/such/log"],
                      ["--camera-format", "png"], ["--camera-format", "mjpeg", "--log", "/etc/hostname"],
-                     ["--suite-world", "x"], ["--suite-seed", "-1"], ["--suite-world", "1", "--log", "/etc/hostname"]],
+                     ["--suite-world", "x"], ["--suite-seed", "-1"], ["--suite-world", "1", "--log", "/etc/hostname"],
+                     ["--against"], ["--against", "/no/such/build", "--log", "/etc/hostname"]],
 }
 
 
@@ -121,6 +122,36 @@ class BenchTable(unittest.TestCase):
         self.assertIn("| `BM_B` | — | — | skipped: this CPU lacks the instructions |", lines)
         self.assertNotIn("mean", r.stdout)
         self.assertIn("(no benchmark selected)", lines)
+
+
+class ReplaySpeed(unittest.TestCase):
+    def test_against_runs_the_builds_alternately_and_gives_the_cpu_ratio(self):
+        """Two stand-in slamds (a shell loop that burns CPU, then prints slamd's last line): the rounds
+        alternate --bin's and --against's, and the ratio of their CPU medians is printed."""
+        import re
+        import tempfile
+        with tempfile.TemporaryDirectory() as d:
+            log = os.path.join(d, "x.lcmlog")
+            with open(log, "wb") as f:
+                f.write(b"\0" * 64)
+            dirs = {}
+            for name, loops in (("fast", 60000), ("slow", 180000)):
+                dirs[name] = os.path.join(d, name)
+                os.mkdir(dirs[name])
+                path = os.path.join(dirs[name], "slamd")
+                with open(path, "w") as f:
+                    f.write("#!/bin/bash\ni=0; while [ $i -lt %d ]; do i=$((i+1)); done\n"
+                            "echo 'slamd: replayed 100.0 s of data in 0.10 s (1000x real time)' >&2\n" % loops)
+                os.chmod(path, 0o755)
+            r = run("replay-speed", ["--log", log, "--runs", "3", "--bin", dirs["fast"], "--against", dirs["slow"]])
+        self.assertEqual(r.returncode, 0, r.stderr)
+        order = re.findall(r"^run (\d) \[.*/(fast|slow)/slamd\]", r.stdout, re.M)
+        self.assertEqual(order, [("1", "fast"), ("1", "slow"), ("2", "fast"), ("2", "slow"), ("3", "fast"), ("3", "slow")])
+        m = re.search(r"^against .*/slow/slamd: median CPU ([0-9.]+) s, \d+x real time; --bin's CPU is ([0-9.]+) of it$",
+                      r.stdout, re.M)
+        self.assertIsNotNone(m, r.stdout)
+        self.assertLess(float(m.group(2)), 0.75, r.stdout)  # a third of the loop: well under the slow one
+        self.assertGreater(float(m.group(2)), 0.1, r.stdout)
 
 
 if __name__ == "__main__":
