@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <cstring>
 #include <random>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -252,6 +253,21 @@ TEST(PoseCells, DynamicsEqualThePlainFullGridComputationToTheBit) {
       ASSERT_EQ(std::memcmp(pc.activity().data(), expected.data(), expected.size() * sizeof(float)), 0) << "step " << step;
     }
   }
+}
+
+// The wrap tables reach kPad (16) cells past an edge; load() caps radii at 10, and a network built
+// directly with a wider kernel is refused rather than read past its tables.
+TEST(PoseCells, KernelsWiderThanTheWrapTablesAreRefused) {
+  PoseCellParams p;
+  p.exc_radius = 17;
+  EXPECT_THROW(PoseCells{p}, std::invalid_argument);
+  PoseCells pc{PoseCellParams{}};
+  p = PoseCellParams{};
+  p.inh_radius = 40;
+  EXPECT_THROW(pc.set_params(p), std::invalid_argument);
+  EXPECT_EQ(pc.params().inh_radius, PoseCellParams{}.inh_radius) << "a refused set_params changes nothing";
+  p.inh_radius = 16;
+  EXPECT_NO_THROW(pc.set_params(p));
 }
 
 TEST(PoseCells, RepeatedInjectionMovesTheBestEstimate) {

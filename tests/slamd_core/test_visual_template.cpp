@@ -233,9 +233,19 @@ TEST(VisualTemplate, ConvertingOnlyTheCropGivesTheTemplatesOfConvertingTheWholeI
   }
 }
 
-// What visual_rows leaves whole: a compressed frame, a crop to the image's edge, and a frame whose
-// data is short, which must still be refused with the whole frame's numbers.
+// What visual_rows leaves whole: a compressed frame, a crop to the image's edge, and frames that
+// must be refused with the whole frame's numbers (a crop right of the image, data too short).
 TEST(VisualTemplate, VisualRowsKeepsTheWholeFrameWhereTheCropCannotSayWhichRowsAreRead) {
+  const auto error_of = [](const ImageView& im, const VisualParams& p) -> std::string {
+    const ImageView part = visual_rows(im, p);
+    EXPECT_EQ(part.height, im.height);
+    try {
+      make_visual_template(part, p);
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "no error";
+  };
   const std::vector<uint8_t> bytes(640 * 480 * 2, 100);
   VisualParams p;
   p.crop_height = 300;
@@ -246,16 +256,15 @@ TEST(VisualTemplate, VisualRowsKeepsTheWholeFrameWhereTheCropCannotSayWhichRowsA
   EXPECT_EQ(visual_rows(jpeg, p).data.size(), bytes.size());
   p.crop_height = 0;
   EXPECT_EQ(visual_rows(yuyv, p).height, 480);
+  VisualParams right = p;
+  right.crop_x = 700;
+  right.crop_y = 10;
+  right.crop_height = 290;
+  EXPECT_EQ(error_of(yuyv, right), "image: crop (700, 10) lies outside the 640x480 image");
   p.crop_height = 300;
   const std::vector<uint8_t> short_data(640 * 479 * 2, 100);
-  const ImageView cut = view(short_data, 640, 480, 1280, kPixYuyv);
-  EXPECT_EQ(visual_rows(cut, p).height, 480);
-  try {
-    make_visual_template(visual_rows(cut, p), p);
-    ADD_FAILURE() << "no error";
-  } catch (const InputError& e) {
-    EXPECT_STREQ(e.what(), "image: 613120 bytes of data, 614400 needed for 640x480 YUYV");
-  }
+  EXPECT_EQ(error_of(view(short_data, 640, 480, 1280, kPixYuyv), p),
+            "image: 613120 bytes of data, 614400 needed for 640x480 YUYV");
 }
 
 TEST(VisualTemplate, AnMjpegFrameLargerThanItsMessageSaysIsRefusedBeforeDecoding) {

@@ -35,10 +35,14 @@ std::vector<Run> runs(const std::vector<uint8_t>& m) {
   return out;
 }
 
-// out += w·in over `count` cells: the convolutions' inner loop. Built for AVX2 as well, chosen at
-// run time; AVX2 without FMA multiplies and adds each cell exactly as SSE2 does, so the sums are the
-// same to the bit on every x86-64.
-[[gnu::target_clones("avx2", "default")]] void add_span(float* out, const float* in, float w, size_t count) {
+// out += w·in over `count` cells: the convolutions' inner loop. On x86-64 (GCC) built for AVX2 as
+// well, chosen at load time; AVX2 without FMA multiplies and adds each cell exactly as SSE2 does, so
+// the sums are the same to the bit on every x86-64. Other targets (the aarch64 cross build) and the
+// sanitizer builds get the one plain clone, as experience_map.cpp's apply_corrections.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(__SANITIZE_ADDRESS__)
+__attribute__((target_clones("avx2", "default")))
+#endif
+void add_span(float* out, const float* in, float w, size_t count) {
   for (size_t k = 0; k < count; ++k) out[k] += w * in[k];
 }
 
@@ -63,6 +67,7 @@ void load(const ParamNode& n, PoseCellParams& p) {
 }
 
 PoseCells::PoseCells(const PoseCellParams& params) : params_(params), n_(params.dim_xy), nt_(params.dim_theta) {
+  check_radii(params);
   const size_t cells = static_cast<size_t>(n_) * static_cast<size_t>(n_) * static_cast<size_t>(nt_);
   p_.assign(cells, 0.0f);
   a_.assign(cells, 0.0f);
@@ -80,9 +85,18 @@ void PoseCells::set_params(const PoseCellParams& params) {
   if (params.dim_xy != n_ || params.dim_theta != nt_) {
     throw std::invalid_argument("PoseCells::set_params: dimensions cannot change");
   }
+  check_radii(params);
   params_ = params;
   build_kernels();
   best_valid_ = false;
+}
+
+void PoseCells::check_radii(const PoseCellParams& p) {
+  // The wrap tables (and the dilation and convolutions that read them) reach kPad cells past an edge.
+  if (std::max(p.exc_radius, p.inh_radius) > kPad || std::min(p.exc_radius, p.inh_radius) < 0) {
+    throw std::invalid_argument("PoseCells: kernel radii must be 0.." + std::to_string(kPad) + ", not " +
+                                std::to_string(p.exc_radius) + " and " + std::to_string(p.inh_radius));
+  }
 }
 
 void PoseCells::build_kernels() {
@@ -158,9 +172,9 @@ PoseCells::Support PoseCells::convolve(const std::vector<float>& src, std::vecto
   const int taps = 2 * r + 1;
   const float* k = kernel.data();
   // Every pass adds whole runs of consecutive rows at once: the rows of a run of y are contiguous, so
-  // the inner loop is one long span instead of n-cell rows. Each output cell still receives its
-  // taps in order from +0, so the sums are those of the plain per-cell loops to the bit (a test
-  // compares the two).
+  // the inner loop is one long span, which vectorises where a row of 21 cells does not. Each output
+  // cell receives its taps in order from +0, so the sums are those of plain per-cell loops to the
+  // bit (PoseCells.DynamicsEqualThePlainFullGridComputationToTheBit compares the two).
   const std::vector<Run> s_y = runs(s.y), d_y = runs(d.y), region_y = runs(region.y);
   const size_t row = static_cast<size_t>(n_);
   // Pass x: rows (t ∈ s.t, y ∈ s.y). A run of rows is copied into `row_` with r wrapped cells each

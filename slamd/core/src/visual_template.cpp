@@ -298,10 +298,11 @@ ImageView visual_rows(const ImageView& image, const VisualParams& params) {
       image.row_stride < static_cast<int64_t>(image.width) * bytes_per_pixel) {
     return image;
   }
-  // An image whose data is short, or a crop beyond it, keeps every row, and so its error.
+  // An image whose data is short, or a crop beyond it (below, or right of it), keeps every row, and
+  // so its error, with the image's own size.
   const int64_t whole = static_cast<int64_t>(image.row_stride) * (image.height - 1) + static_cast<int64_t>(image.width) * bytes_per_pixel;
   const int64_t bottom = static_cast<int64_t>(params.crop_y) + params.crop_height;
-  if (static_cast<int64_t>(image.data.size()) < whole || bottom >= image.height) return image;
+  if (static_cast<int64_t>(image.data.size()) < whole || bottom >= image.height || params.crop_x >= image.width) return image;
   ImageView part = image;
   part.height = static_cast<int>(bottom);
   part.data = image.data.first(std::min(image.data.size(), static_cast<size_t>(bottom) * static_cast<size_t>(image.row_stride)));

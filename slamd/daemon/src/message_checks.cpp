@@ -47,9 +47,12 @@ std::string check_whisk_cycle(const whisk_cycle_t& m) {
       ++missing_samples;
       continue;
     }
-    // Nearly every sample is good: a branch-free test of all its whiskers first (within the limits,
-    // or NaN in all three values), and the whisker-by-whisker checks below only to name a fault.
-    const float *th = m.theta[s].data(), *xs = m.deflection_x[s].data(), *ys = m.deflection_y[s].data();
+    // Nearly every sample is good: one test of all its whiskers first (within the limits, or NaN in
+    // all three values; within the limits is finite), and the whisker-by-whisker checks below only
+    // to name a fault.
+    const float* th = m.theta[s].data();
+    const float* xs = m.deflection_x[s].data();
+    const float* ys = m.deflection_y[s].data();
     bool good = true;
     for (int w = 0; w < kNumWhiskers; ++w) {
       const double theta = th[w], dx = xs[w], dy = ys[w];

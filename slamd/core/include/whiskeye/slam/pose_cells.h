@@ -68,7 +68,9 @@ class PoseCells {
   double packet_fraction() const;
   const std::vector<float>& activity() const { return p_; }  // [θ][y][x]
   const PoseCellParams& params() const { return params_; }
-  void set_params(const PoseCellParams& params);  // same dimensions; kernels rebuilt
+  // Same dimensions; kernels rebuilt. Throws std::invalid_argument (and changes nothing) for other
+  // dimensions or kernel radii beyond 16 (load() caps them at 10).
+  void set_params(const PoseCellParams& params);
 
   void serialise(std::vector<uint8_t>& out) const;
   void deserialise(const std::vector<uint8_t>& in, size_t& pos);  // dimensions must match
@@ -88,6 +90,7 @@ class PoseCells {
                    const Support& s, const Support& region);
   void translate_layers(double vx_cells, double vy_cells);
   void rotate(double dtheta_cells);
+  static void check_radii(const PoseCellParams& p);  // throws std::invalid_argument beyond 0..kPad
   void build_kernels();
   void compute_best(double& x, double& y, double& theta) const;
   size_t idx(int t, int y, int x) const {

@@ -56,7 +56,8 @@ VisualTemplate make_visual_template(const ImageView& image, const VisualParams& 
 
 // The part of `image` make_visual_template reads with `params`: of an uncompressed image, its rows
 // down to the crop's bottom one (the same image with fewer rows, which gives the same template); a
-// compressed one whole. A replay reads only these bytes of a frame from the log.
+// compressed one, one whose data is short or whose crop lies outside it whole (the same error, with
+// the image's size). A replay reads only these bytes of a frame from the log.
 ImageView visual_rows(const ImageView& image, const VisualParams& params);
 
 // Shrinks a width × height float image (`stride_floats` between rows) into out_width × out_height
