@@ -51,22 +51,25 @@ int raw_bytes_per_pixel(uint32_t fourcc) {
   }
 }
 
-void check_raw(const ImageView& im) {
+// Why an uncompressed image's size, row stride and data do not fit together, or "".
+std::string raw_size_error(const ImageView& im) {
   const int bytes_per_pixel = raw_bytes_per_pixel(im.pixelformat);
-  if (im.width <= 0 || im.height <= 0) {
-    throw InputError("image: bad size " + std::to_string(im.width) + "x" + std::to_string(im.height));
-  }
+  if (im.width <= 0 || im.height <= 0) return "image: bad size " + std::to_string(im.width) + "x" + std::to_string(im.height);
   const int64_t row_bytes = static_cast<int64_t>(im.width) * bytes_per_pixel;
   if (im.row_stride < row_bytes) {
-    throw InputError("image: row_stride " + std::to_string(im.row_stride) + " < " + std::to_string(row_bytes) +
-                     " bytes for " + fourcc_text(im.pixelformat) + " width " + std::to_string(im.width));
+    return "image: row_stride " + std::to_string(im.row_stride) + " < " + std::to_string(row_bytes) + " bytes for " +
+           fourcc_text(im.pixelformat) + " width " + std::to_string(im.width);
   }
   const int64_t need = static_cast<int64_t>(im.row_stride) * (im.height - 1) + row_bytes;
   if (static_cast<int64_t>(im.data.size()) < need) {
-    throw InputError("image: " + std::to_string(im.data.size()) + " bytes of data, " + std::to_string(need) +
-                     " needed for " + std::to_string(im.width) + "x" + std::to_string(im.height) + " " +
-                     fourcc_text(im.pixelformat));
+    return "image: " + std::to_string(im.data.size()) + " bytes of data, " + std::to_string(need) + " needed for " +
+           std::to_string(im.width) + "x" + std::to_string(im.height) + " " + fourcc_text(im.pixelformat);
   }
+  return "";
+}
+
+void check_raw(const ImageView& im) {
+  if (std::string bad = raw_size_error(im); !bad.empty()) throw InputError(bad);
 }
 
 // The part of a width × height image that `p` crops; throws when nothing is left.
@@ -293,16 +296,11 @@ VisualTemplate finish_template(std::vector<float> v, const VisualParams& p) {
 }  // namespace
 
 ImageView visual_rows(const ImageView& image, const VisualParams& params) {
-  const int bytes_per_pixel = raw_bytes_per_pixel(image.pixelformat);
-  if (bytes_per_pixel == 0 || params.crop_height == 0 || image.width <= 0 || image.height <= 0 ||
-      image.row_stride < static_cast<int64_t>(image.width) * bytes_per_pixel) {
-    return image;
-  }
-  // An image whose data is short, or a crop beyond it (below, or right of it), keeps every row, and
-  // so its error, with the image's own size.
-  const int64_t whole = static_cast<int64_t>(image.row_stride) * (image.height - 1) + static_cast<int64_t>(image.width) * bytes_per_pixel;
+  // A compressed image, one whose sizes do not fit, or a crop beyond it (below, or right of it)
+  // keeps every row, and so its error, with the image's own size.
+  if (raw_bytes_per_pixel(image.pixelformat) == 0 || params.crop_height == 0 || !raw_size_error(image).empty()) return image;
   const int64_t bottom = static_cast<int64_t>(params.crop_y) + params.crop_height;
-  if (static_cast<int64_t>(image.data.size()) < whole || bottom >= image.height || params.crop_x >= image.width) return image;
+  if (bottom >= image.height || params.crop_x >= image.width) return image;
   ImageView part = image;
   part.height = static_cast<int>(bottom);
   part.data = image.data.first(std::min(image.data.size(), static_cast<size_t>(bottom) * static_cast<size_t>(image.row_stride)));
