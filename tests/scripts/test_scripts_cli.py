@@ -12,9 +12,10 @@ SCRIPTS = os.path.join(sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.pat
 # Per script: bad command lines (each must fail at once). lcm-spy passes what it does not know to
 # lcm-spy itself, so only its --help is ours.
 BAD = {
-    "demo": [["--bogus"], ["--seed"], ["--seed", "2", "--laps"]],
+    "demo": [["--bogus"], ["--seed"], ["--seed", "2", "--laps"], ["--world", "/no/such.yaml"],
+             ["--config", "/no/such.yaml"]],
     "demo-kidnap": [["--bogus"], ["--seed"], ["--at"], ["--seed", "2", "--to-angle"]],
-    "seeds": [["--bogus"], ["--world"]],
+    "seeds": [["--bogus"], ["--world"], ["--world", "/no/such.yaml"], ["--config", "/no/such.yaml"]],
     "fuzz": [["--bogus"], ["--minutes"], ["--seconds", "x"], ["no_such_target"]],
     "suite": [["--bogus"], ["--worlds"], ["--worlds", "x"], ["--scenario", "wander"], ["--camera-format", "png"]],
     "install-deps": [["--bogus"]],
@@ -30,14 +31,28 @@ BAD = {
 }
 
 
-def run(name, args):
+def run(name, args, cwd=None):
     return subprocess.run([os.path.join(SCRIPTS, name)] + args, capture_output=True, text=True, timeout=60,
-                          stdin=subprocess.DEVNULL)
+                          stdin=subprocess.DEVNULL, cwd=cwd)
 
 
 class Scripts(unittest.TestCase):
     def test_every_script_is_covered(self):
-        self.assertEqual(sorted(os.listdir(SCRIPTS)), sorted(BAD))
+        scripts = [n for n in os.listdir(SCRIPTS) if os.path.isfile(os.path.join(SCRIPTS, n))]
+        self.assertEqual(sorted(scripts), sorted(BAD))
+
+    def test_a_relative_path_is_the_callers_not_the_repositorys(self):
+        """Run from another directory, `config/slam.yaml` names that directory's file (there is none),
+        not the repository's, and the error says which file it looked for."""
+        import tempfile
+        with tempfile.TemporaryDirectory() as d:
+            for name, option, what in (("demo", "--config", "configuration"), ("demo", "--world", "world"),
+                                       ("seeds", "--config", "configuration"), ("seeds", "--world", "world")):
+                with self.subTest(script=name, option=option):
+                    path = "config/slam.yaml" if option == "--config" else "config/worlds/aliased_arena.yaml"
+                    r = run(name, [option, path], cwd=d)
+                    self.assertEqual(r.returncode, 2, r.stdout + r.stderr)
+                    self.assertEqual(r.stderr, f"{name}: no {what} file '{d}/{path}'\n")
 
     def test_help_exits_zero_with_a_usage_line(self):
         for name in BAD:
@@ -110,10 +125,10 @@ class BenchTable(unittest.TestCase):
                    {"name": "BM_B", "run_type": "iteration", "real_time": 7.0, "cpu_time": 6.0, "time_unit": "ms",
                     "error_occurred": True, "error_message": "this CPU lacks the instructions"}]},
                    "viewer-bench": None}}
-        with tempfile.NamedTemporaryFile("w", suffix=".json") as f:
-            json.dump(doc, f)
-            f.flush()
-            r = run("bench", ["--table", f.name])
+        with tempfile.TemporaryDirectory() as d:
+            with open(os.path.join(d, "results.json"), "w") as f:
+                json.dump(doc, f)
+            r = run("bench", ["--table", "results.json"], cwd=d)  # the caller's directory's file
         self.assertEqual(r.returncode, 0, r.stderr)
         lines = r.stdout.splitlines()
         self.assertEqual(lines[0], "2026-12-04T12:00:00Z, `abc123`, RelWithDebInfo build, /usr/bin/c++, 2 × Some CPU; "
@@ -126,8 +141,9 @@ class BenchTable(unittest.TestCase):
 
 class ReplaySpeed(unittest.TestCase):
     def test_against_runs_the_builds_alternately_and_gives_the_cpu_ratio(self):
-        """Two stand-in slamds (a shell loop that burns CPU, then prints slamd's last line): the rounds
-        alternate --bin's and --against's, and the ratio of their CPU medians is printed."""
+        """Two stand-in slamds (a shell loop that burns CPU, then prints slamd's last line), named by
+        paths relative to the caller's directory: the rounds alternate --bin's and --against's, and the
+        ratio of their CPU medians is printed."""
         import re
         import tempfile
         with tempfile.TemporaryDirectory() as d:
@@ -143,9 +159,10 @@ class ReplaySpeed(unittest.TestCase):
                     f.write("#!/bin/bash\ni=0; while [ $i -lt %d ]; do i=$((i+1)); done\n"
                             "echo 'slamd: replayed 100.0 s of data in 0.10 s (1000x real time)' >&2\n" % loops)
                 os.chmod(path, 0o755)
-            r = run("replay-speed", ["--log", log, "--runs", "3", "--bin", dirs["fast"], "--against", dirs["slow"]])
+            # relative to the directory it is started in, as any command's paths
+            r = run("replay-speed", ["--log", "x.lcmlog", "--runs", "3", "--bin", "fast", "--against", "slow"], cwd=d)
         self.assertEqual(r.returncode, 0, r.stderr)
-        order = re.findall(r"^run (\d) \[.*/(fast|slow)/slamd\]", r.stdout, re.M)
+        order = re.findall(r"^run (\d) \[/.*/(fast|slow)/slamd\]", r.stdout, re.M)
         self.assertEqual(order, [("1", "fast"), ("1", "slow"), ("2", "fast"), ("2", "slow"), ("3", "fast"), ("3", "slow")])
         m = re.search(r"^against .*/slow/slamd: median CPU ([0-9.]+) s, \d+x real time; --bin's CPU is ([0-9.]+) of it$",
                       r.stdout, re.M)
