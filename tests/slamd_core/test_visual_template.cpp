@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <random>
 
 namespace whiskeye::slam {
@@ -261,6 +262,14 @@ TEST(VisualTemplate, VisualRowsKeepsTheWholeFrameWhereTheCropCannotSayWhichRowsA
   right.crop_y = 10;
   right.crop_height = 290;
   EXPECT_EQ(error_of(yuyv, right), "image: crop (700, 10) lies outside the 640x480 image");
+  VisualParams below = p;
+  below.crop_y = 500;
+  below.crop_height = 10;
+  EXPECT_EQ(error_of(yuyv, below), "image: crop (0, 500) lies outside the 640x480 image");
+  VisualParams tall = p;  // a bottom past INT_MAX is past the image's last row
+  tall.crop_y = 10;
+  tall.crop_height = std::numeric_limits<int>::max();
+  EXPECT_EQ(error_of(yuyv, tall), "no error");
   p.crop_height = 300;
   const std::vector<uint8_t> short_data(640 * 479 * 2, 100);
   EXPECT_EQ(error_of(view(short_data, 640, 480, 1280, kPixYuyv), p),

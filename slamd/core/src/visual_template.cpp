@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -72,17 +73,21 @@ void check_raw(const ImageView& im) {
   if (std::string bad = raw_size_error(im); !bad.empty()) throw InputError(bad);
 }
 
-// The part of a width × height image that `p` crops; throws when nothing is left.
-cv::Rect crop_rect(const VisualParams& p, int width, int height) {
+// The part of a width × height image that `p` crops, or none when nothing is left.
+std::optional<cv::Rect> fitted_crop(const VisualParams& p, int width, int height) {
   const int x0 = std::min(p.crop_x, width);
   const int y0 = std::min(p.crop_y, height);
   const int cw = p.crop_width == 0 ? width - x0 : std::min(p.crop_width, width - x0);
   const int ch = p.crop_height == 0 ? height - y0 : std::min(p.crop_height, height - y0);
-  if (cw <= 0 || ch <= 0) {
-    throw InputError("image: crop (" + std::to_string(p.crop_x) + ", " + std::to_string(p.crop_y) +
-                     ") lies outside the " + std::to_string(width) + "x" + std::to_string(height) + " image");
-  }
-  return {x0, y0, cw, ch};
+  if (cw <= 0 || ch <= 0) return std::nullopt;
+  return cv::Rect{x0, y0, cw, ch};
+}
+
+// The same; throws when nothing is left.
+cv::Rect crop_rect(const VisualParams& p, int width, int height) {
+  if (const std::optional<cv::Rect> crop = fitted_crop(p, width, height)) return *crop;
+  throw InputError("image: crop (" + std::to_string(p.crop_x) + ", " + std::to_string(p.crop_y) +
+                   ") lies outside the " + std::to_string(width) + "x" + std::to_string(height) + " image");
 }
 
 // The crop of an image as 8-bit grey bytes: `bytes` is the crop's first grey byte, `step` the
@@ -296,13 +301,14 @@ VisualTemplate finish_template(std::vector<float> v, const VisualParams& p) {
 }  // namespace
 
 ImageView visual_rows(const ImageView& image, const VisualParams& params) {
-  // A compressed image, one whose sizes do not fit, or a crop beyond it (below, or right of it)
-  // keeps every row, and so its error, with the image's own size.
-  if (raw_bytes_per_pixel(image.pixelformat) == 0 || params.crop_height == 0 || !raw_size_error(image).empty()) return image;
-  const int64_t bottom = static_cast<int64_t>(params.crop_y) + params.crop_height;
-  if (bottom >= image.height || params.crop_x >= image.width) return image;
+  // A compressed image, a crop that reaches the last row, a crop beyond the image (which keeps
+  // every row, and so its error, with the image's own size), or sizes that do not fit: every row.
+  if (raw_bytes_per_pixel(image.pixelformat) == 0) return image;
+  const std::optional<cv::Rect> crop = fitted_crop(params, image.width, image.height);
+  if (!crop || crop->br().y >= image.height || !raw_size_error(image).empty()) return image;
+  const int bottom = crop->br().y;
   ImageView part = image;
-  part.height = static_cast<int>(bottom);
+  part.height = bottom;
   part.data = image.data.first(std::min(image.data.size(), static_cast<size_t>(bottom) * static_cast<size_t>(image.row_stride)));
   return part;
 }
