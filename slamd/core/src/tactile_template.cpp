@@ -8,6 +8,7 @@
 #include <bit>
 #include <cmath>
 #include <numeric>
+#include <utility>
 
 namespace whiskeye::slam {
 
@@ -65,47 +66,64 @@ uint32_t measured(const WhiskSample& s) {
   return m;
 }
 
-// The samples of whisker w that count as contact; empty when below min_contact_samples. The x
-// deflection is first corrected for the whisking-speed term (drag/inertia bends a moving whisker
-// against its motion: x −= −speed_gain·θ̇), with θ̇ from central differences of the valid samples.
-// `masks`: measured() of every sample; `valid`: a buffer for the whisker's valid samples.
-WhiskerTrace contact_samples(const WhiskCycleInput& cycle, int w, const TactileParams& p,
+// The per-sample arithmetic of a whisker's contact, shared by both paths below so that they agree
+// to the bit. The x deflection is first corrected for the whisking-speed term (drag/inertia bends a
+// moving whisker against its motion: x −= −speed_gain·θ̇), with θ̇ from central differences of the
+// valid samples: sample k's neighbours are k − 1 and k + 1, itself at either end.
+std::pair<size_t, size_t> neighbours(size_t k, size_t n) { return {k == 0 ? 0 : k - 1, k + 1 < n ? k + 1 : k}; }
+
+// θ̇ of whisker w between the samples a and b; 0 when they are the same moment (or out of order).
+double theta_rate(const WhiskSample& a, const WhiskSample& b, size_t w) {
+  const double dt = static_cast<double>(b.utime - a.utime) * 1e-6;
+  return dt > 0.0 ? (static_cast<double>(b.theta[w]) - a.theta[w]) / dt : 0.0;
+}
+
+double corrected_dx(const WhiskSample& s, size_t w, double speed_gain, double theta_dot) {
+  return s.deflection_x[w] + speed_gain * theta_dot;
+}
+
+// False for most samples, far below the threshold: hypot(dx, dy) ≤ √2·max(|dx|, |dy|) (to within an
+// ulp) < 1.5·max, so this skips them exactly as add_if_contact's test would, without the libm call.
+bool may_exceed(double dx, double dy, double threshold) { return !(1.5 * std::max(std::abs(dx), std::abs(dy)) <= threshold); }
+
+// Sample s of whisker w joins its trace when its deflection's magnitude exceeds the threshold (and,
+// with use_contact_flags, its contact flag is set).
+void add_if_contact(WhiskerTrace& t, const WhiskSample& s, size_t w, double dx, const TactileParams& p) {
+  const double m = std::hypot(dx, static_cast<double>(s.deflection_y[w]));
+  if (m <= p.contact_threshold) return;
+  if (p.use_contact_flags && !s.contact[w]) return;
+  t.theta.push_back(s.theta[w]);
+  t.magnitude.push_back(m);
+  t.utime.push_back(s.utime);
+}
+
+// The samples of whisker w that count as contact. `masks`: measured() of every sample; `valid`: a
+// buffer for the whisker's valid samples.
+WhiskerTrace contact_samples(const WhiskCycleInput& cycle, size_t w, const TactileParams& p,
                              const std::vector<uint32_t>& masks, std::vector<const WhiskSample*>& valid) {
   WhiskerTrace t;
-  const auto i = static_cast<size_t>(w);
   valid.clear();
   for (size_t k = 0; k < cycle.samples.size(); ++k) {
-    if ((masks[k] >> i) & 1u) valid.push_back(&cycle.samples[k]);
+    if ((masks[k] >> w) & 1u) valid.push_back(&cycle.samples[k]);
   }
-  for (size_t k = 0; k < valid.size(); ++k) {
+  const size_t n = valid.size();
+  for (size_t k = 0; k < n; ++k) {
     const WhiskSample& s = *valid[k];
     double theta_dot = 0.0;
-    if (p.speed_gain != 0.0 && valid.size() > 1) {
-      const WhiskSample& a = *valid[k == 0 ? 0 : k - 1];
-      const WhiskSample& b = *valid[k + 1 < valid.size() ? k + 1 : k];
-      const double dt = static_cast<double>(b.utime - a.utime) * 1e-6;
-      if (dt > 0.0) theta_dot = (static_cast<double>(b.theta[i]) - a.theta[i]) / dt;
+    if (p.speed_gain != 0.0 && n > 1) {
+      const auto [a, b] = neighbours(k, n);
+      theta_dot = theta_rate(*valid[a], *valid[b], w);
     }
-    const double dx = s.deflection_x[i] + p.speed_gain * theta_dot;
-    const double dy = s.deflection_y[i];
-    // Most samples are far below the threshold: hypot(dx, dy) ≤ √2·max(|dx|, |dy|) (to within an
-    // ulp) < 1.5·max, so this skips them exactly as the test below would, without the libm call.
-    if (1.5 * std::max(std::abs(dx), std::abs(dy)) <= p.contact_threshold) continue;
-    const double m = std::hypot(dx, dy);
-    if (m <= p.contact_threshold) continue;
-    if (p.use_contact_flags && !s.contact[i]) continue;
-    t.theta.push_back(s.theta[i]);
-    t.magnitude.push_back(m);
-    t.utime.push_back(s.utime);
+    const double dx = corrected_dx(s, w, p.speed_gain, theta_dot);
+    if (may_exceed(dx, s.deflection_y[w], p.contact_threshold)) add_if_contact(t, s, w, dx, p);
   }
-  if (static_cast<int>(t.theta.size()) < p.min_contact_samples) t = {};
   return t;
 }
 
 // contact_samples for every whisker of a cycle whose every sample measured every whisker (the
 // usual one): a whisker's valid samples are then all of them, so a sample's neighbours are the same
-// for all whiskers, and each sample's whiskers are computed side by side (vectorised), with the same
-// arithmetic; only those above the cheap bound go on, whisker by whisker.
+// for all whiskers, and each sample's whiskers are computed side by side (vectorised); only those
+// above the cheap bound go on, whisker by whisker.
 WhiskerTraces contact_traces_all_measured(const WhiskCycleInput& cycle, const TactileParams& p) {
   WhiskerTraces traces;
   const std::vector<WhiskSample>& samples = cycle.samples;
@@ -114,35 +132,21 @@ WhiskerTraces contact_traces_all_measured(const WhiskCycleInput& cycle, const Ta
   for (size_t k = 0; k < n; ++k) {
     const WhiskSample& s = samples[k];
     if (p.speed_gain != 0.0 && n > 1) {
-      const WhiskSample& a = samples[k == 0 ? 0 : k - 1];
-      const WhiskSample& b = samples[k + 1 < n ? k + 1 : k];
-      const double dt = static_cast<double>(b.utime - a.utime) * 1e-6;
+      const auto [a, b] = neighbours(k, n);
       for (size_t w = 0; w < static_cast<size_t>(kNumWhiskers); ++w) {
-        const double theta_dot = dt > 0.0 ? (static_cast<double>(b.theta[w]) - a.theta[w]) / dt : 0.0;
-        dx[w] = s.deflection_x[w] + p.speed_gain * theta_dot;
+        dx[w] = corrected_dx(s, w, p.speed_gain, theta_rate(samples[a], samples[b], w));
       }
     } else {
-      const double theta_dot = 0.0;
-      for (size_t w = 0; w < static_cast<size_t>(kNumWhiskers); ++w) dx[w] = s.deflection_x[w] + p.speed_gain * theta_dot;
+      for (size_t w = 0; w < static_cast<size_t>(kNumWhiskers); ++w) dx[w] = corrected_dx(s, w, p.speed_gain, 0.0);
     }
-    uint32_t above = 0;  // bit w: not skipped by contact_samples' bound
+    uint32_t above = 0;  // bit w: may_exceed
     for (size_t w = 0; w < static_cast<size_t>(kNumWhiskers); ++w) {
-      const double dy = s.deflection_y[w];
-      above |= static_cast<uint32_t>(!(1.5 * std::max(std::abs(dx[w]), std::abs(dy)) <= p.contact_threshold)) << w;
+      above |= static_cast<uint32_t>(may_exceed(dx[w], s.deflection_y[w], p.contact_threshold)) << w;
     }
     for (; above != 0; above &= above - 1) {
       const auto w = static_cast<size_t>(std::countr_zero(above));
-      const double m = std::hypot(dx[w], static_cast<double>(s.deflection_y[w]));
-      if (m <= p.contact_threshold) continue;
-      if (p.use_contact_flags && !s.contact[w]) continue;
-      WhiskerTrace& t = traces[w];
-      t.theta.push_back(s.theta[w]);
-      t.magnitude.push_back(m);
-      t.utime.push_back(s.utime);
+      add_if_contact(traces[w], s, w, dx[w], p);
     }
-  }
-  for (WhiskerTrace& t : traces) {
-    if (static_cast<int>(t.theta.size()) < p.min_contact_samples) t = {};
   }
   return traces;
 }
@@ -159,11 +163,18 @@ WhiskerTraces contact_traces(const WhiskCycleInput& cycle, const TactileParams& 
     all &= masks[k];
   }
   if (sensed != nullptr) *sensed = any;
-  if (all == kEvery) return contact_traces_all_measured(cycle, p);
   WhiskerTraces traces;
-  std::vector<const WhiskSample*> valid;
-  valid.reserve(cycle.samples.size());
-  for (int w = 0; w < kNumWhiskers; ++w) traces[static_cast<size_t>(w)] = contact_samples(cycle, w, p, masks, valid);
+  if (all == kEvery) {
+    traces = contact_traces_all_measured(cycle, p);
+  } else {
+    std::vector<const WhiskSample*> valid;
+    valid.reserve(cycle.samples.size());
+    for (size_t w = 0; w < static_cast<size_t>(kNumWhiskers); ++w) traces[w] = contact_samples(cycle, w, p, masks, valid);
+  }
+  // A whisker with fewer contact samples than min_contact_samples touched nothing.
+  for (WhiskerTrace& t : traces) {
+    if (static_cast<int>(t.theta.size()) < p.min_contact_samples) t = {};
+  }
   return traces;
 }
 
