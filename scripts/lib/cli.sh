@@ -15,6 +15,6 @@ path_value() {
   v=$(value "$@") || exit 2
   case "$v" in
     /*) printf '%s' "$v" ;;
-    *) printf '%s/%s' "$cli_caller_dir" "$v" ;;
+    *) printf '%s/%s' "${cli_caller_dir%/}" "$v" ;;  # from /: /x, not //x
   esac
 }

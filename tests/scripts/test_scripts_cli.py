@@ -2,8 +2,10 @@
 """Every script of scripts/ has a correct --help (exit 0, its own usage line) and turns a bad command
 line into one line "<script>: <reason>" and exit 2, before it builds, installs or runs anything."""
 import os
+import shutil
 import subprocess
 import sys
+import tempfile
 import unittest
 
 SCRIPTS = os.path.join(sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "../.."),
@@ -31,9 +33,20 @@ BAD = {
 }
 
 
+# What a script must not reach before it refuses its command line: a build or a package install.
+# These stand-ins fail at once, so a check that stops working fails its test in a second with this
+# line, instead of building the tree until the time-out.
+STUBS = tempfile.mkdtemp(prefix="scripts-cli-stubs-")
+for tool in ("cmake", "ninja", "apt-get"):
+    with open(os.path.join(STUBS, tool), "w") as f:
+        f.write(f"#!/bin/sh\necho '{tool}: reached by a command line that should have been refused' >&2\nexit 97\n")
+    os.chmod(os.path.join(STUBS, tool), 0o755)
+ENV = dict(os.environ, PATH=STUBS + os.pathsep + os.environ.get("PATH", ""))
+
+
 def run(name, args, cwd=None):
     return subprocess.run([os.path.join(SCRIPTS, name)] + args, capture_output=True, text=True, timeout=60,
-                          stdin=subprocess.DEVNULL, cwd=cwd)
+                          stdin=subprocess.DEVNULL, cwd=cwd, env=ENV)
 
 
 class Scripts(unittest.TestCase):
@@ -44,7 +57,6 @@ class Scripts(unittest.TestCase):
     def test_a_relative_path_is_the_callers_not_the_repositorys(self):
         """Run from another directory, `config/slam.yaml` names that directory's file (there is none),
         not the repository's, and the error says which file it looked for."""
-        import tempfile
         with tempfile.TemporaryDirectory() as d:
             for name, option, what in (("demo", "--config", "configuration"), ("demo", "--world", "world"),
                                        ("seeds", "--config", "configuration"), ("seeds", "--world", "world")):
@@ -53,6 +65,8 @@ class Scripts(unittest.TestCase):
                     r = run(name, [option, path], cwd=d)
                     self.assertEqual(r.returncode, 2, r.stdout + r.stderr)
                     self.assertEqual(r.stderr, f"{name}: no {what} file '{d}/{path}'\n")
+        r = run("seeds", ["--world", "no-such-world.yaml"], cwd="/")  # /no-such-world.yaml, not //
+        self.assertEqual(r.stderr, "seeds: no world file '/no-such-world.yaml'\n")
 
     def test_help_exits_zero_with_a_usage_line(self):
         for name in BAD:
@@ -113,7 +127,6 @@ class InstallDepsProfiles(unittest.TestCase):
 class BenchTable(unittest.TestCase):
     def test_a_results_file_becomes_one_markdown_table_per_binary_with_medians_only(self):
         import json
-        import tempfile
         doc = {"date": "2026-12-04T12:00:00Z", "git_describe": "abc123", "build_type": "RelWithDebInfo",
                "compiler": "/usr/bin/c++", "cpus": 2, "cpu": "Some CPU", "load_average_before": [0.5, 0.4, 0.3],
                "load_average_after": [1.0, 0.9, 0.8],
@@ -145,7 +158,6 @@ class ReplaySpeed(unittest.TestCase):
         paths relative to the caller's directory: the rounds alternate --bin's and --against's, and the
         ratio of their CPU medians is printed."""
         import re
-        import tempfile
         with tempfile.TemporaryDirectory() as d:
             log = os.path.join(d, "x.lcmlog")
             with open(log, "wb") as f:
@@ -172,4 +184,7 @@ class ReplaySpeed(unittest.TestCase):
 
 
 if __name__ == "__main__":
-    unittest.main(argv=sys.argv[:1])
+    try:
+        unittest.main(argv=sys.argv[:1])
+    finally:
+        shutil.rmtree(STUBS)
