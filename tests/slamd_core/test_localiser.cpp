@@ -283,6 +283,29 @@ TEST(Localiser, KeepsAtMostMaxHypothesesAndNeverDropsThePrior) {
   EXPECT_TRUE(c->gave_up);
 }
 
+// On a saved map there is no prior: the trim keeps the best max_hypotheses and moves nothing to the
+// end. It once rotated "the prior" from end() (one past the last candidate) into the kept ones: a
+// heap overflow (ASan), a double free, or a garbage anchor that a checkpoint then refused.
+TEST(Localiser, WithoutAPriorTheTrimKeepsTheBestCandidatesOnly) {
+  Ring ring([](int) { return 0; });
+  LocaliserParams p;
+  p.max_hypotheses = 5;
+  Localiser loc(p);
+  ring.map.set_current(0, Pose2{0.0, 9.0, 0.0});
+  loc.start(false);
+  for (int k = 0; k < 3; ++k) {
+    loc.on_localising_cycle(0, 0.0, ring.map);
+    EXPECT_EQ(loc.hypotheses(), 5);
+    EXPECT_FALSE(loc.has_prior());
+    std::vector<uint8_t> blob;
+    loc.serialise(blob);
+    Localiser again(p);
+    size_t pos = 0;
+    EXPECT_NO_THROW(again.deserialise(blob, pos, ring.map.size()));  // every anchor names an experience
+    EXPECT_EQ(again.hypotheses(), 5);
+  }
+}
+
 TEST(Localiser, ACheckpointMidLocalisationContinuesIdentically) {
   Ring ring([](int i) { return i == 26 ? 100 : half_ring_alias(i); });
   ring.map.set_current(0, between(Ring::pose(0), Ring::pose(25)));

@@ -8,6 +8,7 @@
 
 #include <map>
 #include <memory>
+#include <optional>
 
 namespace whiskeye::slam {
 namespace {
@@ -413,6 +414,49 @@ TEST(VitaSlam, AResumedMapLocalisesFirstOnlyWhenOdometryResumesLongAfterItsLast)
   VitaSlam once = resumed_from(blob, p, w);
   loop_cycle(once, w, 0, 25);
   EXPECT_FALSE(loop_cycle(once, w, 1, 100).localising);
+}
+
+// A checkpoint written while localising, resumed after a long gap, goes on localising as it was:
+// on a saved map still without a prior (which would be where the saved map last was, meaningless
+// after a restart) and learning nothing. The resume once restarted the localisation with a prior,
+// mapped tentatively from it, and gave up onto it.
+TEST(VitaSlam, ACheckpointWrittenWhileLocalisingResumesAsItWasAfterALongGap) {
+  World w;
+  SlamParams p;
+  p.mode = Mode::Visual;
+  VitaSlam uninterrupted = VitaSlam::deserialise(two_laps_mapped(w, p), p, w.geometry);
+  uninterrupted.start_localising(false);
+  ASSERT_TRUE(loop_cycle(uninterrupted, w, 50, 100).localising);  // a view the map never had
+  VitaSlam resumed = resumed_from(uninterrupted.serialise(), p, w);
+  for (int k = 0; k < 16; ++k) {
+    const int c = 200 + k;  // odometry 100 s after the checkpoint's
+    const CycleResult a = loop_cycle(uninterrupted, w, 60 + k, c), b = loop_cycle(resumed, w, 60 + k, c);
+    EXPECT_EQ(b.localising, a.localising) << "cycle " << c;
+    EXPECT_FALSE(resumed.localiser().has_prior()) << "cycle " << c;
+    EXPECT_TRUE(resumed.serialise() == uninterrupted.serialise()) << "cycle " << c << ": the states differ";
+  }
+  // Mid-kidnap: checkpointed on the cycle the kidnap is detected, resumed 100 s later. The
+  // experiences mapped during the disagreements stay no evidence, and are retired as they are in
+  // the uninterrupted run.
+  p.localisation.kidnap_disagreements = 4;  // off as shipped
+  VitaSlam robot(p, w.geometry);
+  int c = 1;
+  for (; c <= 24; ++c) loop_cycle(robot, w, (c - 1) % 12, c);
+  std::optional<VitaSlam> after;
+  for (int k = 0; k < 12; ++k, ++c) {
+    const int place = (c - 1 + 6) % 12;  // put down half a loop away
+    const int at = after ? c + 100 : c;
+    const CycleResult a = loop_cycle(robot, w, place, at);
+    if (after) {
+      const CycleResult b = loop_cycle(*after, w, place, at);
+      EXPECT_EQ(b.localising, a.localising) << "cycle " << c;
+      EXPECT_TRUE(after->serialise() == robot.serialise()) << "cycle " << c << ": the states differ";
+    } else if (a.localising) {
+      after.emplace(resumed_from(robot.serialise(), p, w));
+    }
+  }
+  ASSERT_TRUE(after);
+  EXPECT_EQ(robot.localiser().kidnaps_detected(), 1);
 }
 
 // While localising with where odometry says as a candidate (a resume after a long gap, a suspected

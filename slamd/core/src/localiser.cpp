@@ -170,7 +170,7 @@ std::optional<Commit> Localiser::on_localising_cycle(int template_id, double tra
     if (static_cast<int>(kept.size()) > params_.max_hypotheses) {
       const auto prior = std::find_if(kept.begin(), kept.end(), [](const Hypothesis& h) { return h.prior; });
       const auto last = kept.begin() + (params_.max_hypotheses - 1);
-      if (prior > last) std::rotate(last, prior, prior + 1);  // the prior is never crowded out
+      if (prior != kept.end() && prior > last) std::rotate(last, prior, prior + 1);  // the prior is never crowded out
       kept.resize(static_cast<size_t>(params_.max_hypotheses));
     }
     hyps_ = std::move(kept);

@@ -57,7 +57,10 @@ CycleResult VitaSlam::process_cycle(const CycleInput& in) {
   ++stats_.cycles;
   if (resume_gap_s_ && !in.odometry.empty()) {
     const double gap_s = (static_cast<double>(in.odometry.front().utime) - static_cast<double>(last_odometry_utime_)) * 1e-6;
-    if (!have_odometry_time_ || gap_s < 0.0 || gap_s > *resume_gap_s_) start_localising(true);
+    // A checkpoint written while localising goes on as it was: restarting would give a saved map a
+    // prior, and make the experiences mapped before a kidnap's detection evidence again.
+    const bool moved = !have_odometry_time_ || gap_s < 0.0 || gap_s > *resume_gap_s_;
+    if (moved && !localiser_.localising()) start_localising(true);
     resume_gap_s_.reset();
   }
   integrate_odometry(in.odometry);                           // 1. path integration
