@@ -121,7 +121,9 @@ void CameraNode::open(int64_t now) {
     // The backoff is reset by the session's first frame, not by the open: a camera that opens
     // but sends nothing (USB bandwidth) is reopened ever more slowly, not every few seconds.
     last_open_error_.clear();
-    last_frame_us_ = now;
+    // From when the device is streaming: opening it (REQBUFS, mmap, STREAMON; seconds on some UVC
+    // cameras) is not time without frames.
+    last_frame_us_ = clock_.monotonic_us();
     last_sequence_ = -1;
     corrupt_logged_ = 0;
     dequeue_error_logged_ = false;

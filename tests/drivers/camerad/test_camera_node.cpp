@@ -136,6 +136,7 @@ class CameraNodeTest : public ::testing::Test {
                            [this](int64_t us) { time_.now_us += us; }};
       auto open = [this](const v4l2::CaptureConfig& config) -> std::unique_ptr<CaptureSession> {
         open_attempts_us_.push_back(time_.now_us - kStartUs);
+        time_.now_us += open_takes_us_;
         if (scripts_.empty()) throw v4l2::CaptureError(config.device + ": cannot open: No such file or directory", true);
         auto s = std::make_unique<FakeSession>(time_, std::move(scripts_.front()));
         scripts_.pop_front();
@@ -183,6 +184,7 @@ class CameraNodeTest : public ::testing::Test {
   FakeTime time_;
   std::deque<std::deque<Event>> scripts_;
   std::vector<int64_t> open_attempts_us_;
+  int64_t open_takes_us_ = 0;  // how long each open takes
   std::unique_ptr<CameraNode> node_;
   std::vector<image_t> images_;
   std::vector<driver_status_t> statuses_;
@@ -268,6 +270,25 @@ TEST_F(CameraNodeTest, SilenceIsDegradedThenTheDeviceIsReopened) {
   EXPECT_EQ(counter(st, "device_lost"), 1);
   EXPECT_EQ(counter(st, "reopens"), 1);
   EXPECT_EQ(st.state, driver_status_t::STATE_OK) << st.message;
+}
+
+// Opening a camera can take seconds (STREAMON on some UVC cameras); the time without frames starts
+// when it streams. It once started before the open, so a camera slower to start than
+// frame_timeout_s (2 s) was declared lost before its first frame, again at every reopen.
+TEST_F(CameraNodeTest, TheTimeAnOpenTakesIsNotTimeWithoutFrames) {
+  open_takes_us_ = 2'100'000;
+  Event waiting;  // the first frame is 0.2 s in coming
+  waiting.result = Capture::Result::kTimeout;
+  waiting.took_us = 200'000;
+  std::deque<Event> s = frames(10);
+  s.push_front(waiting);
+  add_session(std::move(s));
+  run_until(3'500'000);
+  EXPECT_EQ(open_attempts_us_.size(), 1u);
+  EXPECT_EQ(log_lines_containing("closing and reopening"), 0);
+  EXPECT_EQ(images_.size(), 10u);
+  ASSERT_FALSE(statuses_.empty());
+  EXPECT_EQ(counter(statuses_.back(), "device_lost"), 0);
 }
 
 TEST_F(CameraNodeTest, LostDeviceIsClosedReopenedAndCounted) {
