@@ -182,7 +182,8 @@ Reply RobotinoClient::request(const std::string& method, const std::string& path
     return true;
   };
   const int64_t t0 = monotonic_us();
-  // The deadline covers connecting, sending and the whole reply.
+  // The deadline covers sending and the whole reply, and connecting: a connect under way holds the
+  // lock httplib's stop() takes, so it runs to connect_timeout_s, and then the request is stopped.
   impl_->watchdog.arm(std::chrono::steady_clock::now() +
                       std::chrono::microseconds(static_cast<int64_t>(reply_timeout_s_ * 1e6)));
   httplib::Result res = impl_->client.send(req);
