@@ -33,6 +33,9 @@ void load(const ParamNode& root, Params& p) {
   if (p.capture.formats.empty()) throw ParamError(cam.path_of("formats") + " is empty");
   cam.get("reopen_initial_s", p.reopen_initial_s, 0.01, 10.0);
   cam.get("reopen_max_s", p.reopen_max_s, 0.01, 60.0);
+  if (p.reopen_max_s < p.reopen_initial_s) {
+    throw ParamError(cam.source() + ": " + cam.path_of("reopen_max_s") + " must be >= " + cam.path_of("reopen_initial_s"));
+  }
   cam.get("frame_timeout_s", p.frame_timeout_s, 0.1, 60.0);
   const ParamNode lcm = root.section("lcm");
   lcm.get("url", p.lcm_url);

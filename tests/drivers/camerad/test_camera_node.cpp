@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "whiskeye/camerad/camera_node.h"
+#include "whiskeye/common/params.h"
 
 namespace {
 
@@ -355,3 +356,16 @@ TEST_F(CameraNodeTest, OnlyDamagedFramesIsDegradedAndReopened) {
 }
 
 }  // namespace
+
+// A backoff whose cap is below its start would reopen at the cap from the first failure on: refused.
+TEST(CameradParams, AReopenCapBelowTheFirstDelayIsRefusedNamingBoth) {
+  camerad::Params p;
+  try {
+    camerad::load(ParamNode::from_string("camera:\n  reopen_initial_s: 2.0\n  reopen_max_s: 1.0\n"), p);
+    FAIL() << "expected a ParamError";
+  } catch (const ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("camera.reopen_max_s must be >= camera.reopen_initial_s"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_NO_THROW(camerad::load(ParamNode::from_string("camera:\n  reopen_initial_s: 1.0\n  reopen_max_s: 1.0\n"), p));
+}
