@@ -77,6 +77,11 @@ void load(const ParamNode& root, Params& p) {
                      " exceeds the classic-CAN bus capacity (max 200 Hz, see docs/can-protocol.md)");
   }
   can.get("stale_timeout_s", p.stale_timeout_s, 0.005, 10.0);
+  if (p.stale_timeout_s < 2.0 / p.rate_hz) {
+    throw ParamError(can.path_of("stale_timeout_s") + " = " + std::to_string(p.stale_timeout_s) +
+                     " is less than two sample periods at rate_hz " + std::to_string(p.rate_hz) +
+                     ": every board would be stale between its samples and the whiskers never run");
+  }
   const ParamNode ids = can.section("ids");
   int sample = static_cast<int>(p.ids.sample_base), command = static_cast<int>(p.ids.command_base),
       heartbeat = static_cast<int>(p.ids.heartbeat_base);

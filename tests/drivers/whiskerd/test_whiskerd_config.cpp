@@ -32,6 +32,23 @@ TEST(WhiskerdConfig, ClassicModeDefaultsToAFeasibleRateAndRejectsTooFast) {
   EXPECT_THROW(load(ParamNode::from_string("can: {mode: classic, rate_hz: 500}\n"), q), ParamError);
 }
 
+// A board is stale when its last sample is older than stale_timeout_s: under two sample periods,
+// every board is stale between its samples and whiskerd never leaves retracting.
+TEST(WhiskerdConfig, AStaleTimeoutUnderTwoSamplePeriodsIsRefused) {
+  Params p;
+  try {
+    load(ParamNode::from_string("can: {mode: classic, rate_hz: 10, stale_timeout_s: 0.15}\n"), p);
+    FAIL() << "expected a ParamError";
+  } catch (const ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("can.stale_timeout_s = 0.150000 is less than two sample periods"),
+              std::string::npos) << e.what();
+  }
+  Params q;
+  EXPECT_NO_THROW(load(ParamNode::from_string("can: {mode: classic, rate_hz: 10, stale_timeout_s: 0.2}\n"), q));
+  Params r;  // the shipped 0.1 s at the FD default of 500 Hz
+  EXPECT_NO_THROW(load(ParamNode::from_string("can: {stale_timeout_s: 0.1}\n"), r));
+}
+
 TEST(WhiskerdConfig, OverlappingIdRangesAreRejected) {
   Params p;
   EXPECT_THROW(load(ParamNode::from_string("can: {ids: {sample_base: 0x200}}\n"), p), ParamError);
