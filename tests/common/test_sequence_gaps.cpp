@@ -39,6 +39,26 @@ TEST(SequenceGaps, AHugeGapSaturatesInsteadOfOverflowing) {
   EXPECT_EQ(g.places(), 2);
 }
 
+// A message that arrived but was refused: at its place in the sequence it is no gap; any other
+// number (a stale copy, a corrupt field) changes nothing, not even at the top of the range.
+TEST(SequenceGaps, ARefusedMessageAtItsPlaceIsNoGapAndAnyOtherChangesNothing) {
+  SequenceGaps g;
+  g.arrived(5);  // before any number: nothing to follow
+  g.add(1);
+  g.arrived(2);  // refused, but it came
+  EXPECT_EQ(g.add(3), 0);
+  g.arrived(0);     // a stale copy
+  g.arrived(kMin);  // a corrupt number
+  g.arrived(9);     // ahead: says nothing of 4..8
+  EXPECT_EQ(g.add(4), 0);
+  EXPECT_EQ(g.lost(), 0);
+  EXPECT_EQ(g.restarts(), 0);
+  g.add(kMax);
+  g.arrived(kMin);  // kMax + 1 does not exist
+  EXPECT_EQ(g.add(kMax), 0);
+  EXPECT_EQ(g.restarts(), 1);
+}
+
 TEST(SequenceGaps, TheLargestNumberFollowedByNothingLargerIsARestart) {
   SequenceGaps g;
   g.add(kMax - 1);

@@ -590,7 +590,8 @@ TEST_F(SlamNodeTest, RepeatedWarningsAreRateLimitedWithACountOfWhatWasSuppressed
 // Messages lost before slamd took them (LCM's subscription queue, a fragment lost on the wire, a
 // recording's gap) show only in the inputs' sequence numbers: counted in input_gaps and logged,
 // rate-limited. A number that goes back is a sender restarting, not a loss; a rejected message
-// (a stale copy, a bad value) is not looked at.
+// arrived: a bad value at its place in the sequence is no gap (once counted as one, "lost on the
+// way", beside its validation error), and a stale copy changes nothing.
 TEST_F(SlamNodeTest, MessagesMissingByTheirSequenceNumbersAreCountedAndLoggedButARestartIsNot) {
   std::vector<std::string> lines;
   int64_t now = 0;
@@ -608,6 +609,7 @@ TEST_F(SlamNodeTest, MessagesMissingByTheirSequenceNumbersAreCountedAndLoggedBut
         odometry_t o{};
         o.utime = t;
         o.seq = seq;
+        if (sec == 5 && k == 10) o.vx = std::numeric_limits<double>::quiet_NaN();  // refused: no gap
         publish(in_, "ODOMETRY", o);
       }
       if (k % 10 == 0) {
@@ -626,6 +628,7 @@ TEST_F(SlamNodeTest, MessagesMissingByTheirSequenceNumbersAreCountedAndLoggedBut
     }
   }
   node_->flush();
+  EXPECT_EQ(node_->counters().validation_errors, 1 + 1) << "the stale copy and the NaN";
   EXPECT_EQ(node_->counters().input_gaps, 3 + 1 + 1);
   EXPECT_EQ(node_->status(kT0 + 6 * kS).input_gaps, 5);
   std::string all;

@@ -60,6 +60,11 @@ void SlamNode::reject(Input input, const std::string& what) {
   log_burst(input, "rejected " + what + " (" + std::to_string(counters_.validation_errors) + " rejected so far)");
 }
 
+void SlamNode::reject(Input input, int64_t seq, const std::string& what) {
+  gaps_[input].arrived(seq);
+  reject(input, what);
+}
+
 void SlamNode::log_burst(Input input, const std::string& line) {
   // Per input, so a broken sender is logged at the start of each burst even while the other inputs
   // are fine, and then rate-limited, so a flood of bad messages cannot flood the journal.
@@ -92,14 +97,14 @@ void SlamNode::on_camera(std::span<const uint8_t> data, const MessageInfo& info)
   std::string reason;
   if (!decode_camera_frame(data, frame, &reason)) return decode_errors_.record(info.channel, reason);
   const std::string err = camera_frame_error(frame);
-  if (!err.empty()) return reject(kCamera, err);
+  if (!err.empty()) return reject(kCamera, frame.seq, err);
   if (info.data_owner) {
     frame.owner = info.data_owner;  // the bytes outlive this call: keep a view
   } else {
     own_pixels(frame);
   }
   const int64_t seq = frame.seq;
-  if (const std::string why = sync_.add_camera(std::move(frame)); !why.empty()) return reject(kCamera, why);
+  if (const std::string why = sync_.add_camera(std::move(frame)); !why.empty()) return reject(kCamera, seq, why);
   accepted(kCamera);
   sequence(kCamera, seq);
   process(sync_.take_ready());
@@ -107,9 +112,9 @@ void SlamNode::on_camera(std::span<const uint8_t> data, const MessageInfo& info)
 
 void SlamNode::on_whisk_cycle(whisk_cycle_t msg) {
   const std::string err = check_whisk_cycle(msg);
-  if (!err.empty()) return reject(kWhisk, err);
+  if (!err.empty()) return reject(kWhisk, msg.cycle, err);
   const int64_t seq = msg.cycle;
-  if (const std::string why = sync_.add_whisk_cycle(std::move(msg)); !why.empty()) return reject(kWhisk, why);
+  if (const std::string why = sync_.add_whisk_cycle(std::move(msg)); !why.empty()) return reject(kWhisk, seq, why);
   accepted(kWhisk);
   sequence(kWhisk, seq);
   process(sync_.take_ready());
@@ -117,10 +122,10 @@ void SlamNode::on_whisk_cycle(whisk_cycle_t msg) {
 
 void SlamNode::on_odometry(const odometry_t& msg) {
   const std::string err = check_odometry(msg);
-  if (!err.empty()) return reject(kOdometry, err);
+  if (!err.empty()) return reject(kOdometry, msg.seq, err);
   // A dropped sample is not dead-reckoned either (a pose back in time, or an hour ahead).
   const int64_t overflow_before = sync_.counters().odometry_overflow;
-  if (const std::string why = sync_.add_odometry(msg); !why.empty()) return reject(kOdometry, why);
+  if (const std::string why = sync_.add_odometry(msg); !why.empty()) return reject(kOdometry, msg.seq, why);
   accepted(kOdometry);
   sequence(kOdometry, msg.seq);
   // Logged at the first dropped sample of each stretch without whisk cycles, not at every one.

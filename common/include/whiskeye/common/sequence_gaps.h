@@ -39,6 +39,12 @@ class SequenceGaps {
     last_ = seq;
     return missing;
   }
+  // A message that arrived but was refused (a bad value, a time jump): when it is the next number
+  // it is no gap, and the following one must not be counted as missing it. Any other number (a
+  // stale copy, or the corrupt field that got it refused) changes nothing.
+  void arrived(int64_t seq) {
+    if (last_ && *last_ != kMax && seq == *last_ + 1) last_ = seq;
+  }
   int64_t lost() const { return lost_; }          // messages missing in all
   int64_t places() const { return places_; }      // places where messages were missing
   int64_t longest() const { return longest_; }    // the most missing in a row

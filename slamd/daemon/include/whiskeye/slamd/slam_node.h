@@ -88,6 +88,8 @@ class SlamNode {
   enum Input { kCamera, kOdometry, kWhisk, kFrameInCycle, kWhiskInCycle, kInputs };
   // Counts a rejected message (validation_errors) and logs it as log_burst() does.
   void reject(Input input, const std::string& what);
+  // The same for a message whose sequence number was read: it arrived, so it is no gap.
+  void reject(Input input, int64_t seq, const std::string& what);
   // Logs the first line of a burst on that input (a burst ends at accepted(input)); the rest of the
   // burst goes through the throttle: at most one line per 10 s, saying how many were held back.
   void log_burst(Input input, const std::string& line);
