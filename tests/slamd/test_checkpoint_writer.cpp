@@ -201,6 +201,41 @@ TEST(CheckpointWriter, FinishWritesWhatIsWaitingAndLaterSubmitsAreWrittenAtOnce)
   EXPECT_EQ(writer.counters().written, 3);
 }
 
+// slamd's exit status says whether its final state is on disk. An earlier snapshot that fails while
+// the final one waits (the disk full until space was freed just before SIGTERM) does not make the
+// final one lost: slamd once compared the error count before and after and exited 1, saying so.
+TEST(CheckpointWriter, FinishSaysWhetherTheNewestSnapshotIsOnDiskNotWhetherAnEarlierOneFailed) {
+  {
+    std::promise<void> entered, release;
+    CheckpointWriter writer(
+        [&](uint64_t sequence, std::vector<uint8_t>&) {
+          if (sequence != 1) return;
+          entered.set_value();
+          release.get_future().wait();  // a slow write of 1 ...
+          throw std::runtime_error("/state/checkpoint: No space left on device");  // ... that fails
+        },
+        nullptr);
+    writer.submit(1, bytes(4));
+    ASSERT_EQ(entered.get_future().wait_for(10s), std::future_status::ready);
+    writer.submit(2, bytes(4));  // the final state waits behind it
+    release.set_value();         // 1 fails, then 2 is written
+    EXPECT_TRUE(writer.finish());
+    EXPECT_EQ(writer.counters().errors, 1);
+    EXPECT_EQ(writer.counters().written, 1);
+    EXPECT_TRUE(writer.finish()) << "idempotent";
+  }
+  {
+    FakeDisk disk;
+    disk.fail_on(2);
+    CheckpointWriter writer(disk.fn(), nullptr);
+    writer.submit(1, bytes(4));
+    writer.submit(2, bytes(4));  // the final state fails
+    EXPECT_FALSE(writer.finish());
+  }
+  CheckpointWriter idle([](uint64_t, std::vector<uint8_t>&) {}, nullptr);
+  EXPECT_TRUE(idle.finish()) << "nothing submitted: nothing lost";
+}
+
 TEST(CheckpointWriter, WithTheRealStoreTheNewestSubmittedStateIsTheOneThatLoads) {
   const fs::path dir = whiskeye::testing::scratch_dir("cp_writer_store");
   CheckpointStore store(dir.string(), 3);

@@ -31,14 +31,17 @@ void CheckpointWriter::submit(uint64_t sequence, std::vector<uint8_t> payload) {
   write_one(s);  // after finish(): no thread left to hand it to
 }
 
-void CheckpointWriter::finish() {
+bool CheckpointWriter::finish() {
   {
     std::lock_guard lock(mutex_);
-    if (stopping_) return;
-    stopping_ = true;
-    wake_.notify_one();
+    if (!stopping_) {
+      stopping_ = true;
+      wake_.notify_one();
+    }
   }
-  thread_.join();
+  if (thread_.joinable()) thread_.join();
+  std::lock_guard lock(mutex_);
+  return !counters_.failing;  // the newest write is the last one made: written unless it failed
 }
 
 CheckpointWriter::Counters CheckpointWriter::counters() const {

@@ -52,8 +52,9 @@ class CheckpointWriter {
   // Queues a snapshot and returns without touching the disk; replaces one still waiting.
   void submit(uint64_t sequence, std::vector<uint8_t> payload);
   // Writes the snapshot still waiting (if any), then stops the thread. Idempotent; a submit() from
-  // then on is written on the caller's thread.
-  void finish();
+  // then on is written on the caller's thread. Returns whether the newest snapshot submitted is on
+  // disk (true when none was): an earlier write failing while this one waited does not make it lost.
+  bool finish();
 
   Counters counters() const;
 
