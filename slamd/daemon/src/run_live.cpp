@@ -99,6 +99,11 @@ int run_live(const Parameters& cfg, const Options& o) {
     service.stall_if_injected(now, [] { return g_stop.load(); });
   }
   service.stopping();
+  // What LCM already holds (a burst after a pause, what came while the loop took its last message)
+  // goes into the final state too: handled until 50 ms pass without a message, for at most 2 s.
+  for (const int64_t until = monotonic_us() + 2'000'000; exit_code == 0 && monotonic_us() < until;) {
+    if (bus.handle_timeout(50) <= 0) break;
+  }
   node.flush();  // cycles still waiting for a camera frame go into the final state
   if (store) checkpoint();
   const bool final_written = writer.finish();  // the final state is on disk before slamd exits
