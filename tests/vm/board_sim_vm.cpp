@@ -35,7 +35,7 @@ int main(int argc, char** argv) {
   tp.calibration = truth.calibration;
   tp.channel = truth.channel;
   sim::BoardTraffic traffic(tp);
-  can::Socket sock(interface, true);
+  can::Socket sock(interface);
   const double stop = stop_deg * kPi / 180.0;
   constexpr double kPeriod = 0.002, kMaxRate = 2.0;
   std::array<double, wp::kNumWhiskers> theta{}, target{};  // per whisker, rad

@@ -178,7 +178,7 @@ int socket_down_check(const std::string& interface, Results& results) {
   f.id = 0x7ff;
   f.fd = true;
   f.len = 8;
-  can::Socket sock(interface, true);
+  can::Socket sock(interface);
   results.report("socket_sends_while_up", sock.send(f));
   if (!link("down")) {
     results.report("socket_check_sets_link_down", false, "ip link set down failed");
@@ -249,8 +249,8 @@ int main(int argc, char** argv) {
     while (!done) bus.handle_timeout(50);
   });
 
-  can::Socket tx(interface, true);
-  can::Socket motor(interface, true);
+  can::Socket tx(interface);
+  can::Socket motor(interface);
   motor.set_filters({{0x200, 0x7f8}});
   std::map<uint16_t, wp::MotorCommand> commands;  // FD: by command seq
   std::vector<uint16_t> command_order;
@@ -379,6 +379,14 @@ int main(int argc, char** argv) {
       wp::encode_sample_fd(s, f.data);
       send_reliably(tx, f);
     }
+    if (seq == script.bad_at) {
+      // A sample of the other frame type (an FD board on a bus configured classic, or the reverse):
+      // counted as such. The kernel dropped FD frames unseen on a socket without FD frames enabled.
+      can::Frame f = script.classic ? fd_frame(wp::sample_id({}, 1), wp::kFdSampleBytes) : can::Frame{};
+      f.id = wp::sample_id({}, 1);
+      if (!script.classic) f.len = 8;
+      send_reliably(tx, f);
+    }
     sleep_until(t, script.period_ns);
   }
   (void)contact_onset_mono;
@@ -472,7 +480,7 @@ int main(int argc, char** argv) {
   counter_is("rejected_wrong_length", 1);
   counter_is("rejected_unknown_id", 1);
   counter_is("rejected_out_of_range", 1);
-  counter_is("rejected_wrong_frame_type", 0);
+  counter_is("rejected_wrong_frame_type", 1);
 
   // Bus-off reported (DEGRADED, "bus-off") and recovered from (later: running, error-active) while
   // whiskerd keeps running.

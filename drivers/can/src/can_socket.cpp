@@ -56,7 +56,7 @@ BusState next_bus_state(BusState current, const ErrorInfo& e) {
   return current;
 }
 
-Socket::Socket(const std::string& interface, bool fd) : interface_(interface), fd_frames_(fd) {
+Socket::Socket(const std::string& interface) : interface_(interface) {
   open_socket();
 }
 
@@ -81,10 +81,9 @@ void Socket::open_socket() {
   ifreq ifr{};
   std::strncpy(ifr.ifr_name, interface_.c_str(), IFNAMSIZ - 1);
   if (::ioctl(fd_, SIOCGIFINDEX, &ifr) < 0) fail("no such interface");
-  if (fd_frames_) {
-    int on = 1;
-    if (::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_FD_FRAMES, &on, sizeof(on)) < 0) fail("enable FD frames");
-  }
+  // FD frames too on a classic bus: without this the kernel drops them before any reader sees them.
+  int fd_on = 1;
+  if (::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_FD_FRAMES, &fd_on, sizeof(fd_on)) < 0) fail("enable FD frames");
   can_err_mask_t err_mask = CAN_ERR_MASK;
   if (::setsockopt(fd_, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &err_mask, sizeof(err_mask)) < 0) {
     fail("enable error frames");

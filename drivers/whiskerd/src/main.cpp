@@ -36,7 +36,7 @@ int run(const Params& params) {
   std::unique_ptr<gpio::MotorLines> lines;
   std::unique_ptr<LcmBus> bus;
   try {
-    sock = std::make_unique<can::Socket>(params.interface, params.mode == wp::BusMode::kFd);
+    sock = std::make_unique<can::Socket>(params.interface);
     // The 8-id blocks of samples and heartbeats (base .. base+7; load() rejects a base that is not a
     // multiple of 8): node ids 1..6 plus neighbours, so a misconfigured board (an unknown id next
     // to ours) is counted rather than silently filtered.

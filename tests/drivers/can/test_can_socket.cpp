@@ -40,7 +40,7 @@ TEST(CanErrorFrames, WarningDoesNotDowngradePassive) {
 
 TEST(CanSocket, OpeningAMissingInterfaceThrowsNamingIt) {
   try {
-    Socket s("nosuchcan9", true);
+    Socket s("nosuchcan9");
     FAIL() << "expected an exception";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("nosuchcan9"), std::string::npos) << e.what();
@@ -48,5 +48,5 @@ TEST(CanSocket, OpeningAMissingInterfaceThrowsNamingIt) {
 }
 
 TEST(CanSocket, RejectsAnOverlongInterfaceName) {
-  EXPECT_THROW(Socket("this_name_is_far_too_long_for_linux", false), std::runtime_error);
+  EXPECT_THROW(Socket("this_name_is_far_too_long_for_linux"), std::runtime_error);
 }

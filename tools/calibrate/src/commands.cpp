@@ -71,9 +71,9 @@ double read_log(const std::string& path, Recording& r, double rate_hz) {
 }
 
 // Listens on the bus (this socket never sends) until `stop` says so, into `r` under `lock`.
-void listen(const std::string& interface, bool fd, Recording& r, std::mutex& lock, const std::function<bool()>& stop,
+void listen(const std::string& interface, Recording& r, std::mutex& lock, const std::function<bool()>& stop,
             const char* motors = "motors off") {
-  can::Socket sock(interface, fd);
+  can::Socket sock(interface);
   sock.set_receive_buffer(4 << 20);
   std::cerr << kProgram << ": listening on " << interface << " (" << motors << ")\n";
   can::Frame frame;
@@ -103,7 +103,7 @@ double record(const Options& o, const Setup& s, Recording& r) {
   const std::string interface = o.interface.empty() ? s.params.interface : o.interface;
   std::mutex lock;
   const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(o.seconds);
-  listen(interface, s.params.mode == wp::BusMode::kFd, r, lock, [&] { return std::chrono::steady_clock::now() >= until; });
+  listen(interface, r, lock, [&] { return std::chrono::steady_clock::now() >= until; });
   return span_s(r, s.params.rate_hz, o.seconds);
 }
 
@@ -181,7 +181,7 @@ int run_map(const Options& o) {
   std::exception_ptr failure;
   std::thread listener([&] {
     try {
-      listen(interface, s.params.mode == wp::BusMode::kFd, r, lock, [&] { return done.load(); });
+      listen(interface, r, lock, [&] { return done.load(); });
     } catch (...) {
       failure = std::current_exception();
       done = true;
@@ -233,7 +233,7 @@ int run_theta(const Options& o) {
     const SweepOutcome swept = run_sweep(s.params, {stop, 0.1, o.sweep_seconds, interface, !o.no_gpio},
                                          [&](const std::function<bool()>& until) {
                                            // Any fault a board reports ends the sweep at once.
-                                           listen(interface, s.params.mode == wp::BusMode::kFd, r, lock,
+                                           listen(interface, r, lock,
                                                   [&] { return until() || any_fault(r); }, "whiskerd sweeping");
                                          });
     if (!swept.abort.empty()) {

@@ -36,7 +36,7 @@ SweepOutcome run_sweep(const whiskerd::Params& in_use, const SweepPlan& plan,
 
   std::unique_ptr<gpio::MotorLines> lines =
       p.gpio ? gpio::open_gpiod_lines(p.lines, "whiskeye-calibrate") : std::make_unique<gpio::NoMotorLines>();
-  auto sock = std::make_unique<can::Socket>(p.interface, p.mode == wp::BusMode::kFd);
+  auto sock = std::make_unique<can::Socket>(p.interface);
   ServiceNotifier service("whiskeye-calibrate", monotonic_us());
   auto shared = std::make_unique<whiskerd::Shared>();
   std::atomic<bool> stop{false};

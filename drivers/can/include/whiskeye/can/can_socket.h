@@ -65,9 +65,11 @@ struct Counters {
 
 class Socket {
  public:
-  // Opens and binds a raw CAN socket on `interface`; `fd` enables CAN FD frames. Throws
-  // std::runtime_error naming the interface and the cause.
-  Socket(const std::string& interface, bool fd);
+  // Opens and binds a raw CAN socket on `interface`. It receives classic and FD frames alike, so that
+  // a frame of the type the bus is not configured for reaches its reader (and is counted there)
+  // where the kernel would drop it unseen, and sends either. Throws std::runtime_error naming the
+  // interface and the cause.
+  explicit Socket(const std::string& interface);
   ~Socket();
   Socket(const Socket&) = delete;
   Socket& operator=(const Socket&) = delete;
@@ -103,7 +105,6 @@ class Socket {
   void set_error(const char* what, int err);
 
   std::string interface_;
-  bool fd_frames_;
   int fd_ = -1;
   std::vector<Filter> filters_;
   int rcvbuf_ = 0;
