@@ -86,8 +86,16 @@ Embedding embed(const std::vector<whisker_sample_t>& received, const std::vector
     if (j == sim.size()) {
       ++r.unmatched;
       if (r.first_unmatched.empty()) {
+        // Where it would fit, ignoring the order: a sample from before the last match means whiskerd
+        // published an older sample after a newer one; none at all, a value the run never had.
+        std::string fits;
+        for (std::size_t k = 0; k < sim.size(); ++k) {
+          if (board_matches(m, sim[k], b, cal)) fits += (fits.empty() ? "" : ",") + std::to_string(k);
+        }
         r.first_unmatched = "board " + std::to_string(b) + " whiskerd seq " + std::to_string(m.seq) + " theta " +
-                            std::to_string(m.theta[b * kPerBoard]);
+                            std::to_string(m.theta[b * kPerBoard]) + ", after simulated sample " +
+                            std::to_string(static_cast<int64_t>(next) - 1) + "; it fits simulated samples [" +
+                            (fits.empty() ? "none" : fits) + "]";
       }
       continue;
     }
@@ -158,6 +166,17 @@ int main(int argc, char** argv) {
     }
   }
   std::cout << "whiskerd samples received: " << received.size() << std::endl;
+  {
+    // Every sample received, beside the results: what a failure is analysed from.
+    std::ofstream csv(results_path + "." + (prefix.empty() ? "fd_" : prefix) + "received.csv");
+    csv << "seq,utime,stale_boards,theta_first_whisker_of_each_board\n";
+    for (const whisker_sample_t& m : received) {
+      csv << m.seq << "," << m.utime << ",";
+      for (int b = 0; b < kBoards; ++b) csv << (board_fresh(m, b) ? '.' : 's');
+      for (int b = 0; b < kBoards; ++b) csv << "," << m.theta[b * kPerBoard];
+      csv << "\n";
+    }
+  }
 
   int64_t fresh_total = 0, unmatched_total = 0, control_unmatched = 0;
   std::array<Embedding, kBoards> e;
