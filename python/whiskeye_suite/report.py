@@ -78,6 +78,16 @@ def aggregate(a, records, failed, wall_s):
     else:
         targets = check_localisation_targets(worlds, a.scenario) if a.family == "aliased" else []
         summary["localisation"] = {m: localisation_summary(worlds, m) for m in MODES}
+    # A world that failed, or has no result of this run (not run; run with other options or programs),
+    # is a miss like n/a: the targets over the others would otherwise read "met" for the whole suite.
+    have = {w["index"] for w in worlds} | {f["index"] for f in failed}
+    missing = [i for i in range(1, a.worlds + 1) if i not in have]
+    if targets and (failed or missing):
+        seeds = lambda ids: [f"world {i} (seed {a.suite_seed * 1000 + i})" for i in ids]  # noqa: E731
+        targets.insert(0, {"target": f"every one of the {a.worlds} worlds run and evaluated",
+                           "measured": f"{len(worlds)} of {a.worlds}: {len(failed)} failed, {len(missing)} without a "
+                                       "result of this run",
+                           "met": False, "worlds_missed": seeds(sorted([f["index"] for f in failed] + missing))})
     checked = bool(targets)
     misses = miss_lines(targets)
     per_world_ok = {w["index"]: all(vita_conditions(w).values()) if a.family == "aliased" else None for w in worlds}
@@ -90,7 +100,8 @@ def aggregate(a, records, failed, wall_s):
         "scenario": a.scenario, "executor": a.executor, "slurm": {"array_job": a.slurm_array, "aggregate_job": os.environ.get("SLURM_JOB_ID")}
         if a.slurm_array else None,
         "thresholds": thresholds, "summary": summary, "fooled": fooled_counts, "targets_checked": checked,
-        "targets": targets, "target_misses": misses, "failed_worlds": failed, "worlds": worlds,
+        "targets": targets, "target_misses": misses, "failed_worlds": failed, "missing_worlds": missing,
+        "worlds": worlds,
     }
     write_json(os.path.join(a.results, "suite.json"), doc)
     plots = [] if a.no_plots or not worlds else write_plots(worlds, a, per_world_ok)
@@ -233,6 +244,12 @@ def report(a, doc, bins):
         print("suite: rerun only those: " + shlex.join([SCRIPT, *world_options(a, bins), *executor_options(a),
                                                         "--retry-failed"]), file=sys.stderr)
         return 1  # the suite did not run through
+    missing = doc.get("missing_worlds") or []
+    if missing:
+        print(f"suite: {len(missing)} world(s) have no result of this run (not run, or run with other options "
+              f"or programs): {', '.join(map(str, missing))}; run the suite again without --retry-failed "
+              "(or --aggregate-only after they ran)", file=sys.stderr)
+        return 1  # the summary covers only part of the suite
     if a.check and doc["target_misses"]:
         return 1
     return 0

@@ -144,9 +144,37 @@ class Summary(InTempDir):
 
     def test_failed_worlds_are_listed(self):
         failed = [{"index": 2, "world_seed": 5002, "failed": "slamd exited 1 (see x/run.log)", "log": "x/run.log"}]
-        report.aggregate(options(self.tmp), [world(1)], failed, 1.0)
+        report.aggregate(options(self.tmp), [world(1), world(3)], failed, 1.0)
         with open(os.path.join(self.tmp, "suite.md")) as f:
             self.assertIn("- world 2 (seed 5002): slamd exited 1 (see x/run.log)", f.read())
+
+    def test_a_failed_or_missing_world_is_a_missed_target_and_a_failed_suite(self):
+        # The targets over the worlds that did run once read "met" ("2 of 2 worlds") for the suite,
+        # and a world without a record (another build's key, never run) passed unnoticed with exit 0.
+        import contextlib
+        import io
+        failed = [{"index": 2, "world_seed": 5002, "failed": "slamd exited 1", "log": "x/run.log"}]
+        a = options(self.tmp, study=False)
+        doc = report.aggregate(a, [world(1)], failed, 1.0)
+        self.assertEqual(doc["missing_worlds"], [3])
+        first = doc["targets"][0]
+        self.assertEqual(first["target"], "every one of the 3 worlds run and evaluated")
+        self.assertEqual(first["measured"], "1 of 3: 1 failed, 1 without a result of this run")
+        self.assertFalse(first["met"])
+        self.assertEqual(first["worlds_missed"], ["world 2 (seed 5002)", "world 3 (seed 5003)"])
+        self.assertTrue(doc["target_misses"])
+        doc = report.aggregate(a, [world(1), world(2)], [], 1.0)  # one missing, none failed
+        self.assertEqual(doc["missing_worlds"], [3])
+        err = io.StringIO()
+        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(err):
+            self.assertEqual(report.report(a, doc, "bin"), 1)
+        self.assertIn("suite: 1 world(s) have no result of this run (not run, or run with other options or "
+                      "programs): 3;", err.getvalue())
+        doc = report.aggregate(a, [world(1), world(2), world(3)], [], 1.0)
+        self.assertEqual(doc["missing_worlds"], [])
+        self.assertNotIn("every one of", doc["targets"][0]["target"])
+        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+            self.assertEqual(report.report(a, doc, "bin"), 0)
 
 
 class Options(unittest.TestCase):

@@ -542,13 +542,19 @@ class BadInput(unittest.TestCase):
             os.remove(marker)
             os.remove(os.path.join(d, "r", "world-002", "failed.json"))  # as if world 2 had never run
             retried = suite(*args, "--retry-failed")
-            self.assertEqual(retried.returncode, 0, retried.stderr)
             self.assertIn("retrying 1 failed", retried.stderr)
             self.assertEqual(retried.stderr.count("] world "), 1, retried.stderr)
             self.assertFalse(os.path.exists(os.path.join(d, "r", "world-001", "failed.json")))
             with open(os.path.join(d, "r", "suite.json")) as f:
                 doc = json.load(f)
             self.assertEqual(([w["index"] for w in doc["worlds"]], doc["failed_worlds"]), ([1], []))
+            # World 2 has no result: the summary covers half the suite, and says so (it once exited 0).
+            self.assertEqual(doc["missing_worlds"], [2])
+            self.assertEqual(retried.returncode, 1, retried.stderr)
+            self.assertIn("suite: 1 world(s) have no result of this run", retried.stderr)
+            rest = suite(*args)  # without --retry-failed: world 2 runs, and the suite is whole
+            self.assertEqual(rest.returncode, 0, rest.stderr)
+            self.assertEqual(rest.stderr.count("] world "), 2, rest.stderr)  # 1 resumed, 2 run
 
     def test_a_program_that_cannot_run_fails_its_world_not_the_suite(self):
         with tempfile.TemporaryDirectory() as d:
