@@ -51,6 +51,14 @@ def main(argv):
         keys = keys or {label: None for label, _ in a.variants}
         if not any(collect(a, key, label) != ([], []) for label, key in keys.items()):
             fail(f"{a.results}: no finished world to aggregate")
+        for label, key in keys.items():
+            if key is None:  # any run's records: they must be one run's (options, config, programs)
+                records, failed = collect(a, None, label)
+                runs = {doc.get("key") for doc in records + failed}
+                if len(runs) > 1:
+                    fail(f"{a.results}: its worlds{f' [{label}]' if label else ''} come from {len(runs)} different "
+                         "runs (other options, config or programs): one summary must not mix them; run the "
+                         "suite over it again")
         doc = summarise(a, keys, time.time() - started_at)
         if a.slurm_array:
             name = "study" if a.study else "suite"

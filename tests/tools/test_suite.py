@@ -224,6 +224,24 @@ class RecordsCheck(unittest.TestCase):
 
 
 
+class MixedRuns(RecordsCheck):
+    def test_records_of_two_runs_are_not_aggregated_together(self):
+        # Worlds made with two configs (or builds) in one folder: --aggregate-only once summed them
+        # into one summary under the current config's name, exit 0.
+        records = [vita_world(i) for i in range(1, 5)]
+        for r in records:
+            r["key"] = "run-a" if r["index"] <= 2 else "run-b"
+        self.write(records)
+        r = self.check(4)
+        self.assertEqual(r.returncode, 2, r.stdout + r.stderr)
+        self.assertIn("its worlds come from 2 different runs", r.stderr)
+        self.assertEqual(len(r.stderr.splitlines()), 1, r.stderr)
+        for rec in records:
+            rec["key"] = "run-a"
+        self.write(records)
+        self.assertEqual(self.check(4).returncode, 0)
+
+
 class TargetCheck(RecordsCheck):
     """--check on scripted records: every target with its figure, met or missed, the exit status."""
     def good(self, n=24):
