@@ -1,5 +1,6 @@
 // Experience map: relaxation of a drifting loop, the action rule, checkpoints.
 #include "whiskeye/slam/experience_map.h"
+#include "whiskeye/common/params.h"
 
 #include "whiskeye/slam/pose_cells.h"
 
@@ -51,6 +52,22 @@ TEST(ExperienceMap, RelaxationTurnsADriftingSquareLoopIntoASquare) {
   for (double s : sides) EXPECT_NEAR(s, 2.0 * 1.03, 0.15);
   EXPECT_NEAR(d(c[0], c[2]), d(c[1], c[3]), 0.1);  // equal diagonals: a square, not a rhombus
   EXPECT_NEAR(d(c[0], c[2]), 2.0 * 1.03 * std::sqrt(2.0), 0.2);
+}
+
+// Both ends of a link move by `correction` x its error: at 0.5 one loop closes a lone link, above it
+// the pair overshoots (at 1 it swung between +0.2 m and -0.2 m for ever), so the loader stops at 0.5.
+TEST(ExperienceMap, CorrectionAboveOneHalfIsRefusedAndOneHalfClosesALoneLinkInOneLoop) {
+  ExperienceMapParams p;
+  p.correction = 0.5;
+  ExperienceMap m(p);
+  m.add_experience({0, 0, 0}, Experience{});
+  m.add_experience({1.2, 0, 0}, Experience{});
+  m.add_link(0, 1, {1.0, 0, 0}, 0);  // 0.2 m of error
+  m.relax(1);
+  EXPECT_NEAR(m.experiences()[1].pose.x - m.experiences()[0].pose.x, 1.0, 1e-9);
+  ExperienceMapParams q;
+  EXPECT_THROW(load(ParamNode::from_string("correction: 0.75\n"), q), ParamError);
+  EXPECT_NO_THROW(load(ParamNode::from_string("correction: 0.5\n"), q));
 }
 
 TEST(ExperienceMap, RelaxationKeepsAConsistentMapUnchanged) {

@@ -13,7 +13,9 @@ namespace whiskeye::slam {
 
 void load(const ParamNode& n, ExperienceMapParams& p) {
   n.get("delta_pc_threshold", p.delta_pc_threshold, 0.0, 1000.0);
-  n.get("correction", p.correction, 0.0, 1.0);
+  // Each end of a link moves by correction × its error: one loop removes 2 × correction of a lone
+  // link's error, so above 0.5 it overshoots, and at 1 a pair swings between ±error for ever.
+  n.get("correction", p.correction, 0.0, 0.5);
   n.get("loops", p.loops, 0, 10000);
   n.get("max_view_shift", p.max_view_shift, 0, 1000);
   n.get("max_view_shift_distinct", p.max_view_shift_distinct, 0, 1000);
