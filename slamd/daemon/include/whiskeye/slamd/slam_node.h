@@ -37,7 +37,6 @@ struct NodeCounters {
   int64_t validation_errors = 0;
   int64_t cycles_without_camera = 0;
   int64_t cycles_without_contact = 0;
-  int64_t out_of_order = 0;
   int64_t input_gaps = 0;  // input messages missing by their sequence numbers (all three inputs)
 };
 
