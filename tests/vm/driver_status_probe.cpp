@@ -1,6 +1,9 @@
 // Prints the counters of the last DRIVER_STATUS a driver published within a time, one "name=value"
-// per line, for VM scenarios to check with grep (the guest has no LCM for Python).
-//   driver_status_probe --driver whiskerd --seconds 3
+// per line, for VM scenarios to check with grep (the guest has no LCM for Python). With --until-state
+// (and --until-message), the first status in that state (whose message contains the text) instead,
+// as soon as it comes: a state that lasts a second or two is caught whenever its status falls, where
+// a window as short as the status period could see none (vm.camerad once got no status at all).
+//   driver_status_probe --driver whiskerd --seconds 3 [--until-state N [--until-message TEXT]]
 #include "whiskeye/common/bus.h"
 
 #include <whiskeye/driver_status_t.hpp>
@@ -17,18 +20,25 @@ int main(int argc, char** argv) {
   double seconds = 3.0;
   app.add_option("--driver", driver, "driver name (whiskerd, camerad, based)")->required();
   app.add_option("--seconds", seconds, "how long to listen");
+  std::optional<int> until_state;
+  std::string until_message;
+  app.add_option("--until-state", until_state, "stop at the first status in this state");
+  app.add_option("--until-message", until_message, "... whose message contains this text")->needs("--until-state");
   CLI11_PARSE(app, argc, argv);
   whiskeye::LcmBus bus;
   whiskeye::DecodeErrors errors;
   std::optional<whiskeye::driver_status_t> last;
+  bool found = false;
   whiskeye::subscribe<whiskeye::driver_status_t>(
       bus, "DRIVER_STATUS",
       [&](const whiskeye::driver_status_t& m) {
-        if (m.driver == driver) last = m;
+        if (m.driver != driver || found) return;
+        last = m;
+        found = until_state && m.state == *until_state && m.message.find(until_message) != std::string::npos;
       },
       errors);
   const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
-  while (std::chrono::steady_clock::now() < end) bus.handle_timeout(50);
+  while (!found && std::chrono::steady_clock::now() < end) bus.handle_timeout(50);
   if (!last) {
     std::fprintf(stderr, "driver_status_probe: no DRIVER_STATUS from %s in %.1f s\n", driver.c_str(), seconds);
     return 1;

@@ -46,7 +46,7 @@ printf 'camera: {match_card: vivid}\n' > /tmp/faults.yaml
 "$CAMERAD" -c /tmp/faults.yaml > "$RESULTS_DIR/camerad_faults.log" 2>&1 &
 faults_pid=$!
 wait_for "$RESULTS_DIR/camerad_faults.log" streaming 60 || true
-probe() { "$PROBE" --driver camerad --seconds "${2:-3}" > "/tmp/faults_$1.txt"; cp "/tmp/faults_$1.txt" "$RESULTS_DIR/status_$1.txt"; }
+probe() { "$PROBE" --driver camerad --seconds "${2:-3}" "${@:3}" > "/tmp/faults_$1.txt"; cp "/tmp/faults_$1.txt" "$RESULTS_DIR/status_$1.txt"; }
 counter() { probe_value "/tmp/faults_$1.txt" "$2"; }
 has() { probe_has "/tmp/faults_$1.txt" "$2"; }  # has PROBE 'name=regex'
 ctl() { v4l2-ctl -d /dev/video0 -c "$1"; }
@@ -76,8 +76,8 @@ probe dropping
 check camerad_counts_frames_the_driver_dropped has dropping 'sequence_gaps=[1-9][0-9]*'
 # All of them: still open, but DEGRADED, saying no frame arrives (then reopened after frame_timeout).
 ctl percentage_of_dropped_buffers=100
-sleep 2
-probe silent 1
+sleep 1
+probe silent 4 --until-state 2 --until-message "no frame"  # whenever a status falls in it
 degraded() { has silent 'state=2' && has silent 'message=.*no frame.*'; }
 check camerad_is_degraded_while_open_but_silent degraded
 ctl percentage_of_dropped_buffers=0

@@ -66,7 +66,7 @@ check camerad_skips_the_buffer_v4l2loopback_reinitialised_before_its_stream \
   wait_for "$log" "skipping a buffer from before the stream started" 3
 say resume
 
-probe() { "$PROBE" --driver camerad --seconds "${2:-2}" > "/tmp/status_$1.txt"; cp "/tmp/status_$1.txt" "$RESULTS_DIR/status_$1.txt"; }
+probe() { "$PROBE" --driver camerad --seconds "${2:-2}" "${@:3}" > "/tmp/status_$1.txt"; cp "/tmp/status_$1.txt" "$RESULTS_DIR/status_$1.txt"; }
 counter() { probe_value "/tmp/status_$1.txt" "$2"; }
 has() { probe_has "/tmp/status_$1.txt" "$2"; }  # has PROBE 'name=regex'
 # Frames camerad skipped as damaged, less those it found overwritten while it read them:
@@ -111,7 +111,7 @@ check camerad_stays_ok_through_damaged_frames has garbage 'state=1'
 # The camera goes silent (the device stays open): DEGRADED, "no frame", then OK when frames return.
 say pause
 sleep 1.5
-probe silent 1
+probe silent 4 --until-state 2 --until-message "no frame"  # whenever a status falls in it
 silent() { has silent 'state=2' && has silent 'message=.*no frame.*'; }
 check camerad_is_degraded_while_the_camera_is_silent silent
 say resume
