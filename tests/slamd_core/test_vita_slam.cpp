@@ -611,6 +611,9 @@ TEST(SlamParams, LoadFromTheShippedConfigAndRejectUnknownKeys) {
   EXPECT_THROW(load(bad_mode.section("slam"), q), ParamError);
   const ParamNode out_of_range = ParamNode::from_string("slam:\n  pose_cells:\n    dim_xy: 2\n");
   EXPECT_THROW(load(out_of_range.section("slam"), q), ParamError);
+  // Relaxation overshoots above 0.5 (ExperienceMap.CorrectionOneHalfClosesALoneLinkInOneLoop).
+  const ParamNode overshoot = ParamNode::from_string("slam:\n  experience_map:\n    correction: 0.75\n");
+  EXPECT_THROW(load(overshoot.section("slam"), q), ParamError);
   EXPECT_EQ(parse_mode("tactile"), Mode::Tactile);
   EXPECT_THROW(parse_mode("Vita"), std::invalid_argument);
 }
