@@ -17,6 +17,13 @@ RESTART_SESSION_LAPS = 2  # ... each this many laps
 # < 10^4 s), so that the map's experiences and the session's events never share a time.
 RESTART_SESSION_UTIME = 2_000_000_000_000_000
 RESTART_SESSION_UTIME_STEP = 10_000_000_000  # us between sessions
+
+
+def world_seed(suite_seed, index):
+    """World `index` (1-based) of suite seed `suite_seed`: the seed vita-sim draws it from."""
+    return suite_seed * 1000 + index
+
+
 METRICS = (  # key, label, better
     ("arr", "ARR", "high"),
     ("arcr", "ARCR", "high"),

@@ -9,7 +9,7 @@ import subprocess
 import time
 
 from .common import (KIDNAPS_PER_WORLD, MODES, PROGRAMS, RESTART_SESSION_LAPS, RESTART_SESSION_UTIME,
-                     RESTART_SESSION_UTIME_STEP, RESTART_SESSIONS, file_digest, read_json, write_json)
+                     RESTART_SESSION_UTIME_STEP, RESTART_SESSIONS, file_digest, read_json, world_seed, write_json)
 
 
 class WorldFailed(Exception):
@@ -102,7 +102,7 @@ def world_state(a, index, key, label=None):
     """('done', record), ('failed', failure) or ('todo', None) for world `index` under config `label`
     in DIR. A record or failure counts only for this world (the seed) and, given a key, for the same
     options and programs."""
-    seed = a.suite_seed * 1000 + index
+    seed = world_seed(a.suite_seed, index)
     for state, name in (("done", "world.json"), ("failed", "failed.json")):
         doc = read_json(os.path.join(variant_dir(a, index, label), name))
         if doc and doc.get("world_seed") == seed and (key is None or doc.get("key") == key):
@@ -114,7 +114,7 @@ def record_failure(a, index, key, message, log, label=None, **extra):
     """A world's failure, kept in DIR so that the aggregation lists it and --retry-failed finds it."""
     d = variant_dir(a, index, label)
     os.makedirs(d, exist_ok=True)
-    failure = {"index": index, "world_seed": a.suite_seed * 1000 + index, "key": key, "failed": message, "log": log,
+    failure = {"index": index, "world_seed": world_seed(a.suite_seed, index), "key": key, "failed": message, "log": log,
                **({"config": label} if label is not None else {}), **extra}
     write_json(os.path.join(d, "failed.json"), failure)
     return failure
@@ -129,7 +129,7 @@ def run_world(a, bins, index, keys, scratch):
     todo = [(label, config) for label, config in a.variants if states[label][0] != "done"]
     if not todo:
         return [dict(states[label][1], resumed=True) for label, _ in a.variants]
-    seed = a.suite_seed * 1000 + index
+    seed = world_seed(a.suite_seed, index)
     d = world_dir(a, index)
     for label, _ in todo:
         os.makedirs(variant_dir(a, index, label), exist_ok=True)
@@ -180,7 +180,7 @@ def replay_and_evaluate(a, bins, index, key, label, config, world, generated, si
     """One config's part of a world: slamd --replay in the three modes, vita-eval, the record. The
     simulator log is removed after the last config's replays (peak disk: one simulator log per job).
     A step that fails is this config's failure (failed.json); the world's other configs still run."""
-    seed = a.suite_seed * 1000 + index
+    seed = world_seed(a.suite_seed, index)
     d = variant_dir(a, index, label)
     outs = [os.path.join(scratch, f"slam-{mode}.lcmlog") for mode in MODES]
     try:

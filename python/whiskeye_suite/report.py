@@ -7,7 +7,7 @@ import threading
 import time
 
 from .cli import executor_options, world_options
-from .common import METRICS, MODES, ROOT, SCRIPT, file_digest, fmt, write_json
+from .common import METRICS, MODES, ROOT, SCRIPT, file_digest, fmt, world_seed, write_json
 from .plots import write_plots
 from .stats import distribution, percentile
 from .targets import (FOOLED_ARCR, FOOLED_ENM_RATIO, check_localisation_targets, check_targets,
@@ -83,7 +83,7 @@ def aggregate(a, records, failed, wall_s):
     have = {w["index"] for w in worlds} | {f["index"] for f in failed}
     missing = [i for i in range(1, a.worlds + 1) if i not in have]
     if targets and (failed or missing):
-        seeds = lambda ids: [f"world {i} (seed {a.suite_seed * 1000 + i})" for i in ids]  # noqa: E731
+        seeds = lambda ids: [f"world {i} (seed {world_seed(a.suite_seed, i)})" for i in ids]  # noqa: E731
         targets.insert(0, {"target": f"every one of the {a.worlds} worlds run and evaluated",
                            "measured": f"{len(worlds)} of {a.worlds}: {len(failed)} failed, {len(missing)} without a "
                                        "result of this run",
