@@ -110,14 +110,14 @@ def check_targets(worlds, family, faults):
     # Never worse than its best sense. The medians over the same worlds: each over its own defined
     # values compared two different sets of worlds. Where vision has no ARR, ViTa's is not compared;
     # ViTa without one where vision has one is a miss (n/a is the worst).
-    both = [w for w in worlds if w["modes"]["visual"]["arr"] is not None]
-    vita_na = sum(1 for w in both if w["modes"]["vita"]["arr"] is None)
-    mv, ms = (percentile([w["modes"][m]["arr"] for w in both if w["modes"]["vita"]["arr"] is not None], 50)
-              if len(both) > vita_na else None for m in ("vita", "visual"))
+    seen = [w for w in worlds if w["modes"]["visual"]["arr"] is not None]
+    paired = [w for w in seen if w["modes"]["vita"]["arr"] is not None]
+    vita_na = len(seen) - len(paired)
+    mv, ms = (percentile([w["modes"][m]["arr"] for w in paired], 50) if paired else None for m in ("vita", "visual"))
     add("ViTa median ARR >= vision's median ARR (over the worlds where both have one)",
-        f"{fmt(mv, '.3f')} against {fmt(ms, '.3f')} over {len(both) - vita_na} worlds"
+        f"{fmt(mv, '.3f')} against {fmt(ms, '.3f')} over {len(paired)} worlds"
         + (f"; ViTa n/a on {vita_na}" if vita_na else ""),
-        not vita_na and (ms is None or (mv is not None and mv >= ms)))
+        not vita_na and (ms is None or mv >= ms))
     every("lem_vs_senses", f"ViTa LEM <= min(vision's, touch's) + {LEM_OVER_BEST_SENSE_M:.2f} m on every world "
           "(shown: ViTa's minus the best sense's)",
           lambda w: None if vita(w, "lem") is None or best_sense(w, "lem") is None else vita(w, "lem") - best_sense(w, "lem"),
