@@ -7,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -36,9 +37,15 @@ Subprocess::Subprocess(const std::vector<std::string>& argv, std::string output_
   for (auto& e : env_strings) env.push_back(e.data());
   env.push_back(nullptr);
 
+  const pid_t parent = ::getpid();
   pid_ = ::fork();
   if (pid_ < 0) throw std::runtime_error(std::string("fork failed: ") + std::strerror(errno));
   if (pid_ == 0) {
+    // Killed with the test: a test process that ctest kills on its timeout (or that aborts) runs no
+    // destructor, and a daemon left running would hold its ports and CPU through the rest of the
+    // suite. (The signal follows the forking thread: Subprocesses are made on the test's main thread.)
+    ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+    if (::getppid() != parent) std::_Exit(127);  // the test died before the line above
     const int fd = ::open(output_path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     if (fd >= 0) {
       ::dup2(fd, 1);

@@ -1,5 +1,6 @@
 // A child process for integration tests: fork/exec with stdout+stderr captured to a file, wait with a
-// timeout, signalled and reaped on destruction so a failing test never leaves processes behind.
+// timeout, signalled and reaped on destruction so a failing test never leaves processes behind, and
+// killed when the test process dies without running destructors (a ctest timeout, an abort).
 #pragma once
 
 #include <csignal>

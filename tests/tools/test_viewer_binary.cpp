@@ -378,6 +378,17 @@ TEST_F(ViewerBinary, ASlowClientDropsUpdatesCountedWithoutHoldingBackOthersAndCl
       tail = tail.substr(tail.size() > 11 ? tail.size() - 11 : 0);  // a marker split across reads
     }
   });
+  // Ends the reader however the test ends: an ASSERT returning with the thread joinable would abort
+  // the whole binary (std::terminate) and leave nothing but a core.
+  struct EndOnReturn {
+    std::atomic<bool>& stop;
+    std::thread& thread;
+    void operator()() {
+      stop = true;
+      if (thread.joinable()) thread.join();
+    }
+    ~EndOnReturn() { (*this)(); }
+  } end_good{stop, good};
 
   // Big updates, fast: a map of 3000 experiences (~100 kB of JSON) and a pose, every 20 ms, for 4 s.
   LcmBus bus;
@@ -428,8 +439,7 @@ TEST_F(ViewerBinary, ASlowClientDropsUpdatesCountedWithoutHoldingBackOthersAndCl
   EXPECT_THAT(fourth, HasSubstr("HTTP/1.1 503"));
   EXPECT_GE(get_json(port, "/status")["refused"].get<int>(), 1);
 
-  stop = true;
-  good.join();
+  end_good();
   EXPECT_EQ(viewer.stop(15, SIGTERM), 0) << viewer.output();
 }
 
