@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
+#include <vector>
+
 namespace whiskeye::slamd {
 namespace {
 
@@ -284,6 +287,84 @@ TEST(CycleSync, OdometryWithoutWhiskCyclesIsBounded) {
   ASSERT_EQ(ready.size(), 1u);
   ASSERT_EQ(ready[0].odometry.size(), 100u) << "the newest 100";
   EXPECT_EQ(ready[0].odometry.front().utime, kS + 20'000);
+}
+
+// A camera at `fps` with no odometry (the base down) from `from` to `until`, a whisk cycle ending every
+// second in between (each arriving at its end, as whiskerd sends it); the cycles handed out.
+std::vector<SyncedCycle> camera_without_odometry(CycleSynchroniser& s, double fps, int64_t from, int64_t until) {
+  std::vector<SyncedCycle> out;
+  const auto period = static_cast<int64_t>(1e6 / fps);
+  int64_t next_cycle = from + kS;
+  int n = 0;
+  for (int64_t t = from; t <= until; t += period) {
+    if (t >= next_cycle) {
+      s.add_whisk_cycle(cycle(++n, next_cycle));
+      next_cycle += kS;
+    }
+    s.add_camera(frame(t));
+    for (auto& c : s.take_ready()) out.push_back(std::move(c));
+  }
+  return out;
+}
+
+TEST(CycleSync, WithoutOdometryEveryCycleKeepsItsFrameAtThirtyFps) {
+  // A cycle missing its odometry waits max_wait_s (1 s) of data time; a 30 fps camera sends ~35
+  // frames meanwhile, and a buffer of the last 16 had dropped the one near the cycle's end.
+  CycleSynchroniser s(SyncParams{});
+  const auto cycles = camera_without_odometry(s, 30.0, 10 * kS, 40 * kS);
+  ASSERT_GE(cycles.size(), 25u);
+  for (const auto& c : cycles) {
+    ASSERT_TRUE(c.image) << "cycle " << c.whisk.cycle;
+    EXPECT_LE(std::llabs(c.image->utime - c.whisk.utime_end), 34'000) << "cycle " << c.whisk.cycle;
+  }
+  EXPECT_EQ(s.counters().cycles_without_camera, 0);
+  EXPECT_EQ(s.counters().camera_overflow, 0);
+}
+
+TEST(CycleSync, ABufferTooSmallForTheCameraRateCountsWhatItDrops) {
+  SyncParams p;
+  p.camera_buffer = 8;
+  CycleSynchroniser s(p);
+  const auto cycles = camera_without_odometry(s, 30.0, 10 * kS, 20 * kS);
+  ASSERT_GE(cycles.size(), 8u);
+  EXPECT_GT(s.counters().camera_overflow, 0);
+  EXPECT_GT(s.counters().cycles_without_camera, 0) << "8 frames at 30 fps: 0.27 s, the cycles waited 1 s";
+  EXPECT_LE(s.buffered_frames(), 8u);
+}
+
+TEST(CycleSync, FramesAreKeptForATimeNotACount) {
+  // 30 fps with odometry: the camera's last camera_buffer_s (3 s), whatever the rate, and no more.
+  CycleSynchroniser s(SyncParams{});
+  for (int64_t t = 20'000; t <= 30 * kS; t += 20'000) {
+    s.add_odometry(odo(t));
+    if (t % 100'000 == 0) {
+      for (int64_t f = t - 100'000 + 33'334; f <= t; f += 33'333) s.add_camera(frame(f));
+    }
+  }
+  EXPECT_GE(s.buffered_frames(), 89u);
+  EXPECT_LE(s.buffered_frames(), 91u);
+  EXPECT_EQ(s.counters().camera_overflow, 0);
+  // A whisk cycle whose message comes 2.5 s late (whiskerd stalled) still finds its frame.
+  s.add_whisk_cycle(cycle(1, 27 * kS + 500'000));
+  const auto ready = s.take_ready();
+  ASSERT_EQ(ready.size(), 1u);
+  ASSERT_TRUE(ready[0].image);
+  EXPECT_LE(std::llabs(ready[0].image->utime - (27 * kS + 500'000)), 17'000);
+}
+
+TEST(CycleSync, AWaitingCycleKeepsItsFramesWhenDataTimeLeapsPastIt) {
+  // The cycle at 5 s waits for odometry; the camera pauses, then its next frame is 4 s later: that
+  // frame releases the cycle, which still gets the frame at its end (4 s old, beyond camera_buffer_s).
+  CycleSynchroniser s(SyncParams{});
+  feed(s, 20'000, 4 * kS);
+  for (int64_t t = 4 * kS + 200'000; t <= 5 * kS + 200'000; t += 200'000) s.add_camera(frame(t));
+  s.add_whisk_cycle(cycle(1, 5 * kS));
+  EXPECT_TRUE(s.take_ready().empty()) << "odometry stopped at 4 s";
+  s.add_camera(frame(9 * kS));
+  const auto ready = s.take_ready();
+  ASSERT_EQ(ready.size(), 1u);
+  ASSERT_TRUE(ready[0].image);
+  EXPECT_EQ(ready[0].image->utime, 5 * kS);
 }
 
 TEST(CycleSync, FlushHandsOutEverythingPending) {

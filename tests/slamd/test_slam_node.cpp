@@ -392,6 +392,40 @@ TEST_F(SlamNodeTest, AFullOdometryBufferIsLoggedOncePerStretchWithoutWhiskCycles
   EXPECT_NE(lines[1].find("no whisk cycle for 100 odometry samples"), std::string::npos) << lines[1];
 }
 
+TEST_F(SlamNodeTest, ACameraTooFastForItsBufferWithoutOdometryIsLoggedAndTheCyclesWithoutVisionCounted) {
+  // The base is down (no odometry, each cycle waits max_wait_s) and the camera runs at 30 fps for
+  // 6 s, a whisk cycle ending every second; a node of its own with `camera_buffer` frames.
+  const image_t im = stripes(kT0, 8);
+  auto run = [&](int camera_buffer, std::vector<std::string>& lines) {
+    MemoryBus in;
+    NodeParams params;
+    params.sync.camera_buffer = camera_buffer;
+    SlamNode node(in, out_, std::make_unique<slam::VitaSlam>(slam::SlamParams{}, default_robot_geometry()),
+                  params, errors_);
+    int64_t now_us = 0;  // the log clock runs with the data
+    node.set_log_clock([&] { return now_us; });
+    node.set_logger([&](const std::string& l) { lines.push_back(l); });
+    for (int k = 1; k <= 30 * 6; ++k, now_us += 33'333) {
+      image_t f = im;
+      f.utime = kT0 + k * 33'333;
+      publish(in, "CAMERA", f);
+      if (k % 30 == 0) publish(in, "WHISK_CYCLE", free_cycle(k / 30, f.utime));
+    }
+    EXPECT_GE(node.counters().cycles, 4);
+    return node.status(kT0 + 6 * kS);
+  };
+  // 8 frames: the frame at a cycle's end is dropped before the cycle runs. Said, rate-limited.
+  std::vector<std::string> lines;
+  EXPECT_GE(run(8, lines).cycles_without_camera, 4);
+  ASSERT_FALSE(lines.empty());
+  EXPECT_NE(lines[0].find("camera_buffer (8 frames) is too small"), std::string::npos) << lines[0];
+  EXPECT_LE(lines.size(), 3u) << "rate-limited: ~150 frames were dropped";
+  // The default buffer keeps them: every cycle sees, nothing to say.
+  std::vector<std::string> none;
+  EXPECT_EQ(run(NodeParams{}.sync.camera_buffer, none).cycles_without_camera, 0);
+  EXPECT_TRUE(none.empty()) << none.front();
+}
+
 TEST_F(SlamNodeTest, AWhiskCycleWithoutAValidSampleIsMappedWithoutTouchAndIsNotAnError) {
   MemoryBus in;  // a tactile-mode node of its own: the fixture's node stays subscribed to in_
   slam::SlamParams p;

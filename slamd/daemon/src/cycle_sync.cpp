@@ -16,6 +16,8 @@ namespace {
 
 // a + b for b >= 0, without overflowing past INT64_MAX.
 int64_t plus(int64_t a, int64_t b) { return a > INT64_MAX - b ? INT64_MAX : a + b; }
+// a - b for b >= 0, without overflowing past INT64_MIN.
+int64_t minus(int64_t a, int64_t b) { return a < INT64_MIN + b ? INT64_MIN : a - b; }
 
 std::string seconds(int64_t us) {
   char text[32];
@@ -137,8 +139,24 @@ std::string CycleSynchroniser::add_camera(CameraFrame frame) {
   newest_camera_ = frame.utime;
   advance_data_time(frame.utime);
   frames_.push_back(std::move(frame));
-  while (static_cast<int>(frames_.size()) > params_.camera_buffer) frames_.pop_front();
+  evict_frames();
   return {};
+}
+
+void CycleSynchroniser::evict_frames() {
+  // The camera's own time line, not data time: another input's corrupt time (awaiting its undoing)
+  // must not empty the buffer. A waiting cycle keeps the frames from camera_tolerance before its end
+  // even when the camera's next frame leaps past it (a pause), and the newest frame always stays
+  // (assemble() keeps one for a cycle with no newer).
+  int64_t oldest_kept = minus(newest_camera_, seconds_to_utime(params_.camera_buffer_s));
+  if (!pending_.empty()) {
+    oldest_kept = std::min(oldest_kept, minus(pending_.front().utime_end, seconds_to_utime(params_.camera_tolerance_s)));
+  }
+  while (frames_.size() > 1 && frames_.front().utime < oldest_kept) frames_.pop_front();
+  while (static_cast<int>(frames_.size()) > params_.camera_buffer) {
+    frames_.pop_front();
+    ++counters_.camera_overflow;
+  }
 }
 
 std::string CycleSynchroniser::add_odometry(const odometry_t& odometry) {

@@ -6,6 +6,7 @@ namespace whiskeye::slamd {
 void load(const ParamNode& node, NodeParams& p) {
   node.get("camera_tolerance_s", p.sync.camera_tolerance_s, 0.0, 2.0);
   node.get("max_wait_s", p.sync.max_wait_s, 0.05, 30.0);
+  node.get("camera_buffer_s", p.sync.camera_buffer_s, 0.0, 60.0);
   node.get("camera_buffer", p.sync.camera_buffer, 1, 1000);
   node.get("max_jump_s", p.sync.max_jump_s, 1.0, 86400.0);
   node.get("odometry_buffer", p.sync.odometry_buffer, 100, 10000000);

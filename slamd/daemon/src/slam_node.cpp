@@ -104,7 +104,13 @@ void SlamNode::on_camera(std::span<const uint8_t> data, const MessageInfo& info)
     own_pixels(frame);
   }
   const int64_t seq = frame.seq;
+  const int64_t overflow_before = sync_.counters().camera_overflow;
   if (const std::string why = sync_.add_camera(std::move(frame)); !why.empty()) return reject(kCamera, seq, why);
+  if (sync_.counters().camera_overflow != overflow_before) {
+    warn("camera_buffer", "camera_buffer (" + std::to_string(params_.sync.camera_buffer) +
+                              " frames) is too small for camera_buffer_s at the camera's rate: dropped frames a "
+                              "whisk cycle may still use (it then goes without vision); raise camera_buffer");
+  }
   accepted(kCamera);
   sequence(kCamera, seq);
   process(sync_.take_ready());

@@ -45,7 +45,11 @@ namespace whiskeye::slamd {
 struct SyncParams {
   double camera_tolerance_s = 0.15;  // a frame farther than this from the cycle's end is not used
   double max_wait_s = 1.0;           // data time to wait for a late or missing camera / odometry
-  int camera_buffer = 16;            // frames kept
+  // Frames kept: the camera's last camera_buffer_s (a whisk cycle arriving up to that late, less the
+  // tolerance, finds its frame) and those near the end of a cycle still waiting (for odometry: up to
+  // max_wait_s); at most camera_buffer of them (memory), the oldest dropped first and counted.
+  double camera_buffer_s = 3.0;
+  int camera_buffer = 128;
   double max_jump_s = 10.0;          // a sample time this far past data time waits for confirmation
   int odometry_buffer = 180000;      // samples kept while no whisk cycle comes (1 h at 50 Hz); oldest dropped
   bool operator==(const SyncParams&) const = default;
@@ -64,6 +68,7 @@ struct SyncCounters {
   int64_t jumps_followed = 0;          // jumps (forward or back) confirmed and followed
   int64_t outliers_dropped = 0;        // an input's corrupt newest time undone (and what it buffered at it)
   int64_t odometry_overflow = 0;       // oldest samples dropped from a full buffer (no whisk cycles)
+  int64_t camera_overflow = 0;         // frames within camera_buffer_s (or a waiting cycle's) dropped: buffer full
   bool operator==(const SyncCounters&) const = default;
 };
 
@@ -89,6 +94,7 @@ class CycleSynchroniser {
   std::vector<SyncedCycle> flush();
 
   const SyncCounters& counters() const { return counters_; }
+  std::size_t buffered_frames() const { return frames_.size(); }
   int64_t data_time() const { return data_time_; }
 
  private:
@@ -120,6 +126,9 @@ class CycleSynchroniser {
   int64_t others_newest(int input) const;
   // End of the newest whisk cycle taken: the last pending one, else the last handed out.
   int64_t last_cycle_end() const { return pending_.empty() ? consumed_until_ : pending_.back().utime_end; }
+  // Drops the frames older than camera_buffer_s that no waiting cycle can use, then (counted) the
+  // oldest beyond camera_buffer.
+  void evict_frames();
   // After an input's buffered samples were dropped: data time from what every input still holds.
   void recompute_data_time();
 
