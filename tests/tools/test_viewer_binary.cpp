@@ -27,6 +27,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <regex>
@@ -64,6 +65,7 @@ int start_viewer(Subprocess& viewer) {
 
 json get_json(int port, const std::string& path) {
   httplib::Client client("127.0.0.1", port);
+  client.set_connection_timeout(5, 0);  // httplib's default is 300 s: the whole test's time-out
   client.set_read_timeout(5, 0);
   const auto res = client.Get(path.c_str());
   if (!res || res->status != 200) return nullptr;
@@ -78,11 +80,16 @@ class RawClient {
     if (rcvbuf > 0) ::setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &rcvbuf, sizeof rcvbuf);
     timeval tv{5, 0};
     ::setsockopt(fd_, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+    // connect() bounded too (SO_SNDTIMEO, on Linux; a full accept queue retries the SYN for ~2 min),
+    // writes not: the flood tests write until the viewer closes.
+    ::setsockopt(fd_, SOL_SOCKET, SO_SNDTIMEO, &tv, sizeof tv);
     sockaddr_in a{};
     a.sin_family = AF_INET;
     a.sin_port = htons(static_cast<uint16_t>(port));
     a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
     connected_ = ::connect(fd_, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0;
+    const timeval forever{0, 0};
+    ::setsockopt(fd_, SOL_SOCKET, SO_SNDTIMEO, &forever, sizeof forever);
   }
   ~RawClient() { ::close(fd_); }
   bool connected() const { return connected_; }
@@ -96,11 +103,13 @@ class RawClient {
   bool try_send(const std::string& bytes) {
     return ::send(fd_, bytes.data(), bytes.size(), MSG_NOSIGNAL) == static_cast<ssize_t>(bytes.size());
   }
-  // Reads until the peer closes, `until` appears, or the 5 s timeout.
+  // Reads until the peer closes, `until` appears, 5 s pass without a byte, or 30 s in all (a stream
+  // that goes on without `until`).
   std::string read(const std::string& until = "") {
     std::string out;
     char buf[65536];
-    for (;;) {
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+    while (std::chrono::steady_clock::now() < deadline) {
       const ssize_t n = ::read(fd_, buf, sizeof buf);
       if (n <= 0) break;
       out.append(buf, static_cast<std::size_t>(n));
@@ -139,6 +148,10 @@ std::string chromium(const std::vector<std::string>& extra, const std::string& u
 class Browser {
  public:
   Browser() : driver_({"chromedriver", "--port=" + std::to_string(kPort)}, "", {"HOME=" + testing::scratch_dir("chromedriver_home")}) {
+    // A new session starts Chromium: seconds on a loaded runner (beside a TCG guest), where
+    // httplib's default 5 s read time-out made the session null once in two runs.
+    client_.set_connection_timeout(5, 0);
+    client_.set_read_timeout(60, 0);
     EXPECT_TRUE(wait_until([&] { return client_.Get("/status") != nullptr; }, 20.0)) << driver_.output();
     const json caps = {{"capabilities",
                         {{"alwaysMatch",
