@@ -1,10 +1,12 @@
 // Template matching: self-match, shifts, per-template minima, terms per mode, σ estimation, size.
 #include "whiskeye/slam/template_store.h"
+#include "whiskeye/slam/vita_slam.h"
 
 #include "synthetic.h"
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 
 namespace whiskeye::slam {
@@ -311,6 +313,54 @@ TEST(TemplateMatch, AWhiskerWithoutDataCountsNeitherAsAgreementNorAsDisagreement
   EXPECT_EQ(s.match({nullptr, &q}, {false, true}, p).sda, 0.0);
 }
 
+TEST(TemplateMatch, AWhiskerWithoutDataWhenTheTemplateWasMadeCountsNeither) {
+  // A template learnt while boards 0-2 (whiskers 0-11) were offline holds no deflection there; the same
+  // place felt later with every whisker differs from it only where the template had no data.
+  TemplateStore s(64, 40);
+  TactileTemplate stored{};
+  stored.num_contacts = 1;
+  stored.sda[12] = 1.0f;
+  stored.sensed = kAllWhiskersSensed & ~0xfffu;
+  s.add({nullptr, &stored}, 0, 0, 0);
+  EXPECT_EQ(s.sensed(0), kAllWhiskersSensed & ~0xfffu);
+  TactileTemplate q = stored;
+  q.sensed = kAllWhiskersSensed;
+  for (int w = 0; w < 12; ++w) q.sda[static_cast<size_t>(w)] = 3.0f;  // the whiskers back online
+  q.sda[12] = 1.5f;
+  MatchParams p;
+  p.sigma_sda = 1.0;
+  // Only the 12 whiskers both sensed count, scaled to the whole array: 0.5 x 24/12.
+  EXPECT_NEAR(s.match({nullptr, &q}, {false, true}, p).sda, 1.0, 1e-5);
+  // The same in the localiser's recogniser, and between stored templates (the sigma estimate).
+  EXPECT_EQ(TemplateStore::Recogniser(s, {nullptr, &q}, {false, true}, p, 1.01)(0), Recognition::Recognised);
+  EXPECT_EQ(TemplateStore::Recogniser(s, {nullptr, &q}, {false, true}, p, 0.99)(0), Recognition::None);
+  s.add({nullptr, &q}, 0, 0, 0);
+  EXPECT_NEAR(s.estimate_sigmas(p).sigma_sda, 0.0, 1e-12) << "one pair: no spread";
+  TemplateStore three = s;
+  three.add({nullptr, &q}, 0, 0, 0);  // distances 1, 1, 0 (the two healthy ones agree)
+  EXPECT_NEAR(three.estimate_sigmas(p).sigma_sda, std::sqrt(1.0 / 3.0), 1e-6);
+}
+
+TEST(TemplateMatch, TheSensedWhiskersAreCheckpointedAndOlderFormatsReadAsAllSensed) {
+  TemplateStore s(64, 40);
+  TactileTemplate t = random_tactile(80);
+  t.sensed = 0x00ff00u;
+  const VisualTemplate v = random_template(81);
+  s.add({&v, &t}, 1, 2, 3);
+  std::vector<uint8_t> blob;
+  s.serialise(blob);
+  size_t pos = 0;
+  const TemplateStore r = TemplateStore::deserialise(blob, pos, 64, 40, VitaSlam::kCheckpointFormat);
+  EXPECT_EQ(pos, blob.size());
+  EXPECT_EQ(r.sensed(0), 0x00ff00u);
+  // Format 4 ended before the sensed whiskers: the same bytes without them.
+  blob.resize(blob.size() - sizeof(uint64_t) - sizeof(uint32_t));
+  pos = 0;
+  const TemplateStore old = TemplateStore::deserialise(blob, pos, 64, 40, 4);
+  EXPECT_EQ(pos, blob.size());
+  EXPECT_EQ(old.sensed(0), kAllWhiskersSensed);
+}
+
 TEST(TemplateMatch, ErrorTermsAreDividedByTheirSigmas) {
   TemplateStore s(64, 40);
   const VisualTemplate v = random_template(40), v2 = random_template(41);
@@ -354,8 +404,8 @@ TEST(TemplateMatch, StoresATemplateInAtMostThreeKilobytes) {
   for (int i = 0; i < 100; ++i) s.add({&v, &t}, 1, 2, 3);
   s.serialise(full);
   EXPECT_LE(static_cast<double>(full.size() - empty.size()) / 100.0, 3072.0);
-  // Exactly what template_store.h says: 2,906 bytes of parts plus 42 of bookkeeping.
-  EXPECT_EQ(full.size() - empty.size(), 100u * (64 * 40 + 125 * 2 + 24 * 4 + 42));
+  // Exactly what template_store.h says: 2,906 bytes of parts plus 46 of bookkeeping.
+  EXPECT_EQ(full.size() - empty.size(), 100u * (64 * 40 + 125 * 2 + 24 * 4 + 46));
   EXPECT_EQ(s.serialised_bytes(), full.size());
 }
 
@@ -369,21 +419,21 @@ TEST(TemplateMatch, SerialisationRoundTripsExactly) {
   std::vector<uint8_t> blob;
   s.serialise(blob);
   size_t pos = 0;
-  const TemplateStore r = TemplateStore::deserialise(blob, pos, 64, 40);
+  const TemplateStore r = TemplateStore::deserialise(blob, pos, 64, 40, VitaSlam::kCheckpointFormat);
   EXPECT_EQ(pos, blob.size());
   EXPECT_TRUE(r == s);
   // Templates of another size than the parameters' are refused before anything is allocated for
   // them (4096 x 4096 made the first chunk of rows 4 GB).
   pos = 0;
   try {
-    TemplateStore::deserialise(blob, pos, 4096, 4096);
+    TemplateStore::deserialise(blob, pos, 4096, 4096, VitaSlam::kCheckpointFormat);
     FAIL();
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("templates are 64x40, the parameters say 4096x4096"), std::string::npos);
   }
   blob.resize(blob.size() - 3);
   pos = 0;
-  EXPECT_THROW(TemplateStore::deserialise(blob, pos, 64, 40), std::runtime_error);
+  EXPECT_THROW(TemplateStore::deserialise(blob, pos, 64, 40, VitaSlam::kCheckpointFormat), std::runtime_error);
 }
 
 void expect_same(const BestMatch& a, const BestMatch& b, const std::string& what) {
@@ -427,7 +477,7 @@ TEST(TemplateMatch, LowerBoundPrefilterNeverChangesTheResult) {
   std::vector<uint8_t> blob;
   s.serialise(blob);
   size_t pos = 0;
-  const TemplateStore restored = TemplateStore::deserialise(blob, pos, 64, 40);
+  const TemplateStore restored = TemplateStore::deserialise(blob, pos, 64, 40, VitaSlam::kCheckpointFormat);
   std::vector<Query> queries;
   for (size_t i = 0; i < views.size(); i += 3) queries.push_back({&views[i], &touches[(i + 1) % touches.size()]});
   std::vector<VisualTemplate> fresh;

@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
+
 #include <map>
 #include <memory>
 #include <optional>
@@ -482,13 +484,16 @@ TEST(VitaSlam, WhileLocalisingWithAPriorANewPlaceIsMappedTentatively) {
   EXPECT_EQ(saved.templates().size(), templates);
 }
 
+// Cycle c of a tour of 7 places, turning as it goes: the checkpoint tests' run.
+CycleResult tour_cycle(VitaSlam& s, World& w, int c) {
+  return s.process_cycle(input(w.place((c * 5) % 7), c, odometry(c, 0.1, 0.05, 0.3)));
+}
+
 TEST(VitaSlam, ARestoredCheckpointProducesByteIdenticalResults) {
   World w;
   const SlamParams p;
   VitaSlam a(p, w.geometry);
-  auto run = [&](VitaSlam& s, int c) {
-    return s.process_cycle(input(w.place((c * 5) % 7), c, odometry(c, 0.1, 0.05, 0.3)));
-  };
+  const auto run = [&](VitaSlam& s, int c) { return tour_cycle(s, w, c); };
   for (int c = 1; c <= 10; ++c) run(a, c);
   const std::vector<uint8_t> blob = a.serialise();
   VitaSlam b = VitaSlam::deserialise(blob, p, w.geometry);
@@ -505,6 +510,35 @@ TEST(VitaSlam, ARestoredCheckpointProducesByteIdenticalResults) {
   }
   EXPECT_EQ(a.serialise(), b.serialise());
   EXPECT_EQ(a.dead_reckon({0.1, 0, 0}), b.dead_reckon({0.1, 0, 0}));
+}
+
+// The checkpoint `blob` (format 5) as format 4 wrote it: without the templates' sensed whiskers.
+std::vector<uint8_t> as_format_4(const std::vector<uint8_t>& blob, const VitaSlam& written) {
+  constexpr size_t kHeader = 8 + 4 + 1 + 8 + 1 + 5 * 8;  // magic .. stats
+  const auto n = static_cast<size_t>(written.templates().size());
+  const size_t sensed_at = kHeader + written.templates().serialised_bytes() - (sizeof(uint64_t) + 4 * n);
+  std::vector<uint8_t> out(blob.begin(), blob.begin() + static_cast<std::ptrdiff_t>(sensed_at));
+  out.insert(out.end(), blob.begin() + static_cast<std::ptrdiff_t>(sensed_at + sizeof(uint64_t) + 4 * n), blob.end() - 4);
+  const uint32_t version = 4;
+  std::memcpy(out.data() + 8, &version, 4);
+  uint32_t h = 2166136261u;  // FNV-1a, as the format says
+  for (uint8_t b : out) h = (h ^ b) * 16777619u;
+  out.insert(out.end(), reinterpret_cast<const uint8_t*>(&h), reinterpret_cast<const uint8_t*>(&h) + 4);
+  return out;
+}
+
+TEST(VitaSlam, AMapSavedInTheFormatBeforeResumesWithEveryTemplateFullySensed) {
+  // A robot upgraded with its map: the checkpoint of the release before (format 4) is read, its
+  // templates as made with every whisker, and mapping goes on as from the same state in format 5.
+  World w;
+  VitaSlam a(SlamParams{}, w.geometry);
+  for (int c = 1; c <= 10; ++c) tour_cycle(a, w, c);
+  const std::vector<uint8_t> blob = a.serialise();
+  const std::vector<uint8_t> old = as_format_4(blob, a);
+  ASSERT_EQ(old.size(), blob.size() - sizeof(uint64_t) - 4 * static_cast<size_t>(a.templates().size()));
+  // The synthetic places sense every whisker: the same state, which decides as the original
+  // (VitaSlam.ARestoredCheckpointProducesByteIdenticalResults).
+  EXPECT_EQ(VitaSlam::deserialise(old, SlamParams{}, w.geometry).serialise(), blob);
 }
 
 // Resume is state-complete: an instance restored from its own checkpoint after every cycle decides

@@ -210,15 +210,17 @@ float l1_f32(const float* __restrict a, const float* __restrict b, size_t n) {
 // The rules a stored template can match by (match()).
 enum class Rule { kSum, kVision, kEvidence };
 
-// The SDA distance of a query over the whiskers it sensed, scaled to the whole array: a whisker
-// without data (dead, its board offline) counts neither as agreement nor as disagreement.
-double sda_distance(const TactileTemplate& q, const float* stored) {
-  if (q.sensed == kAllWhiskersSensed) return l1_f32(q.sda.data(), stored, kSdaSize);
+// The SDA distance over the whiskers both templates sensed, scaled to the whole array: a whisker
+// without data in either (dead, its board offline then or now) counts neither as agreement nor as
+// disagreement.
+double sda_distance(const float* a, uint32_t a_sensed, const float* b, uint32_t b_sensed) {
+  const uint32_t both = a_sensed & b_sensed;
+  if (both == kAllWhiskersSensed) return l1_f32(a, b, kSdaSize);
   float s = 0.0f;
   int n = 0;
   for (size_t w = 0; w < static_cast<size_t>(kSdaSize); ++w) {
-    if ((q.sensed >> w & 1u) == 0) continue;
-    s += std::abs(q.sda[w] - stored[w]);
+    if ((both >> w & 1u) == 0) continue;
+    s += std::abs(a[w] - b[w]);
     ++n;
   }
   return n == 0 ? 0.0 : static_cast<double>(s) * kSdaSize / n;
@@ -291,8 +293,10 @@ int TemplateStore::add(const Query& q, double pc_x, double pc_y, double pc_theta
     std::copy(q.tactile->pfh.begin(), q.tactile->pfh.end(), pfh);
     std::copy(q.tactile->sda.begin(), q.tactile->sda.end(), sda);
     num_contacts_.push_back(q.tactile->num_contacts);
+    sensed_.push_back(q.tactile->sensed);
   } else {
     num_contacts_.push_back(0);
+    sensed_.push_back(kAllWhiskersSensed);
   }
   has_tactile_.push_back(q.tactile != nullptr ? 1 : 0);
   pc_.push_back(pc_x);
@@ -375,7 +379,7 @@ BestMatch TemplateStore::match(const Query& q, const Terms& terms, const MatchPa
       const bool both_shapes = query_shape && num_contacts_[iu] >= kMinPfhPoints;
       if (terms.tactile) {
         ep = l1_u16(q.tactile->pfh.data(), pfh_.row(iu), kPfhBins) * inv_pfh;
-        es = sda_distance(*q.tactile, sda_.row(iu)) * inv_sda;
+        es = sda_distance(q.tactile->sda.data(), q.tactile->sensed, sda_.row(iu), sensed_[iu]) * inv_sda;
       }
       const auto error = [&](size_t j, double visual) {
         return rule_error(out.rules[j], visual, ep, es, both_shapes, p);
@@ -461,7 +465,8 @@ Recognition TemplateStore::Recogniser::operator()(int id) const {
   bool both_shapes = false;
   if (terms_.tactile) {
     ep = l1_u16(q_.tactile->pfh.data(), store_.pfh_.row(iu), kPfhBins) * (1.0 / (65535.0 * p_.sigma_pfh));
-    es = sda_distance(*q_.tactile, store_.sda_.row(iu)) * (1.0 / p_.sigma_sda);
+    es = sda_distance(q_.tactile->sda.data(), q_.tactile->sensed, store_.sda_.row(iu), store_.sensed_[iu]) *
+         (1.0 / p_.sigma_sda);
     both_shapes = q_.tactile->has_shape() && store_.num_contacts_[iu] >= kMinPfhPoints;
   }
   // Recognised if any of match()'s rules for this query takes it within τ.
@@ -503,7 +508,7 @@ SigmaEstimate TemplateStore::estimate_sigmas(const MatchParams& p, int max_pairs
       }
       if (has_tactile_[iu] != 0 && has_tactile_[ju] != 0) {
         ap.add(l1_u16(pfh_.row(iu), pfh_.row(ju), kPfhBins) / 65535.0);
-        as.add(l1_f32(sda_.row(iu), sda_.row(ju), kSdaSize));
+        as.add(sda_distance(sda_.row(iu), sensed_[iu], sda_.row(ju), sensed_[ju]));
       }
       ++out.pairs;
     }
@@ -520,7 +525,7 @@ size_t TemplateStore::serialised_bytes() const {
     return sizeof(uint64_t) + r.elements() * sizeof(typename std::decay_t<decltype(r)>::value_type);
   };
   return 2 * sizeof(int32_t) + row_bytes(visual_) + bytes(visual_mean_) + bytes(has_visual_) + row_bytes(pfh_) + row_bytes(sda_) +
-         bytes(has_tactile_) + bytes(num_contacts_) + bytes(pc_) + bytes(decay_);
+         bytes(has_tactile_) + bytes(num_contacts_) + bytes(pc_) + bytes(decay_) + bytes(sensed_);
 }
 
 void TemplateStore::serialise(std::vector<uint8_t>& out) const {
@@ -535,9 +540,11 @@ void TemplateStore::serialise(std::vector<uint8_t>& out) const {
   bin::put_vec(out, num_contacts_);
   bin::put_vec(out, pc_);
   bin::put_vec(out, decay_);
+  bin::put_vec(out, sensed_);  // format 5
 }
 
-TemplateStore TemplateStore::deserialise(const std::vector<uint8_t>& in, size_t& pos, int width, int height) {
+TemplateStore TemplateStore::deserialise(const std::vector<uint8_t>& in, size_t& pos, int width, int height,
+                                         uint32_t format_version) {
   TemplateStore s;
   s.width_ = bin::get<int32_t>(in, pos);
   s.height_ = bin::get<int32_t>(in, pos);
@@ -559,8 +566,14 @@ TemplateStore TemplateStore::deserialise(const std::vector<uint8_t>& in, size_t&
   s.pc_ = bin::get_vec<double>(in, pos);
   s.decay_ = bin::get_vec<double>(in, pos);
   const size_t n = s.has_visual_.size();
+  if (format_version >= 5) {
+    s.sensed_ = bin::get_vec<uint32_t>(in, pos);
+  } else {
+    s.sensed_.assign(n, kAllWhiskersSensed);
+  }
   if (s.visual_.rows() != n || s.visual_mean_.size() != n || s.pfh_.rows() != n || s.sda_.rows() != n ||
-      s.has_tactile_.size() != n || s.num_contacts_.size() != n || s.pc_.size() != 3 * n || s.decay_.size() != n) {
+      s.has_tactile_.size() != n || s.num_contacts_.size() != n || s.pc_.size() != 3 * n || s.decay_.size() != n ||
+      s.sensed_.size() != n) {
     throw std::runtime_error("checkpoint: template arrays disagree in length");
   }
   if (!std::all_of(s.pc_.begin(), s.pc_.end(), [](double v) { return std::isfinite(v); }) ||

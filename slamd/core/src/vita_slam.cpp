@@ -16,8 +16,6 @@ namespace whiskeye::slam {
 namespace {
 
 constexpr char kMagic[8] = {'V', 'I', 'T', 'A', 'S', 'L', 'A', 'M'};
-// 2: experiences carry their view shift; 3: the map its travelled distance; 4: the localiser's state
-constexpr uint32_t kVersion = 4;
 constexpr uint32_t kOldestReadable = 1;
 
 uint32_t fnv1a(const uint8_t* data, size_t n) {
@@ -290,7 +288,7 @@ std::vector<uint8_t> VitaSlam::serialise_unsealed() const {
   out.reserve(4096 + store_.serialised_bytes() + 4 * sizeof(float) * cells_.activity().size() +
               128 * static_cast<size_t>(map_.size()) + 64 * map_.links().size() + sizeof(uint32_t));
   out.insert(out.end(), kMagic, kMagic + 8);
-  bin::put<uint32_t>(out, kVersion);
+  bin::put<uint32_t>(out, kCheckpointFormat);
   bin::put<uint8_t>(out, static_cast<uint8_t>(params_.mode));
   bin::put<int64_t>(out, last_odometry_utime_);
   bin::put<uint8_t>(out, have_odometry_time_ ? 1 : 0);
@@ -317,9 +315,9 @@ VitaSlam VitaSlam::deserialise(std::span<const uint8_t> data, const SlamParams& 
   if (bin::get<uint32_t>(in, tail) != fnv1a(in.data(), end)) throw std::runtime_error("checkpoint: checksum mismatch");
   size_t pos = 8;
   const auto version = bin::get<uint32_t>(in, pos);
-  if (version < kOldestReadable || version > kVersion) {
+  if (version < kOldestReadable || version > kCheckpointFormat) {
     throw std::runtime_error("checkpoint: version " + std::to_string(version) + " unsupported (this build reads " +
-                             std::to_string(kOldestReadable) + " to " + std::to_string(kVersion) + ")");
+                             std::to_string(kOldestReadable) + " to " + std::to_string(kCheckpointFormat) + ")");
   }
   const auto mode = bin::get<uint8_t>(in, pos);
   if (mode != static_cast<uint8_t>(params.mode)) {
@@ -333,7 +331,7 @@ VitaSlam VitaSlam::deserialise(std::span<const uint8_t> data, const SlamParams& 
   s.stats_.empty_whisk_cycles = bin::get<int64_t>(in, pos);
   s.stats_.odometry_rejected = bin::get<int64_t>(in, pos);
   s.stats_.odometry_gaps = bin::get<int64_t>(in, pos);
-  s.store_ = TemplateStore::deserialise(in, pos, params.visual.template_width, params.visual.template_height);
+  s.store_ = TemplateStore::deserialise(in, pos, params.visual.template_width, params.visual.template_height, version);
   s.cells_.deserialise(in, pos);
   s.map_.deserialise(in, pos, version, s.store_.size());
   if (version >= 4) s.localiser_.deserialise(in, pos, s.map_.size());

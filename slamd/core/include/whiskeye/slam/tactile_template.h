@@ -63,8 +63,9 @@ struct TactileTemplate {
   std::array<uint16_t, kPfhBins> pfh{};  // fraction of point pairs per bin, quantised ·65535
   std::array<float, kSdaSize> sda{};     // deflection per second
   int num_contacts = 0;                  // whiskers in contact this cycle
-  // Bit w: whisker w had a valid, finite sample this cycle. Matching compares the SDA over these only
-  // (a dead whisker, or one whose board is offline, is neither agreement nor disagreement). Not stored.
+  // Bit w: whisker w had a valid, finite sample this cycle. Matching compares the SDA over the
+  // whiskers both the query and the stored template sensed (a dead whisker, or one whose board is
+  // offline, then or now, is neither agreement nor disagreement); stored with the template.
   uint32_t sensed = kAllWhiskersSensed;
   bool has_contact() const { return num_contacts > 0; }
   // Enough contacts for a PFH: touch felt a shape, not only a whisker or two.

@@ -9,10 +9,10 @@
 //
 // Each template's parts are contiguous (one byte per visual pixel, 16 bits per PFH bin, one float per
 // SDA entry), the templates in chunks of 256 that never move:
-// 64×40 + 125·2 + 24·4 = 2,906 bytes per template, plus 42 bytes of bookkeeping (visual mean 4, the
-// two has-part flags 2, contact count 4, pose-cell x, y, θ 24, decay 8): 2,948 bytes, also what a
-// checkpoint holds per template (TemplateMatch.StoresATemplateInAtMostThreeKilobytes). In memory only, a 4-row
-// block-mean copy of the visual part for the matcher's lower bound: 640 bytes at 64×40, so 3,588
+// 64×40 + 125·2 + 24·4 = 2,906 bytes per template, plus 46 bytes of bookkeeping (visual mean 4, the
+// two has-part flags 2, contact count 4, sensed whiskers 4, pose-cell x, y, θ 24, decay 8): 2,952
+// bytes, also what a checkpoint holds per template (TemplateMatch.StoresATemplateInAtMostThreeKilobytes). In memory only, a 4-row
+// block-mean copy of the visual part for the matcher's lower bound: 640 bytes at 64×40, so 3,592
 // bytes per template in memory, 35.9 MB at 10,000 templates.
 #pragma once
 
@@ -138,6 +138,8 @@ class TemplateStore {
   bool has_visual(int id) const { return has_visual_[static_cast<size_t>(id)] != 0; }
   bool has_tactile(int id) const { return has_tactile_[static_cast<size_t>(id)] != 0; }
   int num_contacts(int id) const { return num_contacts_[static_cast<size_t>(id)]; }
+  // The whiskers that had data when the template was made (TactileTemplate::sensed).
+  uint32_t sensed(int id) const { return sensed_[static_cast<size_t>(id)]; }
   // Column-major (x·height + y): see visual_distance().
   const uint8_t* visual(int id) const { return visual_.row(static_cast<size_t>(id)); }
   const uint16_t* pfh(int id) const { return pfh_.row(static_cast<size_t>(id)); }
@@ -167,8 +169,10 @@ class TemplateStore {
   void serialise(std::vector<uint8_t>& out) const;
   size_t serialised_bytes() const;  // what serialise() appends
   // Reads what serialise() wrote at `pos`, advancing it; throws std::runtime_error on bad data, and
-  // on visual templates of another size than width x height before it allocates for them.
-  static TemplateStore deserialise(const std::vector<uint8_t>& in, size_t& pos, int width, int height);
+  // on visual templates of another size than width x height before it allocates for them. A
+  // checkpoint before format 5 holds no sensed whiskers: every template reads as fully sensed.
+  static TemplateStore deserialise(const std::vector<uint8_t>& in, size_t& pos, int width, int height,
+                                   uint32_t format_version);
 
   bool operator==(const TemplateStore&) const = default;
 
@@ -187,6 +191,7 @@ class TemplateStore {
   RowStore<float> sda_;
   std::vector<uint8_t> has_tactile_;
   std::vector<int32_t> num_contacts_;
+  std::vector<uint32_t> sensed_;
   std::vector<double> pc_;
   std::vector<double> decay_;
 };

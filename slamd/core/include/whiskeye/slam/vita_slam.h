@@ -17,10 +17,11 @@
 // restores exactly: a restored instance produces byte-identical results.
 //
 // Checkpoint format (all little-endian):
-//   magic "VITASLAM" (8 bytes) | u32 version (4; 1 to 3 are still read) | u8 mode | i64 last odometry utime | u8 has it |
+//   magic "VITASLAM" (8 bytes) | u32 version (5; 1 to 4 are still read) | u8 mode | i64 last odometry utime | u8 has it |
 //   5 × i64 stats | template store | pose cells | experience map | localiser (version ≥ 4) | u32 FNV-1a of all previous bytes
 //   template store: i32 w, i32 h, then arrays (u64 count + elements): visual u8, visual mean f32,
-//     has_visual u8, pfh u16, sda f32, has_tactile u8, num_contacts i32, pc (x,y,θ) f64, decay f64
+//     has_visual u8, pfh u16, sda f32, has_tactile u8, num_contacts i32, pc (x,y,θ) f64, decay f64,
+//     sensed whiskers u32 (bit w: whisker w had data; version ≥ 5, before: all)
 //   pose cells: i32 dim_xy, i32 dim_theta, u64 count + f32 activity [θ][y][x]
 //   experience map: u64 n, n × (f64 x, y, cos θ, sin θ, pc_x, pc_y, pc_θ, i64 utime, i32 template,
 //     visual, tactile id, u8 dense, i32 view shift (version ≥ 2), u8 retired (version ≥ 4)) | u64 links, each (i32 from, to, f64 dx, dy, dθ, i64 utime) |
@@ -76,6 +77,11 @@ struct SlamStats {
 
 class VitaSlam {
  public:
+  // The checkpoint format written (the version above); older ones down to 1 are read.
+  // 2: experiences carry their view shift; 3: the map its travelled distance; 4: the localiser's
+  // state; 5: each template the whiskers it sensed.
+  static constexpr uint32_t kCheckpointFormat = 5;
+
   VitaSlam(const SlamParams& params, const RobotGeometry& geometry);
 
   CycleResult process_cycle(const CycleInput& input);
