@@ -32,6 +32,32 @@ wait_for() {
   echo "no line matching '$2' in $1 after ${3:-30} s; its last line: $(tail -n 1 "$1" 2>&1)"
   return 1
 }
+# stop_daemon PID NAME [SECONDS]: SIGTERM to a daemon the scenario started, then up to SECONDS
+# (default 20) for it to exit; its exit status in $stopped_rc. Still running then (a hang in its
+# shutdown, seen once in vm.gpio after whiskerd's last line): where each of its threads waits in the
+# kernel (state, wait channel, kernel stack) is printed, it is killed, and $stopped_rc is 124.
+stop_daemon() {
+  local pid=$1 name=$2 secs=${3:-20} t
+  kill -TERM "$pid" 2>/dev/null
+  for _ in $(seq $((secs * 10))); do
+    # A child that exited stays a zombie (state Z) until it is waited for.
+    [ "$(awk '{print $3}' "/proc/$pid/stat" 2>/dev/null)" = Z ] || ! kill -0 "$pid" 2>/dev/null && break
+    sleep 0.1
+  done
+  if [ -d "/proc/$pid" ] && [ "$(awk '{print $3}' "/proc/$pid/stat")" != Z ]; then
+    echo "$name (pid $pid) still running $secs s after SIGTERM; its threads:"
+    for t in /proc/"$pid"/task/*; do
+      echo "  thread $(basename "$t") $(cat "$t/comm") state $(awk '{print $3}' "$t/stat") wchan $(cat "$t/wchan") syscall $(cut -d" " -f1 "$t/syscall")"
+      sed 's/^/    /' "$t/stack" 2>/dev/null
+    done
+    kill -KILL "$pid"
+    wait "$pid" 2>/dev/null
+    stopped_rc=124
+    return
+  fi
+  wait "$pid"
+  stopped_rc=$?
+}
 # Reading a driver_status_probe output file (KEY=VALUE lines) of the scenario's probes:
 # probe_value FILE NAME: the value of NAME.
 probe_value() { sed -n "s/^$2=//p" "$1"; }

@@ -85,8 +85,8 @@ check a_fault_pulse_drops_the_enable_line poll_enable 0
 check whiskerd_reports_the_fault wait_for "$log" "motor fault / emergency stop: motors disabled"
 wait $player
 check the_fault_stays_latched_to_the_end_of_the_stream test "$(cat "$chip/0")" = 0
-kill -TERM $wd
-wait $wd
+stop_daemon $wd whiskerd
+check whiskerd_exits_on_sigterm_with_the_fault_latched test $stopped_rc != 124
 cat "$log"
 
 # SIGTERM while the motors are powered: whiskerd retracts, then drops the enable line before it exits.
@@ -101,9 +101,8 @@ echo > "$tracing/trace"
 echo 1 > "$tracing/events/gpio/gpio_value/enable"
 start_streaming "$RESULTS_DIR/whiskerd_sigterm.log"
 check enable_goes_high_again_with_the_boards_streaming poll_enable 1
-kill -TERM $wd
-wait $wd
-code=$?
+stop_daemon $wd whiskerd
+code=$stopped_rc
 echo 0 > "$tracing/events/gpio/gpio_value/enable"
 grep -E "gpio_value: $enable_gpio set [01]" "$tracing/trace" > "$RESULTS_DIR/enable_trace.txt"
 tail -3 "$RESULTS_DIR/enable_trace.txt"
