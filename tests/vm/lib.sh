@@ -36,15 +36,21 @@ wait_for() {
 # (default 20) for it to exit; its exit status in $stopped_rc. Still running then (a hang in its
 # shutdown, seen once in vm.gpio after whiskerd's last line): where each of its threads waits in the
 # kernel (state, wait channel, kernel stack) is printed, it is killed, and $stopped_rc is 124.
+# running PID: the process exists and has not exited (a child that exited stays a zombie, state Z,
+# until it is waited for).
+running() {
+  local state
+  state=$(awk '{print $3}' "/proc/$1/stat" 2>/dev/null)
+  [ -n "$state" ] && [ "$state" != Z ]
+}
 stop_daemon() {
   local pid=$1 name=$2 secs=${3:-20} t
   kill -TERM "$pid" 2>/dev/null
   for _ in $(seq $((secs * 10))); do
-    # A child that exited stays a zombie (state Z) until it is waited for.
-    [ "$(awk '{print $3}' "/proc/$pid/stat" 2>/dev/null)" = Z ] || ! kill -0 "$pid" 2>/dev/null && break
+    running "$pid" || break
     sleep 0.1
   done
-  if [ -d "/proc/$pid" ] && [ "$(awk '{print $3}' "/proc/$pid/stat")" != Z ]; then
+  if running "$pid"; then
     echo "$name (pid $pid) still running $secs s after SIGTERM; its threads:"
     for t in /proc/"$pid"/task/*; do
       echo "  thread $(basename "$t") $(cat "$t/comm") state $(awk '{print $3}' "$t/stat") wchan $(cat "$t/wchan") syscall $(cut -d" " -f1 "$t/syscall")"
