@@ -9,7 +9,7 @@ For each of N worlds drawn from the suite seed (world seed = S * 1000 + i): vita
 vita-sim (the simulator log), slamd --replay in the three modes, vita-eval; worlds run in parallel
 (--jobs, default: every core), each world's log is deleted once its three replays are evaluated, and
 a world already done (same world, options and parameters) is not rerun. Writes DIR/suite.json,
-DIR/suite.md and DIR/plots/*.png: per mode ARR, ARCR, LEM, EnM and false closures (re-localisations
+DIR/suite.md and DIR/plots/*.png: per mode ARR, ARCR, ATE, the paper's LEM, EnM and false closures (re-localisations
 to an experience made beyond vita-eval's --false-closure-tolerance, 0.25 m or 15 deg, of the robot),
 per world also ViTa's experience spacing. Exit status 0 when the suite ran, whatever the numbers;
 1 when a world failed to run (its log is named); 2 on bad options.

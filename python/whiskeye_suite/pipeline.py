@@ -46,11 +46,15 @@ def generation_of(path):
 
 def metrics_of(run):
     lem = (run.get("lem") or {}).get("position_m")
+    ate = run.get("ate") or {}
     exm = run["exm"]
     spacing = exm.get("experience_spacing") or {}
     return {
         "arr": exm["arr"],
         "arcr": exm["arcr"],
+        "ate": (ate.get("position_m") or {}).get("rmse"),
+        # ATE per window of laps (vita-eval --ate-window-laps), under the run's alignment.
+        "ate_windows": [w["rmse_m"] for w in ate.get("windows") or []],
         "lem": lem["rmse"] if lem else None,
         "enm": run["enm"]["enm"],
         "experiences": run["counts"]["map_experiences"],

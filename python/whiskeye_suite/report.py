@@ -115,7 +115,7 @@ def aggregate(a, records, failed, wall_s):
               f"{' --quick' if a.quick else ''}{f' --laps {a.laps}' if a.laps else ''}`.")
     md += ["", "## Distributions", "",
            "Per mode and metric: the median, the 10th percentile on the bad side (the 10th for ARR and ARCR, "
-           "the 90th for LEM, EnM and false closures) and the worst world; `n/a` runs (e.g. ARR of a one-lap run) "
+           "the 90th for ATE, LEM, EnM and false closures) and the worst world; `n/a` runs (e.g. ARR of a one-lap run) "
            "are left out and counted.", "",
            "| mode | metric | median | 10th pct (bad side) | worst | n/a |", "|---|---|---|---|---|---|"]
     for m in MODES:
@@ -157,7 +157,7 @@ def aggregate(a, records, failed, wall_s):
            "ViTa spacing: its median experience step (m, °); '½ step beyond' names where half of it exceeds the paper's "
            "thresholds.", "",
            "| world | seed | side (m) | r (m) | v (m/s) | laps | dir | tactile | "
-           + " | ".join(f"{m} ARR | {m} ARCR | {m} LEM | {m} EnM | {m} FC" for m in MODES)
+           + " | ".join(f"{m} ARR | {m} ARCR | {m} ATE | {m} EnM | {m} FC" for m in MODES)
            + " | ViTa spacing (m) | ViTa step (°) | ½ step beyond | ViTa ok |",
            "|" + "---|" * (12 + 5 * len(MODES))]
     def listing(w):
@@ -170,7 +170,7 @@ def aggregate(a, records, failed, wall_s):
                  str(g.get("trajectory.direction", "")), str(g.get("tactile_landmarks", ""))]
         for m in MODES:
             r = w["modes"][m]
-            cells += [fmt(r["arr"], ".3f"), fmt(r["arcr"], ".3f"), fmt(r["lem"], ".3f"), fmt(r["enm"], ".2e"),
+            cells += [fmt(r["arr"], ".3f"), fmt(r["arcr"], ".3f"), fmt(r["ate"], ".3f"), fmt(r["enm"], ".2e"),
                       fmt(r["false_closures"], "d")]
         v = w["modes"]["vita"]
         cells += [fmt(v.get("spacing_m"), ".3f"), fmt(v.get("spacing_deg"), ".2f"), half_step_beyond(v, w.get("thresholds"))]
@@ -182,13 +182,14 @@ def aggregate(a, records, failed, wall_s):
     def badness(w):
         v = w["modes"]["vita"]
         return (v["false_closures"] or 0, -(v["arcr"] if v["arcr"] is not None else 1.0),
-                v["lem"] if v["lem"] is not None else 0.0)
+                v["ate"] if v["ate"] is not None else 0.0)
     for w in sorted(worlds, key=badness, reverse=True)[:3]:
         v = w["modes"]["vita"]
         worst = v.get("false_closure_worst_m")
         md.append(f"- world {w['index']} (seed {w['world_seed']}): {fmt(v['false_closures'], 'd')} false closures"
                   + (f" (worst {worst:.2f} m)" if worst is not None else "") + f", ARCR {fmt(v['arcr'], '.3f')}, "
-                  f"LEM {fmt(v['lem'], '.3f')} m, ARR {fmt(v['arr'], '.3f')}, EnM {fmt(v['enm'], '.5f')}. "
+                  f"ATE {fmt(v['ate'], '.3f')} m (the paper's LEM {fmt(v['lem'], '.3f')} m), ARR {fmt(v['arr'], '.3f')}, "
+                  f"EnM {fmt(v['enm'], '.5f')}. "
                   f"Rerun alone: `{w['rerun']}`")
     if failed:
         md += ["", "## Failed worlds", ""] + [f"- world {x['index']} (seed {x['world_seed']}): {x['failed']}" for x in failed]
@@ -214,7 +215,7 @@ class Progress:
             else:
                 v = rec["modes"]["vita"]
                 what = ("resumed" if rec.get("resumed") else "done") + \
-                    f": ViTa ARR {fmt(v['arr'], '.3f')} ARCR {fmt(v['arcr'], '.3f')} LEM {fmt(v['lem'], '.3f')}" \
+                    f": ViTa ARR {fmt(v['arr'], '.3f')} ARCR {fmt(v['arcr'], '.3f')} ATE {fmt(v['ate'], '.3f')}" \
                     f" false closures {fmt(v.get('false_closures'), 'd')}"
                 loc = (rec.get("localisation") or {}).get("vita")
                 if loc:

@@ -179,7 +179,7 @@ def study_markdown(a, doc, targets, plots):
            f"{c['worlds']} |" for c in doc["configs"]]
     md += ["", "## Side by side", "",
            "Per mode and metric, each config's median / 10th percentile on the bad side / worst world (the 10th "
-           "percentile for ARR and ARCR, the 90th for LEM, EnM and false closures; `n/a` runs left out).", "",
+           "percentile for ARR and ARCR, the 90th for ATE, LEM, EnM and false closures; `n/a` runs left out).", "",
            "| mode | metric | " + " | ".join(labels) + " |", "|" + "---|" * (2 + len(labels))]
     for m in MODES:
         for key, label, _ in METRICS:
@@ -221,14 +221,14 @@ def study_markdown(a, doc, targets, plots):
             md.append(f"| {name} | " + " | ".join(
                 (("met" if targets[lab][k]["met"] else "**MISSED**") + f" ({targets[lab][k]['measured']})")
                 if len(targets[lab]) > k else "—" for lab in labels) + " |")
-    md += ["", "## Worlds", "", "ViTa under each config: ARR, ARCR, LEM (m), false closures.", "",
-           "| world | seed | " + " | ".join(f"{lab} ARR | {lab} ARCR | {lab} LEM | {lab} FC" for lab in labels) + " |",
+    md += ["", "## Worlds", "", "ViTa under each config: ARR, ARCR, ATE (m), false closures.", "",
+           "| world | seed | " + " | ".join(f"{lab} ARR | {lab} ARCR | {lab} ATE | {lab} FC" for lab in labels) + " |",
            "|" + "---|" * (2 + 4 * len(labels))]
     for w in doc["worlds"]:
         cells = [str(w["index"]), str(w["world_seed"])]
         for lab in labels:
             v = (w["configs"][lab] or {}).get("vita")
-            cells += ["—"] * 4 if v is None else [fmt(v["arr"], ".3f"), fmt(v["arcr"], ".3f"), fmt(v["lem"], ".3f"),
+            cells += ["—"] * 4 if v is None else [fmt(v["arr"], ".3f"), fmt(v["arcr"], ".3f"), fmt(v["ate"], ".3f"),
                                                    fmt(v["false_closures"], "d")]
         md.append("| " + " | ".join(cells) + " |")
     if doc["failed_worlds"]:

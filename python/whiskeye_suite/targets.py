@@ -1,17 +1,21 @@
-"""The targets --check applies (the robust-SLAM issue's over a normal suite, the global-localisation
-issue's over kidnaps and session starts) and the per-world judgements behind them."""
+"""The targets --check applies (the robust-SLAM targets over a normal suite, restated in ATE with ARR
+judged against vision alone; the global-localisation targets over kidnaps and session starts) and the
+per-world judgements behind them."""
 from .common import fmt
 from .stats import distribution, percentile
 
-# The robust-SLAM issue's targets for ViTa over a suite of the aliased family (docs/evaluation.md,
+# The robust-SLAM targets for ViTa over a suite of the aliased family (docs/evaluation.md,
 # "Targets"). What a false closure is (its tolerance) is vita-eval's, read from its JSON.
 NO_FALSE_CLOSURE_SHARE = (23, 24)  # worlds without a false closure: at least 23 in 24 ...
 NO_FALSE_CLOSURE_SHARE_FAULTS = (22, 24)  # ... 22 in 24 with --faults
 MAX_FALSE_CLOSURES = 2  # on any world
-LEM_GOOD_M, LEM_GOOD_SHARE, LEM_FLOOR_M = 0.10, 0.90, 0.20
-ARCR_MEDIAN, ARCR_FLOOR = 0.98, 0.95
-ARR_MEDIAN, ARR_FLOOR = 0.78, 0.55
-LEM_OVER_BEST_SENSE_M = 0.03  # ViTa's LEM at most the better sense's plus this
+# Accuracy is ATE (position RMSE after the best-fit SE(2) alignment; docs/evaluation.md).
+ATE_GOOD_M, ATE_GOOD_SHARE, ATE_FLOOR_M = 0.10, 0.90, 0.20
+ATE_OVER_BEST_SENSE_M = 0.03  # ViTa's ATE at most the better single sense's plus this
+ARCR_MEDIAN = 0.98
+# ARR is judged against vision alone only (its ceiling depends on the world's path): ViTa's median
+# at least vision's, and on every world at most this far below vision's.
+ARR_BELOW_VISION = 0.05
 FOOLED_ARCR = 0.95  # a single sense closing wrong loops (ARCR below this) ...
 FOOLED_ENM_RATIO = 10.0  # ... with an EnM at least this many times ViTa's is "fooled"
 # The global-localisation issue's targets for ViTa after kidnaps and session starts (docs/evaluation.md).
@@ -26,11 +30,11 @@ def targets_help():
     """The --check targets in words, from the constants that check them."""
     return (f"Targets: no false closure on >= {NO_FALSE_CLOSURE_SHARE[0]}/{NO_FALSE_CLOSURE_SHARE[1]} of worlds "
             f"({NO_FALSE_CLOSURE_SHARE_FAULTS[0]}/{NO_FALSE_CLOSURE_SHARE_FAULTS[1]} with --faults) and at most "
-            f"{MAX_FALSE_CLOSURES} on any; LEM position RMSE <= {LEM_GOOD_M:.2f} m on >= {LEM_GOOD_SHARE:.0%} of "
-            f"worlds, <= {LEM_FLOOR_M:.2f} m on every one; ARCR median >= {ARCR_MEDIAN}, >= {ARCR_FLOOR} on every "
-            f"world; ARR median >= {ARR_MEDIAN}, >= {ARR_FLOOR} on every world (n/a is a miss); never worse than its "
-            f"best sense: median ARR >= vision's, and on every world LEM <= the better single sense's + "
-            f"{LEM_OVER_BEST_SENSE_M:.2f} m and false closures <= the fewer of the single senses'.")
+            f"{MAX_FALSE_CLOSURES} on any; ATE <= {ATE_GOOD_M:.2f} m on >= {ATE_GOOD_SHARE:.0%} of worlds, "
+            f"<= {ATE_FLOOR_M:.2f} m on every one; ARCR median >= {ARCR_MEDIAN}; never worse than its best sense: "
+            f"median ARR >= vision's, and on every world ARR >= vision's - {ARR_BELOW_VISION:.2f} (n/a is a miss), "
+            f"ATE <= the better single sense's + {ATE_OVER_BEST_SENSE_M:.2f} m and false closures <= the fewer of "
+            f"the single senses'.")
 
 
 def best_sense(w, key):
@@ -43,16 +47,19 @@ def vita_conditions(w):
     """Whether ViTa's run on world `w` meets each per-world part of the targets (the shares' parts
     too); n/a is a miss."""
     v = w["modes"]["vita"]
-    fc, lem = v["false_closures"], v["lem"]
-    best_lem, best_fc = best_sense(w, "lem"), best_sense(w, "false_closures")
+    fc, ate = v["false_closures"], v["ate"]
+    best_ate, best_fc = best_sense(w, "ate"), best_sense(w, "false_closures")
+    vision_arr = w["modes"]["visual"]["arr"]
     return {
         "no_false_closure": fc == 0,
         "false_closures_max": fc is not None and fc <= MAX_FALSE_CLOSURES,
-        "lem_good": lem is not None and lem <= LEM_GOOD_M,
-        "lem_floor": lem is not None and lem <= LEM_FLOOR_M,
-        "arcr_floor": v["arcr"] is not None and v["arcr"] >= ARCR_FLOOR,
-        "arr_floor": v["arr"] is not None and v["arr"] >= ARR_FLOOR,
-        "lem_vs_senses": lem is not None and (best_lem is None or lem <= best_lem + LEM_OVER_BEST_SENSE_M),
+        "ate_good": ate is not None and ate <= ATE_GOOD_M,
+        "ate_floor": ate is not None and ate <= ATE_FLOOR_M,
+        # Where vision has no ARR there is nothing to compare with; ViTa without one where it has is a miss.
+        # Rounded: 0.85 against 0.90 is 0.05 below, not 0.05000000000000004.
+        "arr_vs_vision": vision_arr is None or (v["arr"] is not None
+                                                and round(v["arr"] - vision_arr, 9) >= -ARR_BELOW_VISION),
+        "ate_vs_senses": ate is not None and (best_ate is None or ate <= best_ate + ATE_OVER_BEST_SENSE_M),
         "false_closures_vs_senses": fc is not None and (best_fc is None or fc <= best_fc),
     }
 
@@ -99,14 +106,10 @@ def check_targets(worlds, family, faults):
     share("no_false_closure", num, den, f"ViTa: no false closure on >= {num}/{den} of worlds")
     every("false_closures_max", f"ViTa: at most {MAX_FALSE_CLOSURES} false closures on any world",
           lambda w: vita(w, "false_closures"), spec="d")
-    share("lem_good", round(LEM_GOOD_SHARE * 100), 100,
-          f"ViTa LEM position RMSE <= {LEM_GOOD_M:.2f} m on >= {LEM_GOOD_SHARE:.0%} of worlds")
-    every("lem_floor", f"ViTa LEM position RMSE <= {LEM_FLOOR_M:.2f} m on every world",
-          lambda w: vita(w, "lem"))
+    share("ate_good", round(ATE_GOOD_SHARE * 100), 100,
+          f"ViTa ATE <= {ATE_GOOD_M:.2f} m on >= {ATE_GOOD_SHARE:.0%} of worlds")
+    every("ate_floor", f"ViTa ATE <= {ATE_FLOOR_M:.2f} m on every world", lambda w: vita(w, "ate"))
     median("arcr", "vita", ARCR_MEDIAN, f"ViTa ARCR median >= {ARCR_MEDIAN}")
-    every("arcr_floor", f"ViTa ARCR >= {ARCR_FLOOR} on every world", lambda w: vita(w, "arcr"), "low")
-    median("arr", "vita", ARR_MEDIAN, f"ViTa ARR median >= {ARR_MEDIAN}")
-    every("arr_floor", f"ViTa ARR >= {ARR_FLOOR} on every world", lambda w: vita(w, "arr"), "low")
     # Never worse than its best sense. The medians over the same worlds: each over its own defined
     # values compared two different sets of worlds. Where vision has no ARR, ViTa's is not compared;
     # ViTa without one where vision has one is a miss (n/a is the worst).
@@ -118,9 +121,13 @@ def check_targets(worlds, family, faults):
         f"{fmt(mv, '.3f')} against {fmt(ms, '.3f')} over {len(paired)} worlds"
         + (f"; ViTa n/a on {vita_na}" if vita_na else ""),
         not vita_na and (ms is None or mv >= ms))
-    every("lem_vs_senses", f"ViTa LEM <= min(vision's, touch's) + {LEM_OVER_BEST_SENSE_M:.2f} m on every world "
+    every("arr_vs_vision", f"ViTa ARR >= vision's - {ARR_BELOW_VISION:.2f} on every world "
+          "(shown: ViTa's minus vision's)",
+          lambda w: None if vita(w, "arr") is None or w["modes"]["visual"]["arr"] is None
+          else vita(w, "arr") - w["modes"]["visual"]["arr"], "low", spec="+.3f")
+    every("ate_vs_senses", f"ViTa ATE <= min(vision's, touch's) + {ATE_OVER_BEST_SENSE_M:.2f} m on every world "
           "(shown: ViTa's minus the best sense's)",
-          lambda w: None if vita(w, "lem") is None or best_sense(w, "lem") is None else vita(w, "lem") - best_sense(w, "lem"),
+          lambda w: None if vita(w, "ate") is None or best_sense(w, "ate") is None else vita(w, "ate") - best_sense(w, "ate"),
           spec="+.3f")
     every("false_closures_vs_senses", "ViTa false closures <= min(vision's, touch's) on every world "
           "(shown: ViTa's minus the best sense's)",

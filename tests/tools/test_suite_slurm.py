@@ -139,7 +139,7 @@ class SlurmSuite(unittest.TestCase):
 
     def test_the_aggregation_job_writes_the_summary_and_plots(self):
         md = self.retried_md
-        self.assertIn("| vita | LEM pos RMSE (m) |", md)
+        self.assertIn("| vita | ATE RMSE (m) |", md)
         self.assertIn(f"as Slurm array job {self.retried_doc['slurm']['array_job']}", md)
         for png in ("metrics_by_mode.png", "arr_vs_arcr.png"):
             self.assertGreater(os.path.getsize(os.path.join(self.results, "plots", png)), 1000, png)

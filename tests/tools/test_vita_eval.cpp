@@ -268,6 +268,17 @@ TEST_F(VitaEvalBinary, ComputesTheExpectedMetricsAndWritesJsonAndPlots) {
   EXPECT_LT(run["lem"]["position_m"]["rmse"].get<double>(), 1e-9);
   EXPECT_LT(run["lem"]["orientation_rad"]["rmse"].get<double>(), 1e-9);
   EXPECT_EQ(run["lem"]["samples_used"], 401);
+  // ATE: the estimate is exact in the map frame, so the best fit finds the map frame and no error.
+  EXPECT_EQ(run["ate"]["samples_used"], 401);
+  EXPECT_EQ(run["ate"]["samples_localising"], 0);
+  EXPECT_NEAR(run["ate"]["alignment"]["T_world_map"]["x"].get<double>(), 0.5, 1e-9);
+  EXPECT_NEAR(run["ate"]["alignment"]["T_world_map"]["y"].get<double>(), -0.2, 1e-9);
+  EXPECT_NEAR(run["ate"]["alignment"]["T_world_map"]["theta"].get<double>(), 0.3, 1e-9);
+  for (const char* k : {"rmse", "mean", "median", "max"}) EXPECT_LT(run["ate"]["position_m"][k].get<double>(), 1e-9) << k;
+  EXPECT_NEAR(run["ate"]["lap_length_m"].get<double>(), kTwoPi, 1e-3);
+  ASSERT_EQ(run["ate"]["windows"].size(), 1u) << "two laps make one window of four";
+  EXPECT_EQ(run["ate"]["windows"][0]["samples"], 401);
+  EXPECT_DOUBLE_EQ(j["params"]["ate_window_laps"].get<double>(), 4.0);
   EXPECT_EQ(run["exm"]["base_set_size"], 20);
   EXPECT_NEAR(run["exm"]["base_end_s"].get<double>(), 20.0, 1e-5);
   EXPECT_EQ(run["exm"]["experience_events_after_base"], 20);
@@ -300,6 +311,11 @@ TEST_F(VitaEvalBinary, ComputesTheExpectedMetricsAndWritesJsonAndPlots) {
 
   const std::string table = read_text(file("stdout.txt"));
   EXPECT_NE(table.find("paper ViTa-SLAM"), std::string::npos);
+  EXPECT_NE(table.find("ATE (m)   paper's LEM pos (m)"), std::string::npos) << table;
+  EXPECT_NE(table.find("1        0.0000    0.0000 (0.0000"), std::string::npos) << table;  // ATE, then LEM
+  EXPECT_NE(table.find("ATE (best-fit SE(2) alignment T_world_map = (0.5000, -0.2000, 0.3000 rad)): RMSE 0.0000 m"),
+            std::string::npos)
+      << table;
   EXPECT_NE(table.find("0.9474   1 "), std::string::npos) << table;  // ARCR 18/19 and one false closure
   EXPECT_NE(table.find("closures"), std::string::npos) << table;
   EXPECT_NE(table.find("1 false closures (target beyond 0.25 m or 15 deg; worst 1.782 m), 0 neighbour misses"),
@@ -504,6 +520,9 @@ TEST_F(VitaEvalBinary, MeasuresTheRecoveryFromAKidnapInTheTableTheJsonTheTraceAn
   EXPECT_EQ(loc["summary"]["within_one_lap"], 1);
   EXPECT_EQ(loc["summary"]["false_localisations"], 1);
   EXPECT_TRUE(j["runs"][0]["faults"].empty()) << "a kidnap is an instant, not a fault that is active";
+  // ATE leaves out the poses reported while LOCALISING (25-28 s at 10 Hz), and counts them.
+  EXPECT_EQ(j["runs"][0]["ate"]["samples_localising"], 30);
+  EXPECT_EQ(j["runs"][0]["ate"]["samples_used"], 401 - 30);
   const std::string table = read_text(file("stdout.txt"));
   EXPECT_NE(table.find("kidnap at 25.000 s: localised after 6.00 s, 1.88 m (0.30 laps) onto experience 1"),
             std::string::npos)
@@ -590,6 +609,50 @@ TEST_F(VitaEvalBinary, NoPoseWithinTheGroundTruthIsNoLemNotAPerfectOne) {
   EXPECT_GT(run["lem"]["samples_outside_gt"].get<int>(), 0);
   EXPECT_TRUE(run["lem"]["position_m"].is_null()) << run["lem"];
   EXPECT_TRUE(run["lem"]["orientation_rad"].is_null()) << run["lem"];
+  EXPECT_EQ(run["ate"]["samples_used"], 0);
+  EXPECT_TRUE(run["ate"]["position_m"].is_null()) << run["ate"];
+  EXPECT_FALSE(run["ate"]["alignment"]["valid"]);
+}
+
+// --tum: the trajectory ATE uses and the ground truth, in the TUM format other tools read (evo,
+// the TUM benchmark's scripts): a line per pose, seconds with microseconds, a unit quaternion.
+TEST_F(VitaEvalBinary, WritesTheTrajectoryAndTheGroundTruthInTheTumFormat) {
+  Script script;
+  script.kidnap = true;  // 30 poses reported while LOCALISING: not in the trajectory
+  write_log(file("vita.lcmlog"), script);
+  ASSERT_EQ(run_vita_eval("--input " + file("vita.lcmlog") + " --tum " + file("tum"), file("stdout.txt")), 0)
+      << read_text(file("stdout.txt"));
+  const auto lines = [](const std::string& text) {
+    std::vector<std::string> out;
+    std::istringstream in(text);
+    for (std::string l; std::getline(in, l);) out.push_back(l);
+    return out;
+  };
+  const std::vector<std::string> est = lines(read_text(file("tum/vita_estimate.tum")));
+  const std::vector<std::string> gt = lines(read_text(file("tum/vita_groundtruth.tum")));
+  ASSERT_EQ(est.size(), 1u + 401u - 30u);
+  ASSERT_EQ(gt.size(), 1u + 2001u);
+  EXPECT_EQ(est[0], "# timestamp x y z qx qy qz qw");
+  // The first pose: at kStart, exactly map_pose(kStart); the timestamp keeps the microseconds.
+  std::istringstream first(est[1]);
+  std::string stamp;
+  double x = 0, y = 0, z = 1, qx = 1, qy = 1, qz = 0, qw = 0;
+  first >> stamp >> x >> y >> z >> qx >> qy >> qz >> qw;
+  EXPECT_EQ(stamp, "1700000000.000000");
+  const Pose2 p = map_pose(kStart);
+  EXPECT_NEAR(x, p.x, 1e-8);
+  EXPECT_NEAR(y, p.y, 1e-8);
+  EXPECT_EQ(z, 0.0);
+  EXPECT_EQ(qx, 0.0);
+  EXPECT_EQ(qy, 0.0);
+  EXPECT_NEAR(2.0 * std::atan2(qz, qw), p.theta, 1e-8);
+  EXPECT_NEAR(qz * qz + qw * qw, 1.0, 1e-8);
+  std::istringstream second(gt[2]);  // 20 ms after the first ground-truth sample
+  second >> stamp;
+  EXPECT_EQ(stamp, "1700000000.020000");
+  // 25.1 s, reported while LOCALISING, is not in the trajectory; 28.0 s is.
+  EXPECT_EQ(read_text(file("tum/vita_estimate.tum")).find("1700000025.100000 "), std::string::npos);
+  EXPECT_NE(read_text(file("tum/vita_estimate.tum")).find("1700000028.000000 "), std::string::npos);
 }
 
 TEST_F(VitaEvalBinary, FailsWithAOneLineReasonOnALogThatIsNoSlamdOutputOrABadOption) {

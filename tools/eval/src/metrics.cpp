@@ -1,4 +1,4 @@
-// LEM, ExM and EnM as specified in ../shared/design/metrics.md (see metrics.h for the contract).
+// ATE, LEM, ExM and EnM as specified in ../shared/design/metrics.md (see metrics.h for the contract).
 #include "whiskeye/eval/metrics.h"
 
 #include "whiskeye/common/utime.h"
@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <stdexcept>
 #include <utility>
 
 namespace whiskeye::eval {
@@ -202,6 +203,13 @@ std::map<int32_t, int64_t> creation_times(const std::vector<ExperienceEvent>& so
   return created;
 }
 
+// The median of a non-empty list (the mean of the middle two for an even count).
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
 class StatsAccumulator {
  public:
   void add(double abs_error) {
@@ -245,6 +253,105 @@ LemResult compute_lem(const std::vector<PoseSample>& estimate, const GroundTruth
   }
   r.position_m = pos.stats();
   r.orientation_rad = ori.stats();
+  return r;
+}
+
+// ---- ATE ----
+
+namespace {
+
+// Position errors of `samples` under `T_world_map` (every sample has ground truth).
+std::vector<double> position_errors(const std::vector<PoseSample>& samples, const GroundTruth& gt,
+                                    const Pose2& T_world_map) {
+  std::vector<double> e;
+  e.reserve(samples.size());
+  for (const PoseSample& s : samples) {
+    const Pose2 g = *gt.at(s.utime);
+    const Pose2 w = compose(T_world_map, s.pose);
+    e.push_back(std::hypot(w.x - g.x, w.y - g.y));
+  }
+  return e;
+}
+
+double rms(const std::vector<double>& e, std::size_t begin, std::size_t end) {
+  double sq = 0.0;
+  for (std::size_t i = begin; i < end; ++i) sq += e[i] * e[i];
+  return std::sqrt(sq / static_cast<double>(end - begin));
+}
+
+}  // namespace
+
+std::vector<PoseSample> claimed_poses(const std::vector<PoseSample>& estimate, const std::vector<StateSample>& states) {
+  if (states.empty()) return estimate;
+  if (states.size() != estimate.size()) {
+    throw std::invalid_argument(std::to_string(states.size()) + " localisation states for " +
+                                std::to_string(estimate.size()) + " pose samples");
+  }
+  std::vector<PoseSample> claimed;
+  claimed.reserve(estimate.size());
+  for (std::size_t i = 0; i < estimate.size(); ++i) {
+    if (!states[i].localising) claimed.push_back(estimate[i]);
+  }
+  return claimed;
+}
+
+AteResult compute_ate(const std::vector<PoseSample>& estimate, const std::vector<StateSample>& states,
+                      const GroundTruth& gt, double window_laps) {
+  AteResult r;
+  r.window_laps = window_laps;
+  std::vector<PoseSample> used = claimed_poses(estimate, states);
+  r.samples_localising = estimate.size() - used.size();
+  const auto outside = std::remove_if(used.begin(), used.end(), [&](const PoseSample& s) { return !gt.at(s.utime); });
+  r.samples_outside_gt = static_cast<std::size_t>(used.end() - outside);
+  used.erase(outside, used.end());
+  r.samples_used = used.size();
+  r.alignment = align_best_fit(used, gt);
+  if (!r.alignment.valid) return r;
+  const std::vector<double> e = position_errors(used, gt, r.alignment.T_world_map);
+  AteStats st;
+  st.rmse = rms(e, 0, e.size());
+  for (const double x : e) {
+    st.mean += x;
+    st.max = std::max(st.max, x);
+  }
+  st.mean /= static_cast<double>(e.size());
+  st.median = median(e);
+  r.position_m = st;
+
+  r.lap_length_m = lap_length(gt);
+  if (!r.lap_length_m || !(window_laps > 0.0)) return r;
+  // Travel (ground truth, never across a jump) from the first sample used, sample by sample.
+  const double window_m = window_laps * *r.lap_length_m;
+  std::size_t begin = 0;
+  double begin_m = 0.0;
+  double travelled = 0.0;
+  const auto close_window = [&](std::size_t end, double to_m) {
+    AteWindow w;
+    w.from_lap = begin_m / *r.lap_length_m;
+    w.to_lap = to_m / *r.lap_length_m;
+    w.begin_utime = used[begin].utime;
+    w.end_utime = used[end - 1].utime;
+    w.samples = end - begin;
+    w.rmse = rms(e, begin, end);
+    const std::vector<PoseSample> part(used.begin() + static_cast<std::ptrdiff_t>(begin),
+                                       used.begin() + static_cast<std::ptrdiff_t>(end));
+    if (const Alignment own = align_best_fit(part, gt); own.valid) {
+      w.rmse_own_fit = rms(position_errors(part, gt, own.T_world_map), 0, part.size());
+    }
+    r.windows.push_back(w);
+    begin = end;
+  };
+  // A window ends where the travel reaches the next multiple of the window's length.
+  double last_m = 0.0;
+  for (std::size_t i = 1; i < used.size(); ++i) {
+    travelled += gt.path_length(used[i - 1].utime, used[i].utime);
+    if (std::floor(travelled / window_m) > std::floor(begin_m / window_m)) {
+      close_window(i, last_m);
+      begin_m = travelled;
+    }
+    last_m = travelled;
+  }
+  close_window(used.size(), travelled);
   return r;
 }
 
@@ -301,13 +408,6 @@ Closure classify_closure(double position_error_m, double angle_error_rad, const 
 }
 
 namespace {
-
-// The median of a non-empty list (the mean of the middle two for an even count).
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 // An event that puts the robot at experience e.to_id, judged by the truth now and where the target
 // was created (alignment-free).
@@ -698,7 +798,7 @@ EvalResult evaluate(const EvalInput& input, const EvalParams& params) {
   EvalResult r;
   if (input.ground_truth.empty()) {
     r.ground_truth = false;
-    r.alignment.reason = r.best_fit.reason = "no ground truth";
+    r.alignment.reason = r.ate.alignment.reason = "no ground truth";
     r.exm = count_exm_without_truth(input.events, input.map, params, run_start_utime(input));
     return r;
   }
@@ -706,9 +806,8 @@ EvalResult evaluate(const EvalInput& input, const EvalParams& params) {
   const GroundTruth own(input.ground_truth, kidnap_utimes(input));
   const GroundTruth gt = truth_of(input);
   r.alignment = align_by_first_experience(input.map, gt);
-  r.best_fit = align_best_fit(input.estimate, gt);
   if (r.alignment.valid) r.lem = compute_lem(input.estimate, gt, r.alignment.T_world_map);
-  if (r.best_fit.valid) r.lem_best_fit = compute_lem(input.estimate, gt, r.best_fit.T_world_map);
+  r.ate = compute_ate(input.estimate, input.states, gt, params.ate_window_laps);
   r.exm = exm(input.events, input.map, gt, params, base_set_end(own, params), own.begin_utime());
   r.enm = compute_enm(input.map, gt);
   const std::vector<LocalisationInstant> instants = localisation_instants(input, params);

@@ -3,6 +3,7 @@
 
 #include "whiskeye/common/utime.h"
 
+#include <cmath>
 #include <cstdio>
 #include <sstream>
 
@@ -51,7 +52,9 @@ std::string padded_row(const std::vector<std::string>& cells, const std::vector<
   return out + "\n";
 }
 
-std::string row(const std::vector<std::string>& cells) { return padded_row(cells, {22, 9, 8, 8, 8, 30, 30}); }
+std::string row(const std::vector<std::string>& cells) { return padded_row(cells, {22, 9, 8, 8, 8, 9, 30, 30}); }
+
+std::string ate_cell(const AteResult& ate) { return ate.position_m ? fmt("%.4f", ate.position_m->rmse) : "n/a"; }
 
 std::string localisation_row(const std::vector<std::string>& cells) {
   return padded_row(cells, {22, 9, 10, 8, 9, 7, 9, 11, 10});
@@ -73,6 +76,34 @@ nlohmann::json alignment_json(const Alignment& a) {
 
 nlohmann::json stats_json(const ErrorStats& s) {
   return {{"rmse", s.rmse}, {"mean_abs", s.mean_abs}, {"std_abs", s.std_abs}};
+}
+
+nlohmann::json ate_json(const AteResult& a) {
+  nlohmann::json windows = nlohmann::json::array();
+  for (const AteWindow& w : a.windows) {
+    windows.push_back({{"from_lap", w.from_lap},
+                       {"to_lap", w.to_lap},
+                       {"begin_utime", w.begin_utime},
+                       {"end_utime", w.end_utime},
+                       {"samples", w.samples},
+                       {"rmse_m", w.rmse},
+                       {"rmse_own_fit_m", opt_json(w.rmse_own_fit)}});
+  }
+  nlohmann::json position = nullptr;
+  if (a.position_m) {
+    position = {{"rmse", a.position_m->rmse},
+                {"mean", a.position_m->mean},
+                {"median", a.position_m->median},
+                {"max", a.position_m->max}};
+  }
+  return {{"samples_used", a.samples_used},
+          {"samples_outside_gt", a.samples_outside_gt},
+          {"samples_localising", a.samples_localising},
+          {"alignment", alignment_json(a.alignment)},
+          {"position_m", position},
+          {"lap_length_m", opt_json(a.lap_length_m)},
+          {"window_laps", a.window_laps},
+          {"windows", windows}};
 }
 
 nlohmann::json lem_json(const std::optional<LemResult>& lem) {
@@ -209,6 +240,30 @@ void localisation_block(std::ostringstream& out, const LocalisationReport& l, in
   }
 }
 
+// ATE's figures, its alignment and its windows of laps.
+void ate_block(std::ostringstream& out, const AteResult& a) {
+  if (!a.position_m) {
+    out << "  ATE: none (" << a.alignment.reason << ")";
+  } else {
+    const AteStats& p = *a.position_m;
+    const Pose2& t = a.alignment.T_world_map;
+    out << "  ATE (best-fit SE(2) alignment T_world_map = (" << fmt("%.4f", t.x) << ", " << fmt("%.4f", t.y) << ", "
+        << fmt("%.4f", t.theta) << " rad)): RMSE " << fmt("%.4f", p.rmse) << " m, mean " << fmt("%.4f", p.mean)
+        << ", median " << fmt("%.4f", p.median) << ", max " << fmt("%.4f", p.max) << " m";
+  }
+  out << "; " << a.samples_used << " samples, " << a.samples_localising << " excluded while LOCALISING, "
+      << a.samples_outside_gt << " outside the ground truth\n";
+  if (a.windows.size() > 1) {
+    out << "  ATE per " << fmt("%g", a.window_laps) << " laps (lap " << opt(a.lap_length_m, "%.3f")
+        << " m), RMSE under the run's alignment / the window's own:";
+    for (const AteWindow& w : a.windows) {
+      out << " [" << fmt("%.1f", w.from_lap) << "-" << fmt("%.1f", w.to_lap) << "] " << fmt("%.3f", w.rmse) << "/"
+          << opt(w.rmse_own_fit, "%.3f");
+    }
+    out << "\n";
+  }
+}
+
 nlohmann::json enm_json(const EnmResult& e) {
   return {{"enm", opt_json(e.enm)},
           {"translation_m2", opt_json(e.translation)},
@@ -222,20 +277,20 @@ nlohmann::json enm_json(const EnmResult& e) {
 std::string format_table(const std::vector<RunReport>& runs, const EvalParams& params,
                          const std::vector<PaperRow>& paper) {
   std::ostringstream out;
-  out << row({"method", "EnM", "ARR", "ARCR", "false", "LEM pos (m)", "LEM ori (rad)"});
-  out << row({"", "", "", "", "closures", "RMSE (mean|e| ± std|e|)", "RMSE (mean|e| ± std|e|)"});
-  out << std::string(121, '-') << "\n";
+  out << row({"method", "EnM", "ARR", "ARCR", "false", "ATE (m)", "paper's LEM pos (m)", "paper's LEM ori (rad)"});
+  out << row({"", "", "", "", "closures", "RMSE", "RMSE (mean|e| ± std|e|)", "RMSE (mean|e| ± std|e|)"});
+  out << std::string(131, '-') << "\n";
   for (const RunReport& r : runs) {
     const EvalResult& e = r.result;
     if (!e.ground_truth) {
-      out << row({r.label, "n/a", opt(e.exm.arr), "n/a", "n/a", kNoTruth, kNoTruth});
+      out << row({r.label, "n/a", opt(e.exm.arr), "n/a", "n/a", "n/a", kNoTruth, kNoTruth});
       continue;
     }
     out << row({r.label, opt(e.enm.enm), opt(e.exm.arr), opt(e.exm.arcr), std::to_string(e.exm.false_closures),
-                lem_cell(e.lem, true), lem_cell(e.lem, false)});
+                ate_cell(e.ate), lem_cell(e.lem, true), lem_cell(e.lem, false)});
   }
   for (const PaperRow& p : paper) {
-    out << row({p.method, fmt("%.4f", p.enm), fmt("%.4f", p.arr), fmt("%.4f", p.arcr), "n/a",
+    out << row({p.method, fmt("%.4f", p.enm), fmt("%.4f", p.arr), fmt("%.4f", p.arcr), "n/a", "n/a",
                 fmt("%.4f", p.lem_pos) + " ± " + fmt("%.4f", p.lem_pos_spread),
                 fmt("%.4f", p.lem_ori) + " ± " + fmt("%.4f", p.lem_ori_spread)});
   }
@@ -274,7 +329,7 @@ std::string format_table(const std::vector<RunReport>& runs, const EvalParams& p
     if (!r.log_damage.empty()) out << "  damaged log: " << r.log_damage << "\n";
     if (!e.ground_truth) {
       const ExmResult& x = e.exm;
-      out << "  no ground truth (no GROUND_TRUTH in the log): EnM, ARCR, LEM and the valid fraction are "
+      out << "  no ground truth (no GROUND_TRUTH in the log): EnM, ARCR, ATE, LEM and the valid fraction are "
              "unavailable; events counted, none judged\n";
       out << "  ExM counts: " << x.experiences_created << " new experiences, " << x.relocalisations_total
           << " re-localisations (correctness unknown)";
@@ -288,20 +343,18 @@ std::string format_table(const std::vector<RunReport>& runs, const EvalParams& p
       out << "\n";
       continue;
     }
+    ate_block(out, e.ate);
     if (e.alignment.valid) {
       const Pose2& t = e.alignment.T_world_map;
-      out << "  alignment (first experience onto ground truth): T_world_map = (" << fmt("%.4f", t.x) << ", "
-          << fmt("%.4f", t.y) << ", " << fmt("%.4f", t.theta) << " rad)\n";
+      out << "  the paper's LEM: alignment (first experience onto ground truth) T_world_map = (" << fmt("%.4f", t.x)
+          << ", " << fmt("%.4f", t.y) << ", " << fmt("%.4f", t.theta) << " rad)";
+      if (e.lem) {
+        out << "; " << e.lem->samples_used << " samples, " << e.lem->samples_outside_gt
+            << " excluded (outside the ground-truth time range)";
+      }
+      out << "\n";
     } else {
-      out << "  alignment: none (" << e.alignment.reason << "); LEM not computed\n";
-    }
-    if (e.lem) {
-      out << "  LEM: " << e.lem->samples_used << " samples, " << e.lem->samples_outside_gt
-          << " excluded (outside the ground-truth time range)\n";
-    }
-    if (e.lem_best_fit) {
-      out << "  LEM with BEST-FIT alignment (for comparison only, not the metric): pos "
-          << lem_cell(e.lem_best_fit, true) << " m, ori " << lem_cell(e.lem_best_fit, false) << " rad\n";
+      out << "  the paper's LEM: no alignment (" << e.alignment.reason << "); not computed\n";
     }
     const ExmResult& x = e.exm;
     out << "  ExM: base set " << x.base_set_size << " experiences ("
@@ -345,6 +398,7 @@ nlohmann::json to_json(const std::vector<RunReport>& runs, const EvalParams& par
                  {"false_closure_position_m", params.false_closure_position_m},
                  {"false_closure_angle_rad", params.false_closure_angle_rad},
                  {"centre", {params.centre_x, params.centre_y}},
+                 {"ate_window_laps", params.ate_window_laps},
                  {"base_duration_s", opt_json(params.base_duration_s)}};
   j["runs"] = nlohmann::json::array();
   for (const RunReport& r : runs) {
@@ -365,10 +419,9 @@ nlohmann::json to_json(const std::vector<RunReport>& runs, const EvalParams& par
                          {"decode_errors", decode},
                          {"faults", faults},
                          {"log_damage", r.log_damage.empty() ? nlohmann::json(nullptr) : nlohmann::json(r.log_damage)},
+                         {"ate", e.ground_truth ? ate_json(e.ate) : nlohmann::json(nullptr)},
                          {"alignment", alignment_json(e.alignment)},
-                         {"best_fit_alignment", alignment_json(e.best_fit)},
                          {"lem", lem_json(e.lem)},
-                         {"lem_best_fit_alignment", lem_json(e.lem_best_fit)},
                          {"ground_truth", e.ground_truth},
                          {"unavailable", e.ground_truth ? nlohmann::json(nullptr)
                                                         : nlohmann::json("no ground truth: no GROUND_TRUTH in the log")},
@@ -391,6 +444,24 @@ nlohmann::json to_json(const std::vector<RunReport>& runs, const EvalParams& par
                                {"lem_ori", {p.lem_ori, p.lem_ori_spread}}});
   }
   return j;
+}
+
+std::string format_tum(const std::vector<PoseSample>& poses) {
+  std::ostringstream out;
+  out << "# timestamp x y z qx qy qz qw\n";
+  char line[192];
+  for (const PoseSample& p : poses) {
+    const int64_t whole = p.utime / 1000000;
+    int64_t micro = p.utime % 1000000;
+    // Written from the integer utime: a double's seconds since 1970 would lose the microseconds.
+    const bool negative = p.utime < 0;
+    if (micro < 0) micro = -micro;
+    std::snprintf(line, sizeof line, "%s%lld.%06lld %.9g %.9g 0 0 0 %.9g %.9g\n", negative && whole == 0 ? "-" : "",
+                  static_cast<long long>(whole), static_cast<long long>(micro), p.pose.x, p.pose.y,
+                  std::sin(p.pose.theta / 2.0), std::cos(p.pose.theta / 2.0));
+    out << line;
+  }
+  return out.str();
 }
 
 std::string format_trace_csv(const std::vector<CycleTrace>& rows) {

@@ -50,6 +50,11 @@ std::string format_table(const std::vector<RunReport>& runs, const EvalParams& p
 nlohmann::json to_json(const std::vector<RunReport>& runs, const EvalParams& params,
                        const std::vector<PaperRow>& paper);
 
+// Poses in the TUM trajectory format (Sturm et al. 2012), which evo and the TUM benchmark's tools
+// read: a line per pose, "timestamp x y z qx qy qz qw", the timestamp in seconds (microseconds
+// kept), z = 0, the heading as a rotation about z.
+std::string format_tum(const std::vector<PoseSample>& poses);
+
 // The per-cycle trace as CSV with a header row; a field that does not apply is empty (docs/evaluation.md).
 std::string format_trace_csv(const std::vector<CycleTrace>& rows);
 

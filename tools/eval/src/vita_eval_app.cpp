@@ -57,6 +57,7 @@ int eval_params(const VitaEvalOptions& o, EvalParams& params) {
     std::cerr << "vita-eval: --centre must be X,Y in metres, got '" << o.centre << "'\n";
     return 2;
   }
+  params.ate_window_laps = o.ate_window_laps;
   if (o.base_duration_s > 0) params.base_duration_s = o.base_duration_s;
   params.session_start = o.session_start;
   return 0;
@@ -120,7 +121,7 @@ RunReport evaluate_input(const std::string& path, const std::vector<PoseSample>&
   return r;
 }
 
-// The plots and the per-cycle traces, where asked for.
+// The plots, the TUM trajectories and the per-cycle traces, where asked for.
 void write_plots_and_traces(const VitaEvalOptions& o, const std::vector<RunReport>& reports,
                             const std::vector<EvalInput>& inputs, const PlotScene& scene) {
   if (!o.plots_dir.empty()) {
@@ -131,6 +132,14 @@ void write_plots_and_traces(const VitaEvalOptions& o, const std::vector<RunRepor
       plot_run(o.plots_dir, runs.back(), scene);
     }
     if (runs.size() > 1) plot_comparison(o.plots_dir, runs, scene);
+  }
+  if (!o.tum_dir.empty()) {
+    std::filesystem::create_directories(o.tum_dir);
+    for (std::size_t i = 0; i < reports.size(); ++i) {
+      const std::filesystem::path stem = std::filesystem::path(o.tum_dir) / plot_stem(reports[i].label);
+      write_text(stem.string() + "_estimate.tum", format_tum(claimed_poses(inputs[i].estimate, inputs[i].states)));
+      write_text(stem.string() + "_groundtruth.tum", format_tum(GroundTruth(inputs[i].ground_truth).samples()));
+    }
   }
   if (!o.trace_dir.empty()) {
     std::filesystem::create_directories(o.trace_dir);

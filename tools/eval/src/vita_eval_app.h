@@ -1,6 +1,6 @@
 // vita-eval's command line and what it runs: its options, in --help's order (add_vita_eval_options),
 // and the evaluation they ask for (run_vita_eval): every input log evaluated into a table row, then
-// the table printed and the JSON, plots and traces written. So that vita-eval's main only wires them.
+// the table printed and the JSON, plots, traces and TUM trajectories written. So that vita-eval's main only wires them.
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -15,6 +15,8 @@ struct VitaEvalOptions {
   std::string json_path;
   std::string plots_dir;
   std::string trace_dir;
+  std::string tum_dir;
+  double ate_window_laps = 0.0;  // the default set by add_vita_eval_options
   std::string world_path;
   std::string start_text;  // X,Y,THETA_DEG
   std::vector<std::string> paper_names;

@@ -10,6 +10,7 @@ namespace whiskeye::eval {
 void add_vita_eval_options(CLI::App& app, VitaEvalOptions& o) {
   o.position_threshold_m = kPaperCorrectPosition_m;
   o.angle_threshold_deg = kPaperCorrectAngle_deg;
+  o.ate_window_laps = kAteWindowLaps;
   char default_tolerance[32];
   std::snprintf(default_tolerance, sizeof default_tolerance, "%g,%g", kFalseClosurePosition_m, kFalseClosureAngle_deg);
   o.false_closure_tolerance = default_tolerance;
@@ -26,6 +27,14 @@ void add_vita_eval_options(CLI::App& app, VitaEvalOptions& o) {
   app.add_option("--trace", o.trace_dir,
                  "write a CSV per run into this directory: every cycle's event, its re-localisation's error against "
                  "ground truth and its template match (created if missing)");
+  app.add_option("--tum", o.tum_dir,
+                 "write each run's trajectory and its ground truth in the TUM format (timestamp x y z qx qy qz qw) "
+                 "into this directory: <label>_estimate.tum (the poses ATE uses, in the map frame, unaligned) and "
+                 "<label>_groundtruth.tum (created if missing)");
+  app.add_option("--ate-window-laps", o.ate_window_laps,
+                 "ATE also per window of this many laps of ground-truth travel")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   app.add_option("--map-truth", o.map_truth_path,
                  "a log with the GROUND_TRUTH of the session that made the map the inputs localised in (the first "
                  "session's vita-sim or slamd output log; its clock must not overlap the inputs')")

@@ -1,6 +1,7 @@
-// The evaluation metrics of the paper's Table I (LEM, ExM, EnM) as pure functions, following the
-// contract in ../shared/design/metrics.md. Plain structs in, plain structs out: no LCM, no files, no
-// clocks — `vita-eval` reads the log and converts; tests build the inputs by hand.
+// The evaluation metrics — ATE, the accuracy figure, and the paper's Table I (LEM, ExM, EnM) — as
+// pure functions, following the contract in ../shared/design/metrics.md. Plain structs in, plain
+// structs out: no LCM, no files, no clocks — `vita-eval` reads the log and converts; tests build the
+// inputs by hand.
 //
 // Frames: ground truth is the pose of the robot base in the world frame; pose estimates and
 // experiences are poses of the base in the SLAM map frame. T_world_map ties them together.
@@ -24,6 +25,12 @@ struct PoseSample {
 };
 
 enum class EventType { kSameExperience, kNewExperience, kRelocalise };
+
+// VITA_POSE's localisation state at a time.
+struct StateSample {
+  int64_t utime = 0;
+  bool localising = false;
+};
 
 struct ExperienceEvent {
   int64_t utime = 0;
@@ -103,11 +110,15 @@ inline constexpr double kPaperCorrectAngle_deg = 4.6;
 inline constexpr double kFalseClosurePosition_m = 0.25;
 inline constexpr double kFalseClosureAngle_deg = 15.0;
 
+// ATE per window of this many laps by default: the long-run targets compare the first and the last four.
+inline constexpr double kAteWindowLaps = 4.0;
+
 struct EvalParams {
   double correct_position_m = kPaperCorrectPosition_m;              // ExM: correct within this (m) ...
   double correct_angle_rad = deg_to_rad(kPaperCorrectAngle_deg);    // ... and this heading difference
   double false_closure_position_m = kFalseClosurePosition_m;        // false closure beyond this (m) ...
   double false_closure_angle_rad = deg_to_rad(kFalseClosureAngle_deg);  // ... or this heading difference
+  double ate_window_laps = kAteWindowLaps;       // ATE per window of this many laps
   double centre_x = 0.0;                         // arena centre for the first revolution (m)
   double centre_y = 0.0;
   std::optional<double> base_duration_s;         // if set, base set = first S seconds of GT instead
@@ -128,8 +139,8 @@ struct Alignment {
 // utime_created; ties by smaller id) onto the ground-truth pose at its creation time.
 Alignment align_by_first_experience(const ExperienceMap& map, const GroundTruth& gt);
 
-// Least-squares SE(2) over the positions of the pose samples (closed form, 2-D Kabsch). Reported
-// beside the contract's alignment only, never used for the headline numbers.
+// The least-squares rigid SE(2) transform (no scale) putting the estimated positions onto ground
+// truth at their times (closed form: Horn 1987 / Umeyama 1991 in 2-D). ATE's alignment.
 Alignment align_best_fit(const std::vector<PoseSample>& estimate, const GroundTruth& gt);
 
 // ---- LEM ----
@@ -149,6 +160,52 @@ struct LemResult {
 
 LemResult compute_lem(const std::vector<PoseSample>& estimate, const GroundTruth& gt,
                       const Pose2& T_world_map);
+
+// ---- ATE: the absolute trajectory error, the accuracy figure every target uses ----
+//
+// metrics.md: every VITA_POSE sample with ground truth at its time, except those reported while
+// LOCALISING (they claim nothing: excluded and counted), aligned by the one best-fit SE(2)
+// transform of those samples (align_best_fit); the position error after it. Over long runs also per
+// window of `ate_window_laps` laps of ground-truth travel (lap_length()), each under the run's
+// alignment and under the window's own best fit (the two agree when the map is only offset per
+// window, and differ when its shape is wrong within the window).
+
+struct AteStats {
+  double rmse = 0.0;
+  double mean = 0.0;
+  double median = 0.0;  // of the position errors (the mean of the middle two of an even count)
+  double max = 0.0;
+};
+
+struct AteWindow {
+  double from_lap = 0.0;   // laps of ground-truth travel from the first sample used ...
+  double to_lap = 0.0;     // ... to the last sample in the window (the last window may be short)
+  int64_t begin_utime = 0;
+  int64_t end_utime = 0;
+  std::size_t samples = 0;
+  double rmse = 0.0;                  // under the whole run's alignment
+  std::optional<double> rmse_own_fit; // under the window's own best fit (none if it cannot be fitted)
+};
+
+struct AteResult {
+  std::size_t samples_used = 0;
+  std::size_t samples_outside_gt = 0;  // excluded: no ground truth at their time
+  std::size_t samples_localising = 0;  // excluded: reported while LOCALISING
+  Alignment alignment;                 // the best fit of the samples used
+  std::optional<AteStats> position_m;  // none without a valid alignment
+  std::optional<double> lap_length_m;
+  double window_laps = 0.0;
+  std::vector<AteWindow> windows;      // empty without a lap length
+};
+
+// The pose samples that claim a pose: those not reported while LOCALISING. `states` is VITA_POSE's
+// localisation state of each `estimate` sample (parallel to it), or empty when none was reported;
+// throws std::invalid_argument when it is neither.
+std::vector<PoseSample> claimed_poses(const std::vector<PoseSample>& estimate, const std::vector<StateSample>& states);
+
+// Over claimed_poses(estimate, states) (throws as it does).
+AteResult compute_ate(const std::vector<PoseSample>& estimate, const std::vector<StateSample>& states,
+                      const GroundTruth& gt, double window_laps = kAteWindowLaps);
 
 // ---- ExM ----
 
@@ -266,12 +323,6 @@ struct LocalisationInstant {
 // "kidnap" or "session_start" (the JSON's and the trace's spelling).
 const char* instant_name(LocalisationInstant::Kind kind);
 
-// VITA_POSE's localisation state at a time.
-struct StateSample {
-  int64_t utime = 0;
-  bool localising = false;
-};
-
 struct Localisation {
   LocalisationInstant instant;
   int64_t window_end_utime = 0;          // the next instant, or the log's end
@@ -372,10 +423,9 @@ struct EvalResult {
   // computed — no alignment, LEM, EnM, correctness (ARCR, valid fraction) — and ExM only counts
   // events; ARR too with `base_duration_s` (the base set then starts at the first pose or event).
   bool ground_truth = true;
-  Alignment alignment;
-  Alignment best_fit;
-  std::optional<LemResult> lem;           // with the contract's alignment
-  std::optional<LemResult> lem_best_fit;  // labelled: best-fit alignment
+  Alignment alignment;                    // the paper's: the first experience onto ground truth
+  std::optional<LemResult> lem;           // the paper's LEM, with that alignment
+  AteResult ate;                          // the accuracy figure (best-fit alignment)
   ExmResult exm;
   EnmResult enm;
   std::optional<LocalisationReport> localisation;  // when the run has a localisation instant
