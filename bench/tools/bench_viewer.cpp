@@ -71,7 +71,7 @@ std::vector<uint8_t> map(int n) {
     e.y = 2.0 * std::sin(0.1 * i);
     e.dense = i % 3 == 0;
     m.experiences.push_back(e);
-    if (i > 0) m.links.push_back(link_t{i - 1, i, 0.1, 0.0, 0.1, kT0});
+    if (i > 0) m.links.push_back(link_t{i - 1, i, 0.1, 0.0, 0.1, kT0, 0, 0.002, 1.0, false});
   }
   m.num_experiences = n;
   m.num_links = static_cast<int32_t>(m.links.size());

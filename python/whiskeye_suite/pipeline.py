@@ -58,6 +58,8 @@ def metrics_of(run):
         "lem": lem["rmse"] if lem else None,
         "enm": run["enm"]["enm"],
         "experiences": run["counts"]["map_experiences"],
+        # Links of the final map the back end revoked (none from a slamd before it).
+        "links_revoked": run["counts"].get("map_links_revoked"),
         "relocalisations": exm["relocalisations_total"],
         "false_closures": exm.get("false_closures"),
         "false_closure_worst_m": exm.get("false_closure_worst_m"),

@@ -2,6 +2,9 @@
 #include "whiskeye/slam/experience_map.h"
 
 #include "whiskeye/slam/pose_cells.h"
+#include "whiskeye/slam/vita_slam.h"
+
+#include "old_formats.h"
 
 #include <gtest/gtest.h>
 
@@ -51,6 +54,85 @@ TEST(ExperienceMap, RelaxationTurnsADriftingSquareLoopIntoASquare) {
   for (double s : sides) EXPECT_NEAR(s, 2.0 * 1.03, 0.15);
   EXPECT_NEAR(d(c[0], c[2]), d(c[1], c[3]), 0.1);  // equal diagonals: a square, not a rhombus
   EXPECT_NEAR(d(c[0], c[2]), 2.0 * 1.03 * std::sqrt(2.0), 0.2);
+}
+
+// A ring of 40 experiences 0.1 m apart driven once (odometry exact), then closed twice: once
+// correctly and once onto a place 1.5 m away (a look-alike). The wrong link is revoked by the rest
+// of the map (its scale all but gone), the right one keeps its pull, and the ring keeps its shape.
+TEST(ExperienceMap, AClosureTheRestOfTheMapDisagreesWithIsRevokedAndTheMapKeepsItsShape) {
+  ExperienceMap m;
+  const int n = 40;
+  const double step = kTwoPi / n;
+  const auto ring = [&](int i) { return Pose2{std::cos(i * step), std::sin(i * step), wrap_angle(i * step + kPi / 2)}; };
+  for (int i = 0; i < n; ++i) {
+    m.add_experience(ring(i), Experience{});
+    if (i > 0) m.add_link(i - 1, i, between(ring(i - 1), ring(i)), i);
+  }
+  m.add_link(n - 1, 0, between(ring(n - 1), ring(0)), 100, 1);  // the lap closed where it is
+  // From experience 10 "recognised" as experience 25 (1.5 m away), with the odometry of one step.
+  m.add_link(10, 25, between(ring(10), ring(11)), 101, 1);
+  m.relax(2000);
+  const std::vector<Link>& links = m.links();
+  EXPECT_TRUE(links[links.size() - 1].revoked()) << links.back().scale;
+  EXPECT_FALSE(links[links.size() - 2].revoked());
+  EXPECT_GT(links[links.size() - 2].scale, 0.9);
+  for (std::size_t l = 0; l + 2 < links.size(); ++l) EXPECT_EQ(links[l].scale, 1.0) << "odometry is not robust";
+  double worst = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const Pose2& p = m.experiences()[static_cast<size_t>(i)].pose;
+    worst = std::max(worst, std::hypot(p.x - ring(i).x, p.y - ring(i).y));
+  }
+  EXPECT_LT(worst, 0.05) << "a wrong closure that kept its pull bends the ring by decimetres";
+  // Without the scaling (robust_phi 0) the same wrong link bends it.
+  ExperienceMapParams plain;
+  plain.robust_phi = 0.0;
+  ExperienceMap b(plain);
+  for (int i = 0; i < n; ++i) {
+    b.add_experience(ring(i), Experience{});
+    if (i > 0) b.add_link(i - 1, i, between(ring(i - 1), ring(i)), i);
+  }
+  b.add_link(n - 1, 0, between(ring(n - 1), ring(0)), 100, 1);
+  b.add_link(10, 25, between(ring(10), ring(11)), 101, 1);
+  b.relax(2000);
+  const Pose2& p10 = b.experiences()[10].pose;
+  EXPECT_GT(std::hypot(p10.x - ring(10).x, p10.y - ring(10).y), 0.1);
+}
+
+// A link's weight is its information: odometry between places the robot was at is precise, an end
+// it only recognised is up to half the experience spacing off. Two links disagree by 0.1 m about
+// where experience 1 is: the odometry links' (σ 0.002 m here) win over the re-localisation's (σ about
+// place_sigma_m), where every link counted alike (the mean: 0.05 m off each).
+TEST(ExperienceMap, ALinkToARecognisedPlacePullsLessThanOdometryBetweenPlacesTheRobotWasAt) {
+  ExperienceMapParams p;
+  p.robust_phi = 0.0;  // the weights alone
+  p.odometry_sigma_per_m = 0.02;
+  p.odometry_sigma_min_m = 0.002;
+  p.place_sigma_m = 0.03;
+  ExperienceMap m(p);
+  m.add_experience({0, 0, 0}, Experience{});
+  m.add_experience({0.1, 0, 0}, Experience{});
+  m.add_experience({0.2, 0, 0}, Experience{});
+  m.add_link(0, 1, {0.1, 0, 0}, 0);
+  m.add_link(1, 2, {0.1, 0, 0}, 0);
+  m.add_link(0, 2, {0.1, 0, 0}, 0, 1);  // says experience 2 is where 1 is
+  m.relax(500);
+  const double span = m.experiences()[2].pose.x - m.experiences()[0].pose.x;
+  EXPECT_NEAR(span, 0.2, 0.01);
+  EXPECT_NEAR(m.links()[0].sigma2, 0.002 * 0.002, 1e-12);
+  EXPECT_NEAR(m.links()[2].sigma2, 0.002 * 0.002 + 0.03 * 0.03, 1e-12);
+  // Weighted alike (place_sigma_m 0, a constant σ): the three links share the error.
+  ExperienceMapParams alike = p;
+  alike.place_sigma_m = 0.0;
+  alike.odometry_sigma_per_m = 0.0;
+  ExperienceMap e(alike);
+  e.add_experience({0, 0, 0}, Experience{});
+  e.add_experience({0.1, 0, 0}, Experience{});
+  e.add_experience({0.2, 0, 0}, Experience{});
+  e.add_link(0, 1, {0.1, 0, 0}, 0);
+  e.add_link(1, 2, {0.1, 0, 0}, 0);
+  e.add_link(0, 2, {0.1, 0, 0}, 0, 1);
+  e.relax(500);
+  EXPECT_LT(e.experiences()[2].pose.x - e.experiences()[0].pose.x, 0.15);
 }
 
 // Both ends of a link move by `correction` x its error: at 0.5 one loop closes a lone link, above it
@@ -348,8 +430,10 @@ TEST(ExperienceMap, ReadsOlderCheckpointsWithoutViewShiftsTravelOrRetiredFlags) 
   const PoseCells cells{PoseCellParams{}};
   ExperienceMap m;
   m.on_cycle(0, 0, 0, true, 10, 10, 0, cells, 1);
-  std::vector<uint8_t> v4;
-  m.serialise(v4);
+  std::vector<uint8_t> now;
+  m.serialise(now);
+  const std::vector<uint8_t> v4 = testing::map_as_format_5(now);
+  ASSERT_EQ(v4.size(), now.size() - 1);  // no link: only the "current recognised" flag
   // Version 3 is version 4 without the u8 retired flag after the view shift: 8 bytes of count, then
   // 7 f64, i64, 3 i32, u8, i32 for the one experience.
   std::vector<uint8_t> v3 = v4;
@@ -369,7 +453,11 @@ TEST(ExperienceMap, ReadsOlderCheckpointsWithoutViewShiftsTravelOrRetiredFlags) 
   EXPECT_EQ(r.experiences()[0].view_shift, 0);
   std::vector<uint8_t> again;
   r.serialise(again);
-  EXPECT_EQ(again, v4);
+  EXPECT_EQ(again, now);
+  ExperienceMap r4;
+  pos = 0;
+  r4.deserialise(v4, pos, 4, 1);
+  EXPECT_EQ(pos, v4.size());
   ExperienceMap r3;
   pos = 0;
   r3.deserialise(v3, pos, 3, 1);
@@ -380,6 +468,41 @@ TEST(ExperienceMap, ReadsOlderCheckpointsWithoutViewShiftsTravelOrRetiredFlags) 
   r2.deserialise(v2, pos, 2, 1);
   EXPECT_EQ(pos, v2.size());
   EXPECT_DOUBLE_EQ(r2.travel_since_relocalisation(), 0.0);
+}
+
+// A map saved before links had recognised ends: a link made after its `to` experience is a
+// re-localisation's (one end recognised, robust); a link made with its `to` is odometry's.
+TEST(ExperienceMap, ReadsLinksOfAnOlderCheckpointAsOdometryOrAReLocalisationsByTheirTimes) {
+  const PoseCells cells{PoseCellParams{}};
+  ExperienceMap m;
+  m.on_cycle(0, 0, -1, false, 0, 0, 0, cells, 1000);  // experience 0
+  m.integrate(0.1, 0.0, 0.0, 1.0);
+  m.on_cycle(1, 1, -1, false, 0, 0, 0, cells, 2000);  // experience 1, link 0 -> 1
+  m.integrate(0.1, 0.0, 0.0, 1.0);
+  m.on_cycle(2, 2, -1, false, 0, 0, 0, cells, 3000);  // experience 2, link 1 -> 2
+  m.integrate(-0.15, 0.0, 0.0, 1.0);
+  ASSERT_EQ(m.on_cycle(0, 0, -1, false, 0, 0, 0, cells, 4000).type, EventType::Relocalise);  // back onto 0
+  m.integrate(0.1, 0.0, 0.0, 1.0);
+  const Event next = m.on_cycle(3, 3, -1, false, 0, 0, 0, cells, 5000);  // experience 3 from a recognised one
+  ASSERT_EQ(next.type, EventType::NewExperience);
+  ASSERT_EQ(m.links().size(), 4u);
+  EXPECT_EQ(m.links()[0].recognised_ends, 0);
+  EXPECT_EQ(m.links()[1].recognised_ends, 0);
+  EXPECT_EQ(m.links()[2].recognised_ends, 1);  // 2 -> 0: the re-localisation's end
+  EXPECT_EQ(m.links()[3].recognised_ends, 1);  // 0 -> 3: from where it only recognised itself
+  std::vector<uint8_t> now;
+  m.serialise(now);
+  const std::vector<uint8_t> v5 = testing::map_as_format_5(now);
+  ExperienceMap r;
+  size_t pos = 0;
+  r.deserialise(v5, pos, 5, 4);
+  EXPECT_EQ(pos, v5.size());
+  ASSERT_EQ(r.links().size(), 4u);
+  EXPECT_EQ(r.links()[0].recognised_ends, 0);
+  EXPECT_EQ(r.links()[1].recognised_ends, 0);
+  EXPECT_EQ(r.links()[2].recognised_ends, 1);
+  EXPECT_EQ(r.links()[3].recognised_ends, 0) << "where the robot was when it was made is not in the old format";
+  for (const Link& l : r.links()) EXPECT_EQ(l.scale, 1.0);
 }
 
 TEST(ExperienceMap, ARetiredExperienceIsNeverACandidateAndStaysRetiredInACheckpoint) {
@@ -401,7 +524,8 @@ TEST(ExperienceMap, ARetiredExperienceIsNeverACandidateAndStaysRetiredInACheckpo
   m.serialise(blob);
   ExperienceMap r(p);
   size_t pos = 0;
-  r.deserialise(blob, pos, 4, 2);
+  r.deserialise(blob, pos, VitaSlam::kCheckpointFormat, 2);
+  EXPECT_EQ(pos, blob.size());
   EXPECT_TRUE(r.experiences()[1].retired);
   EXPECT_TRUE(r.experiences_of(1).empty());
   // Template 1 recognised again: its only experience is retired, so this is a new place of it.
@@ -455,7 +579,7 @@ TEST(ExperienceMap, SerialisationRoundTripsExactly) {
   m.serialise(a);
   ExperienceMap r;
   size_t pos = 0;
-  r.deserialise(a, pos, 4, 2);
+  r.deserialise(a, pos, VitaSlam::kCheckpointFormat, 2);
   EXPECT_EQ(pos, a.size());
   r.serialise(b);
   EXPECT_EQ(a, b);

@@ -2,10 +2,12 @@
 #include "whiskeye/slam/vita_slam.h"
 
 #include "whiskeye/slamd/mjpeg_decode.h"  // slamd's MJPEG decoder, which SlamNode gives the core
+#include "old_formats.h"
 #include "synthetic.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 
 #include <map>
@@ -512,13 +514,21 @@ TEST(VitaSlam, ARestoredCheckpointProducesByteIdenticalResults) {
   EXPECT_EQ(a.dead_reckon({0.1, 0, 0}), b.dead_reckon({0.1, 0, 0}));
 }
 
-// The checkpoint `blob` (format 5) as format 4 wrote it: without the templates' sensed whiskers.
+// The checkpoint `blob` (today's format) as format 4 wrote it: without the templates' sensed
+// whiskers (format 5) and the links' recognised ends and scales (format 6).
 std::vector<uint8_t> as_format_4(const std::vector<uint8_t>& blob, const VitaSlam& written) {
   constexpr size_t kHeader = 8 + 4 + 1 + 8 + 1 + 5 * 8;  // magic .. stats
   const auto n = static_cast<size_t>(written.templates().size());
   const size_t sensed_at = kHeader + written.templates().serialised_bytes() - (sizeof(uint64_t) + 4 * n);
+  std::vector<uint8_t> map;
+  written.map().serialise(map);
+  const auto map_at = static_cast<size_t>(std::search(blob.begin(), blob.end(), map.begin(), map.end()) - blob.begin());
+  const std::vector<uint8_t> old_map = testing::map_as_format_5(map);
   std::vector<uint8_t> out(blob.begin(), blob.begin() + static_cast<std::ptrdiff_t>(sensed_at));
-  out.insert(out.end(), blob.begin() + static_cast<std::ptrdiff_t>(sensed_at + sizeof(uint64_t) + 4 * n), blob.end() - 4);
+  out.insert(out.end(), blob.begin() + static_cast<std::ptrdiff_t>(sensed_at + sizeof(uint64_t) + 4 * n),
+             blob.begin() + static_cast<std::ptrdiff_t>(map_at));
+  out.insert(out.end(), old_map.begin(), old_map.end());
+  out.insert(out.end(), blob.begin() + static_cast<std::ptrdiff_t>(map_at + map.size()), blob.end() - 4);
   const uint32_t version = 4;
   std::memcpy(out.data() + 8, &version, 4);
   uint32_t h = 2166136261u;  // FNV-1a, as the format says
@@ -535,10 +545,15 @@ TEST(VitaSlam, AMapSavedInTheFormatBeforeResumesWithEveryTemplateFullySensed) {
   for (int c = 1; c <= 10; ++c) tour_cycle(a, w, c);
   const std::vector<uint8_t> blob = a.serialise();
   const std::vector<uint8_t> old = as_format_4(blob, a);
-  ASSERT_EQ(old.size(), blob.size() - sizeof(uint64_t) - 4 * static_cast<size_t>(a.templates().size()));
-  // The synthetic places sense every whisker: the same state, which decides as the original
-  // (VitaSlam.ARestoredCheckpointProducesByteIdenticalResults).
-  EXPECT_EQ(VitaSlam::deserialise(old, SlamParams{}, w.geometry).serialise(), blob);
+  const std::size_t links = a.map().links().size();
+  ASSERT_EQ(old.size(), blob.size() - sizeof(uint64_t) - 4 * static_cast<size_t>(a.templates().size()) - 9 * links - 1);
+  // The synthetic places sense every whisker: the same templates as the original's.
+  const VitaSlam restored = VitaSlam::deserialise(old, SlamParams{}, w.geometry);
+  std::vector<uint8_t> templates_now, templates_then;
+  a.templates().serialise(templates_now);
+  restored.templates().serialise(templates_then);
+  EXPECT_EQ(templates_then, templates_now);
+  EXPECT_EQ(restored.map().links().size(), links);
 }
 
 // Resume is state-complete: an instance restored from its own checkpoint after every cycle decides

@@ -318,6 +318,21 @@ TEST_F(ViewerBinary, LivePageRenderedInChromiumShowsTheMapsExperienceCountAndThe
   more.num_experiences = static_cast<int32_t>(more.experiences.size());
   publish(bus, channels::kVitaMap, more);
   EXPECT_TRUE(wait_until([&] { return browser.text("num-experiences") == std::to_string(more.num_experiences); }, 10));
+  EXPECT_EQ(browser.text("localisation"), "tracking");
+  // A link the back end revoked is counted on the page, and slamd LOCALISING is shown as such.
+  more.links.push_back(link_t{});
+  more.links.back().from_id = more.experiences.front().id;
+  more.links.back().to_id = extra.id;
+  more.links.back().revoked = true;
+  more.num_links = static_cast<int32_t>(more.links.size());
+  publish(bus, channels::kVitaMap, more);
+  EXPECT_TRUE(wait_until([&] { return browser.text("num-revoked") == "1"; }, 10)) << browser.text("num-revoked");
+  vita_pose_t lost{};
+  lost.utime = last_map.utime + 1'000'000;
+  lost.mode = vita_pose_t::MODE_VITA;
+  lost.localisation = vita_pose_t::LOCALISATION_LOCALISING;
+  publish(bus, channels::kVitaPose, lost);
+  EXPECT_TRUE(wait_until([&] { return browser.text("localisation") == "LOCALISING"; }, 10)) << browser.text("localisation");
 
   // A screenshot for people: build/tests/tools/viewer_results/viewer-live.png.
   fs::create_directories(VIEWER_RESULTS_DIR);

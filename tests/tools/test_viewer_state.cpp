@@ -50,6 +50,37 @@ TEST(ViewerState, LinksAreSentAsPairsOfExperienceIds) {
   const json map = s.snapshot()["map"];
   EXPECT_EQ(map["num_links"], 4);
   EXPECT_EQ(map["links"], json({0, 1, 1, 2, 2, 3, 3, 0}));
+  EXPECT_EQ(map["revoked"], json({0, 0, 0, 0}));
+  EXPECT_EQ(map["num_revoked"], 0);
+}
+
+// A link the back end revoked is flagged, so that the page draws it apart.
+TEST(ViewerState, ALinkTheBackEndRevokedIsFlaggedAndCounted) {
+  ViewerState s;
+  vita_map_t m = make_map(4, 0);
+  link_t wrong{};
+  wrong.from_id = 3;
+  wrong.to_id = 1;
+  wrong.scale = 1e-4;
+  wrong.revoked = true;
+  m.links.push_back(wrong);
+  m.num_links = static_cast<int32_t>(m.links.size());
+  ASSERT_TRUE(feed(s, channels::kVitaMap, m));
+  const json map = s.snapshot()["map"];
+  EXPECT_EQ(map["revoked"], json({0, 0, 0, 1}));
+  EXPECT_EQ(map["num_revoked"], 1);
+}
+
+// The page shows LOCALISING: the pose claims nothing while slamd does not know where it is.
+TEST(ViewerState, ThePoseSaysWhetherSlamdIsLocalising) {
+  ViewerState s;
+  vita_pose_t p = make_pose(1.0, 2.0);
+  ASSERT_TRUE(feed(s, channels::kVitaPose, p));
+  EXPECT_EQ(s.snapshot()["pose"]["localising"], false);
+  p.localisation = vita_pose_t::LOCALISATION_LOCALISING;
+  p.utime += 100000;
+  ASSERT_TRUE(feed(s, channels::kVitaPose, p));
+  EXPECT_EQ(s.snapshot()["pose"]["localising"], true);
 }
 
 TEST(ViewerState, NothingReceivedShowsEmptySections) {

@@ -23,6 +23,11 @@ void load(const ParamNode& n, ExperienceMapParams& p) {
   n.get("drift_base", p.drift_base, 0.0, 1000.0);
   n.get("drift_per_m", p.drift_per_m, 0.0, 1000.0);
   n.get("packet_trust_m", p.packet_trust_m, 0.0, 1e6);
+  n.get("odometry_sigma_per_m", p.odometry_sigma_per_m, 0.0, 1.0);
+  // A floor: without it a link of no length would have no σ and an infinite weight.
+  n.get("odometry_sigma_min_m", p.odometry_sigma_min_m, 1e-6, 1.0);
+  n.get("place_sigma_m", p.place_sigma_m, 0.0, 10.0);
+  n.get("robust_phi", p.robust_phi, 0.0, 1e6);
 }
 
 ExperienceMap::ExperienceMap(const ExperienceMapParams& params) : params_(params) {}
@@ -59,8 +64,6 @@ int ExperienceMap::add_experience(const Pose2& pose, const Experience& meta) {
   y_.push_back(pose.y);
   c_.push_back(std::cos(pose.theta));
   s_.push_back(std::sin(pose.theta));
-  inv_degree_.push_back(0.0);
-  degree_.push_back(0);
   if (e.template_id >= 0 && !e.retired) {
     if (static_cast<size_t>(e.template_id) >= by_template_.size()) by_template_.resize(static_cast<size_t>(e.template_id) + 1);
     by_template_[static_cast<size_t>(e.template_id)].push_back(e.id);
@@ -68,32 +71,41 @@ int ExperienceMap::add_experience(const Pose2& pose, const Experience& meta) {
   return e.id;
 }
 
-void ExperienceMap::add_link(int from, int to, const Pose2& delta, int64_t utime) {
+double ExperienceMap::link_sigma2(const Pose2& delta, int recognised_ends) const {
+  const double odometry = std::max(params_.odometry_sigma_min_m, params_.odometry_sigma_per_m * std::hypot(delta.x, delta.y));
+  return odometry * odometry + recognised_ends * params_.place_sigma_m * params_.place_sigma_m;
+}
+
+void ExperienceMap::add_link(int from, int to, const Pose2& delta, int64_t utime, int recognised_ends) {
   if (from < 0 || to < 0 || from >= size() || to >= size() || from == to) {
     throw std::invalid_argument("ExperienceMap::add_link: bad ends " + std::to_string(from) + " -> " + std::to_string(to));
   }
-  links_.push_back({from, to, delta, utime});
+  if (recognised_ends < 0 || recognised_ends > 2) {
+    throw std::invalid_argument("ExperienceMap::add_link: " + std::to_string(recognised_ends) + " recognised ends");
+  }
+  const double sigma2 = link_sigma2(delta, recognised_ends);
+  links_.push_back({from, to, delta, utime, recognised_ends, sigma2, 1.0});
   lfrom_.push_back(from);
   lto_.push_back(to);
   ldx_.push_back(delta.x);
   ldy_.push_back(delta.y);
   ldc_.push_back(std::cos(delta.theta));
   lds_.push_back(std::sin(delta.theta));
-  // A node's correction is the mean over its links.
-  ++degree_[static_cast<size_t>(from)];
-  ++degree_[static_cast<size_t>(to)];
-  inv_degree_[static_cast<size_t>(from)] = 1.0 / degree_[static_cast<size_t>(from)];
-  inv_degree_[static_cast<size_t>(to)] = 1.0 / degree_[static_cast<size_t>(to)];
+  lw_.push_back(1.0 / sigma2);
+  lrobust_.push_back(recognised_ends > 0 && params_.robust_phi > 0.0 ? 1 : 0);
+  lscale_.push_back(1.0);
 }
 
 void ExperienceMap::set_current(int id, const Pose2& offset) {
   current_ = id;
   offset_ = offset;
+  current_recognised_ = false;
 }
 
 void ExperienceMap::jump_to(int id, const Pose2& offset) {
   if (id < -1 || id >= size()) throw std::invalid_argument("ExperienceMap::jump_to: no experience " + std::to_string(id));
   set_current(id, offset);
+  current_recognised_ = true;
   travel_ = 0.0;
 }
 
@@ -173,7 +185,14 @@ void ExperienceMap::relax(int loops) {
   ax_.assign(n, 0.0);
   ay_.assign(n, 0.0);
   as_.assign(n, 0.0);
+  aw_.assign(n, 0.0);
+  inv_.assign(n, 0.0);
   const double f = params_.correction;
+  const double phi = params_.robust_phi;
+  double* __restrict aw = aw_.data();
+  double* __restrict scale = lscale_.data();
+  const double* __restrict lw = lw_.data();
+  const uint8_t* __restrict robust = lrobust_.data();
   double* __restrict x = x_.data();
   double* __restrict y = y_.data();
   double* __restrict c = c_.data();
@@ -181,7 +200,7 @@ void ExperienceMap::relax(int loops) {
   double* __restrict ax = ax_.data();
   double* __restrict ay = ay_.data();
   double* __restrict as = as_.data();
-  const double* __restrict inv = inv_degree_.data();
+  double* __restrict inv = inv_.data();
   for (int loop = 0; loop < loops; ++loop) {
     for (size_t l = 0; l < nl; ++l) {
       const auto a = static_cast<size_t>(lfrom_[l]);
@@ -189,21 +208,38 @@ void ExperienceMap::relax(int loops) {
       const double ca = c[a], sa = s[a];
       const double px = x[a] + ca * ldx_[l] - sa * ldy_[l];
       const double py = y[a] + sa * ldx_[l] + ca * ldy_[l];
-      const double ex = x[b] - px, ey = y[b] - py;
+      double ex = x[b] - px, ey = y[b] - py;
+      // Dynamic covariance scaling: s = min(1, 2Φ / (Φ + χ²)), the pull weighted by s².
+      if (robust[l] != 0) {
+        const double chi2 = (ex * ex + ey * ey) * lw[l];
+        const double sc = chi2 <= phi ? 1.0 : 2.0 * phi / (phi + chi2);
+        scale[l] = sc * sc;
+      }
+      const double w = lw[l] * scale[l];
+      ex *= w;
+      ey *= w;
       ax[a] += ex;
       ay[a] += ey;
       ax[b] -= ex;
       ay[b] -= ey;
+      aw[a] += w;
+      aw[b] += w;
       // q = R_a·R_δ: the heading b should have.
       const double qc = ca * ldc_[l] - sa * lds_[l];
       const double qs = sa * ldc_[l] + ca * lds_[l];
       // sin of b's heading error ε = θ_b − (θ_a + δθ): a turns by +ε, b by −ε.
-      const double es = qc * s[b] - qs * c[b];
+      const double es = w * (qc * s[b] - qs * c[b]);
       as[a] += es;
       as[b] -= es;
     }
+    // A node's correction is the weighted mean over its links.
+    for (size_t i = 0; i < n; ++i) {
+      inv[i] = aw[i] > 0.0 ? 1.0 / aw[i] : 0.0;
+      aw[i] = 0.0;
+    }
     apply_corrections(n, f, inv, x, y, c, s, ax, ay, as);
   }
+  for (size_t l = 0; l < nl; ++l) links_[l].scale = scale[l];
   // Products of unit complex numbers drift off the circle by rounding only; renormalise once.
   for (size_t i = 0; i < n; ++i) {
     const double k = 1.0 / std::sqrt(c[i] * c[i] + s[i] * s[i]);
@@ -236,7 +272,7 @@ Event ExperienceMap::on_cycle(int template_id, int visual_template_id, int tacti
     const Pose2 pose = current_pose();
     const int from = current_;
     const int id = add_experience(pose, meta);
-    if (from >= 0) add_link(from, id, offset_, utime);
+    if (from >= 0) add_link(from, id, offset_, utime, current_recognised_ ? 1 : 0);
     set_current(id);
     ev = {EventType::NewExperience, from, id};
   };
@@ -293,9 +329,10 @@ Event ExperienceMap::on_cycle(int template_id, int visual_template_id, int tacti
         for (size_t l = 0; l < lfrom_.size() && !linked; ++l) {
           linked = (lfrom_[l] == from && lto_[l] == nearest) || (lfrom_[l] == nearest && lto_[l] == from);
         }
-        if (!linked) add_link(from, nearest, offset_, utime);
+        if (!linked) add_link(from, nearest, offset_, utime, 1 + (current_recognised_ ? 1 : 0));
       }
       set_current(nearest);
+      current_recognised_ = true;
       travel_ = 0.0;
       ev = {EventType::Relocalise, from, nearest};
     } else {
@@ -333,8 +370,11 @@ void ExperienceMap::serialise(std::vector<uint8_t>& out) const {
     bin::put<double>(out, links_[l].delta.y);
     bin::put<double>(out, links_[l].delta.theta);
     bin::put<int64_t>(out, links_[l].utime_created);
+    bin::put<uint8_t>(out, static_cast<uint8_t>(links_[l].recognised_ends));
+    bin::put<double>(out, lscale_[l]);
   }
   bin::put<int32_t>(out, current_);
+  bin::put<uint8_t>(out, current_recognised_ ? 1 : 0);
   bin::put<double>(out, offset_.x);
   bin::put<double>(out, offset_.y);
   bin::put<double>(out, offset_.theta);
@@ -389,14 +429,27 @@ void ExperienceMap::deserialise(const std::vector<uint8_t>& in, size_t& pos, uin
     d.theta = bin::get<double>(in, pos);
     const auto ut = bin::get<int64_t>(in, pos);
     if (!finite({d.x, d.y, d.theta})) throw std::runtime_error("checkpoint: link " + std::to_string(l) + " is not finite");
+    int recognised = 0;
+    double scale = 1.0;
+    if (format_version >= 6) {
+      recognised = bin::get<uint8_t>(in, pos);
+      scale = bin::get<double>(in, pos);
+      if (!std::isfinite(scale) || scale < 0.0 || scale > 1.0) {
+        throw std::runtime_error("checkpoint: link " + std::to_string(l) + " has a scale outside [0, 1]");
+      }
+    } else if (to >= 0 && to < m.size() && ut > m.meta_[static_cast<size_t>(to)].utime_created) {
+      recognised = 1;  // made after its `to`: a re-localisation's link
+    }
     try {
-      m.add_link(from, to, d, ut);
+      m.add_link(from, to, d, ut, recognised);
     } catch (const std::invalid_argument& e) {
       throw std::runtime_error(std::string("checkpoint: ") + e.what());
     }
+    m.lscale_.back() = m.links_.back().scale = scale;
   }
   m.current_ = bin::get<int32_t>(in, pos);
   if (m.current_ < -1 || m.current_ >= m.size()) throw std::runtime_error("checkpoint: bad current experience");
+  if (format_version >= 6) m.current_recognised_ = bin::get<uint8_t>(in, pos) != 0;
   m.offset_.x = bin::get<double>(in, pos);
   m.offset_.y = bin::get<double>(in, pos);
   m.offset_.theta = bin::get<double>(in, pos);

@@ -3,6 +3,7 @@
 
 #include "whiskeye/common/whisker_array.h"
 
+#include <cmath>
 #include <whiskeye/vita_pose_t.hpp>
 
 namespace whiskeye::slamd {
@@ -130,6 +131,10 @@ vita_map_t map_message(const slam::ExperienceMap& map, int64_t utime, slam::Mode
     x.dy = l.delta.y;
     x.dtheta = l.delta.theta;
     x.utime_created = l.utime_created;
+    x.recognised_ends = static_cast<int8_t>(l.recognised_ends);
+    x.sigma = std::sqrt(l.sigma2);
+    x.scale = l.scale;
+    x.revoked = l.revoked();
     msg.links.push_back(x);
   }
   msg.num_links = static_cast<int32_t>(msg.links.size());

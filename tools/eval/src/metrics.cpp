@@ -19,6 +19,10 @@ const MapExperience* ExperienceMap::find(int32_t id) const {
   return nullptr;
 }
 
+std::size_t ExperienceMap::revoked_links() const {
+  return static_cast<std::size_t>(std::count_if(links.begin(), links.end(), [](const MapLink& l) { return l.revoked; }));
+}
+
 ExperienceIndex::ExperienceIndex(const ExperienceMap& map) {
   by_id_.reserve(map.experiences.size());
   for (const MapExperience& e : map.experiences) by_id_.emplace(e.id, &e);
@@ -282,7 +286,7 @@ double rms(const std::vector<double>& e, std::size_t begin, std::size_t end) {
 }  // namespace
 
 std::vector<PoseSample> claimed_poses(const std::vector<PoseSample>& estimate, const std::vector<StateSample>& states) {
-  if (states.empty()) return estimate;
+  if (states.empty() || estimate.empty()) return estimate;
   if (states.size() != estimate.size()) {
     throw std::invalid_argument(std::to_string(states.size()) + " localisation states for " +
                                 std::to_string(estimate.size()) + " pose samples");

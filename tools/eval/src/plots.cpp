@@ -24,6 +24,7 @@ using figure::Xy;
 
 const Rgb kGrey{170, 170, 170};     // ground truth
 const Rgb kBlue{30, 110, 200};      // links, sparse experiences
+const Rgb kPink{240, 150, 190};     // links the back end revoked
 const Rgb kOrange{255, 140, 0};     // dense experiences
 const Rgb kGreen{40, 160, 40};      // correct re-localisation
 const Rgb kAmber{235, 150, 0};      // neighbour miss: wrong by the paper, within the false-closure tolerance
@@ -78,7 +79,8 @@ void draw_experience_map(FigurePanel& panel, const EvalInput& input, const Pose2
     const MapExperience* i = by_id.find(l.from_id);
     const MapExperience* j = by_id.find(l.to_id);
     if (i == nullptr || j == nullptr) continue;
-    panel.polyline({at(compose(T, i->pose)), at(compose(T, j->pose))}, kBlue, 1, "link");
+    panel.polyline({at(compose(T, i->pose)), at(compose(T, j->pose))}, l.revoked ? kPink : kBlue, 1,
+                   l.revoked ? "link revoked" : "link");
   }
   for (const MapExperience& e : input.map.experiences) {
     const Pose2 w = compose(T, e.pose);
@@ -106,8 +108,10 @@ void truth_legend(Figure& fig, const EvalInput& input) {
   }
 }
 
-void map_legend(Figure& fig) {
+// `revoked`: how many links the back end revoked (their legend entry only where there are any).
+void map_legend(Figure& fig, std::size_t revoked) {
   fig.legend({LegendEntry::Kind::Line, kBlue, 1, "link"});
+  if (revoked > 0) fig.legend({LegendEntry::Kind::Line, kPink, 1, "link revoked by the back end (" + std::to_string(revoked) + ")"});
   fig.legend({LegendEntry::Kind::Dot, kOrange, 5, "dense experience (contacts)"});
   fig.legend({LegendEntry::Kind::Ring, kBlue, 4, "sparse experience"});
   fig.legend({LegendEntry::Kind::Tick, kBlue, 4, "tick: the experience's heading"});
@@ -279,7 +283,7 @@ std::vector<std::string> plot_run(const std::string& dir, const PlotRun& run, co
     draw_experience_map(panel, input, pl.T_plot_map);
     world_legend(fig, scene);
     truth_legend(fig, input);
-    map_legend(fig);
+    map_legend(fig, input.map.revoked_links());
     keep(write(fig, base + "_experience_map"));
   }
 
@@ -419,7 +423,9 @@ std::vector<std::string> plot_comparison(const std::string& dir, const std::vect
                                          const PlotScene& scene) {
   Figure fig("experience maps side by side");
   bool any_truth = false;
+  std::size_t revoked = 0;
   for (const PlotRun& run : runs) {
+    revoked += run.input->map.revoked_links();
     const Placement pl = place(*run.input, *run.result, scene);
     FigurePanel& panel = fig.add_panel(run.label);
     draw_scene(panel, *run.input, scene, pl);
@@ -428,7 +434,7 @@ std::vector<std::string> plot_comparison(const std::string& dir, const std::vect
   }
   world_legend(fig, scene);
   if (any_truth) fig.legend({LegendEntry::Kind::Line, kGrey, 2, "ground truth"});
-  map_legend(fig);
+  map_legend(fig, revoked);
   fig.share_axes(true);
   return write(fig, (std::filesystem::path(dir) / "comparison").string());
 }

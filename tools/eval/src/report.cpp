@@ -317,7 +317,7 @@ std::string format_table(const std::vector<RunReport>& runs, const EvalParams& p
     out << r.label << " (" << r.path << "):\n";
     out << "  samples: " << r.pose_samples << " VITA_POSE, " << r.events << " VITA_EVENT, "
         << r.ground_truth_samples << " GROUND_TRUTH; final map " << r.map_experiences << " experiences, "
-        << r.map_links << " links\n";
+        << r.map_links << " links (" << r.map_links_revoked << " revoked by the back end)\n";
     for (const auto& [ch, n] : r.decode_errors) out << "  undecodable messages on " << ch << ": " << n << "\n";
     if (!r.faults.empty()) {
       out << "  simulated faults (SIM_FAULT):";
@@ -415,6 +415,7 @@ nlohmann::json to_json(const std::vector<RunReport>& runs, const EvalParams& par
                            {"events", r.events},
                            {"map_experiences", r.map_experiences},
                            {"map_links", r.map_links},
+                           {"map_links_revoked", r.map_links_revoked},
                            {"ground_truth_samples", r.ground_truth_samples}}},
                          {"decode_errors", decode},
                          {"faults", faults},

@@ -20,6 +20,7 @@ struct RunReport {
   std::size_t events = 0;
   std::size_t map_experiences = 0;
   std::size_t map_links = 0;
+  std::size_t map_links_revoked = 0;
   std::size_t ground_truth_samples = 0;
   std::map<std::string, int64_t> decode_errors;
   std::string log_damage;  // empty: the log was read whole

@@ -79,6 +79,7 @@ RunReport evaluate_input(const std::string& path, const std::vector<PoseSample>&
   r.events = run.input.events.size();
   r.map_experiences = run.input.map.experiences.size();
   r.map_links = run.input.map.links.size();
+  r.map_links_revoked = run.input.map.revoked_links();
   r.ground_truth_samples = run.input.ground_truth.size();
   r.decode_errors = run.decode_errors;
   r.log_damage = run.log_damage;

@@ -272,22 +272,28 @@ json ViewerState::map_json() const {
     dense.push_back(e.dense ? 1 : 0);
   }
   json links = json::array();  // flat: from, to, from, to, ...
+  json revoked = json::array();  // per link: 1 where the back end revoked it
+  int num_revoked = 0;
   for (const link_t& l : map_.links) {
     links.push_back(l.from_id);
     links.push_back(l.to_id);
+    revoked.push_back(l.revoked ? 1 : 0);
+    num_revoked += l.revoked ? 1 : 0;
   }
   return {{"utime", map_.utime},
           {"mode", mode_name(map_.mode)},
           {"current", map_.current_experience_id},
           {"num_experiences", map_.num_experiences},
           {"num_links", map_.num_links},
+          {"num_revoked", num_revoked},
           {"num_dense", num_dense_},
           {"num_sparse", map_.num_experiences - num_dense_},
           {"id", std::move(ids)},
           {"x", std::move(xs)},
           {"y", std::move(ys)},
           {"dense", std::move(dense)},
-          {"links", std::move(links)}};
+          {"links", std::move(links)},
+          {"revoked", std::move(revoked)}};
 }
 
 json ViewerState::pose_json() const {
@@ -298,6 +304,7 @@ json ViewerState::pose_json() const {
           {"theta", mm(pose_.theta)},
           {"experience_id", pose_.experience_id},
           {"template_id", pose_.template_id},
+          {"localising", pose_.localisation == vita_pose_t::LOCALISATION_LOCALISING},
           {"mode", mode_name(pose_.mode)}};
 }
 

@@ -55,14 +55,20 @@ function drawMap() {
   if (map) {
     const at = new Map();
     map.id.forEach((id, i) => at.set(id, i));
-    g.strokeStyle = '#4b5563'; g.lineWidth = 1;
-    g.beginPath();
-    for (let i = 0; i + 1 < map.links.length; i += 2) {
-      const a = at.get(map.links[i]), b = at.get(map.links[i + 1]);
-      if (a === undefined || b === undefined) continue;
-      g.moveTo(X(map.x[a]), Y(map.y[a])); g.lineTo(X(map.x[b]), Y(map.y[b]));
+    // Links in grey; those the back end revoked (the rest of the map disagrees) dashed in pink.
+    for (const revoked of [0, 1]) {
+      g.strokeStyle = revoked ? '#f778ba' : '#4b5563'; g.lineWidth = 1;
+      g.setLineDash(revoked ? [4, 3] : []);
+      g.beginPath();
+      for (let i = 0; i + 1 < map.links.length; i += 2) {
+        if ((map.revoked[i / 2] || 0) !== revoked) continue;
+        const a = at.get(map.links[i]), b = at.get(map.links[i + 1]);
+        if (a === undefined || b === undefined) continue;
+        g.moveTo(X(map.x[a]), Y(map.y[a])); g.lineTo(X(map.x[b]), Y(map.y[b]));
+      }
+      g.stroke();
     }
-    g.stroke();
+    g.setLineDash([]);
   }
   // The trail over the links (where the robot went, in the map frame), under the experiences.
   if (trail && trail.xy.length >= 4) {
@@ -102,12 +108,18 @@ function renderMap() {
   $('num-dense').textContent = m ? m.num_dense : 0;
   $('num-sparse').textContent = m ? m.num_sparse : 0;
   $('num-links').textContent = m ? m.num_links : 0;
+  $('num-revoked').textContent = m ? m.num_revoked : 0;
   $('current-experience').textContent = m && m.current >= 0 ? m.current : '—';
   $('map-mode').textContent = m ? m.mode + ' mode' : '';
   const p = S.pose;
   $('pose').textContent = p
     ? `pose x ${fmt(p.x, 2)} m, y ${fmt(p.y, 2)} m, θ ${fmt(p.theta * 180 / Math.PI, 0)}°, experience ${p.experience_id}, template ${p.template_id}`
     : 'pose —';
+  // LOCALISING: slamd does not know where it is (after a suspected kidnap, or on a saved map); the
+  // pose above claims nothing until it commits.
+  const loc = $('localisation');
+  loc.textContent = !p ? '—' : p.localising ? 'LOCALISING' : 'tracking';
+  loc.className = p && p.localising ? 'state localising' : 'state';
   drawMap();
 }
 

@@ -6,9 +6,14 @@
 // Relaxation: each loop computes, for every link a→b, the error between b and a ∘ δ, and moves
 // both ends towards agreement — positions by `correction`·error, headings by `correction`·sin of
 // the heading error (equal to the error to first order, the right sign for any error below π) —
-// averaging over a node's links (damped Jacobi). Headings are kept as unit complex numbers
-// (cos, sin) and turned by multiplication with a Taylor-series rotation, so the loop needs no
-// trigonometry, square root or division; arrays are contiguous (no pointer chasing).
+// a weighted mean over a node's links (damped Jacobi). A link's weight is its information, 1/σ²
+// (ExperienceMapParams, "the back end"): an odometry measurement between two places where the robot
+// was is precise; an end the robot only recognised (a re-localisation put it at that experience,
+// up to half the experience spacing from where the experience was made) is not, and such a link is
+// also robust: dynamic covariance scaling turns it off when the rest of the map disagrees with it.
+// Headings are kept as unit complex numbers (cos, sin) and turned by multiplication with a
+// Taylor-series rotation, so the loop needs no trigonometry or square root; arrays are contiguous
+// (no pointer chasing).
 #pragma once
 
 #include "whiskeye/common/params.h"
@@ -52,7 +57,24 @@ struct ExperienceMapParams {
   // delta_pc_threshold) while the robot has re-localised within this distance travelled; after a
   // longer stretch without any, the nearest in the map (the packet may have drifted away).
   double packet_trust_m = 1.0;
+  // The back end (docs/slam-core.md, "The back end: weighted, revocable links"). A link's σ² is
+  //   max(odometry_sigma_min_m, odometry_sigma_per_m · its length)² + (recognised ends) · place_sigma_m²,
+  // its weight 1/σ². A link with a recognised end is weighted further by dynamic covariance scaling
+  // (Agarwal et al., ICRA 2013): s² with s = min(1, 2Φ / (Φ + χ²)), χ² = |position residual|² / σ²,
+  // recomputed every relaxation loop, so that a closure the rest of the map disagrees with loses its
+  // pull (revoked below kRevokedScale) and regains it if the map comes to agree. robust_phi 0 turns
+  // the scaling off; odometry_sigma_per_m and place_sigma_m 0 weigh every link alike (RatSLAM's).
+  // The σ's are those measured on the default arena's links against ground truth (2 cm on a 10 cm
+  // link of odometry, 4.6 cm with a recognised end); Φ = 64 keeps the full pull up to 8 σ (0.3 m), so
+  // that only a closure metres off is revoked: the first closures of a drifting loop are 0.2-0.3 m
+  // off and must bend it (docs/results.md, "The back end").
+  double odometry_sigma_per_m = 0.2;   // m per m of the link's length
+  double odometry_sigma_min_m = 0.01;  // m: the σ of a link too short for the term above
+  double place_sigma_m = 0.03;         // m: where a recognised place puts the robot, against where it is
+  double robust_phi = 64.0;            // DCS's Φ: the χ² up to which a link keeps its whole pull
 };
+// A link's scale s² below this (its pull all but gone) is reported as revoked.
+inline constexpr double kRevokedScale = 0.01;
 void load(const ParamNode& node, ExperienceMapParams& p);
 
 struct Experience {
@@ -75,6 +97,12 @@ struct Link {
   int to = -1;
   Pose2 delta;  // pose of `to` in the frame of `from`, as measured by odometry
   int64_t utime_created = 0;
+  // Ends the robot only recognised (0..2): `from` when the robot had re-localised onto it, `to`
+  // when this link is a re-localisation's. A link with one is robust (ExperienceMapParams).
+  int recognised_ends = 0;
+  double sigma2 = 1.0;  // m²: the link's σ² (its weight is 1 / sigma2, times scale for a robust one)
+  double scale = 1.0;   // DCS's s² after the last relaxation (1 for a link that is not robust)
+  bool revoked() const { return scale < kRevokedScale; }
 };
 
 class ExperienceMap {
@@ -105,7 +133,8 @@ class ExperienceMap {
 
   // Building blocks (public for tests and the benchmark).
   int add_experience(const Pose2& pose, const Experience& meta);
-  void add_link(int from, int to, const Pose2& delta, int64_t utime);
+  // `recognised_ends`: Link::recognised_ends; its σ² follows from the parameters.
+  void add_link(int from, int to, const Pose2& delta, int64_t utime, int recognised_ends = 0);
   void set_current(int id, const Pose2& offset = {});
   // Moves the base to `offset` from experience `id` without a link (the odometry since the current
   // experience says nothing about the way there: a localisation after a kidnap or a restart).
@@ -128,12 +157,15 @@ class ExperienceMap {
   void set_params(const ExperienceMapParams& p) { params_ = p; }
 
   void serialise(std::vector<uint8_t>& out) const;
-  // format_version: the checkpoint's; version 1 had no view shifts (read as 0). Template ids must be
+  // format_version: the checkpoint's; version 1 had no view shifts (read as 0); before version 6 links
+  // had no recognised ends (a link made after its `to` experience is read as a re-localisation's, one
+  // end recognised) and the link scales restart at 1. Template ids must be
   // below num_templates, poses finite and headings unit vectors (std::runtime_error otherwise).
   void deserialise(const std::vector<uint8_t>& in, size_t& pos, uint32_t format_version, int num_templates);
 
  private:
   void sync_poses() const;
+  double link_sigma2(const Pose2& delta, int recognised_ends) const;
 
   ExperienceMapParams params_;
   mutable std::vector<Experience> meta_;
@@ -144,10 +176,13 @@ class ExperienceMap {
   std::vector<double> x_, y_, c_, s_;
   std::vector<int32_t> lfrom_, lto_;
   std::vector<double> ldx_, ldy_, ldc_, lds_;
-  std::vector<double> inv_degree_;
-  std::vector<int32_t> degree_;
-  std::vector<double> ax_, ay_, as_;  // scratch: per-loop sums of position errors and sin(heading error)
+  std::vector<double> lw_;       // 1 / σ² of every link
+  std::vector<uint8_t> lrobust_;  // whether it is scaled by DCS
+  std::vector<double> lscale_;   // its scale s² after the last relaxation
+  std::vector<double> inv_;      // scratch: 1 / (a node's weight sum) in the current loop
+  std::vector<double> ax_, ay_, as_, aw_;  // scratch: per-loop weighted sums of errors, and of weights
   int current_ = -1;
+  bool current_recognised_ = false;  // the robot re-localised onto the current experience (not made it)
   Pose2 offset_;
   double travel_ = 0.0;  // m since the last re-localisation
   bool frozen_ = false;

@@ -79,8 +79,9 @@ class VitaSlam {
  public:
   // The checkpoint format written (the version above); older ones down to 1 are read.
   // 2: experiences carry their view shift; 3: the map its travelled distance; 4: the localiser's
-  // state; 5: each template the whiskers it sensed.
-  static constexpr uint32_t kCheckpointFormat = 5;
+  // state; 5: each template the whiskers it sensed; 6: each link its recognised ends and scale, the
+  // map whether the robot recognised its current experience.
+  static constexpr uint32_t kCheckpointFormat = 6;
 
   VitaSlam(const SlamParams& params, const RobotGeometry& geometry);
 

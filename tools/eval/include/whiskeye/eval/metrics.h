@@ -51,11 +51,13 @@ struct MapExperience {
 struct MapLink {
   int32_t from_id = -1;
   int32_t to_id = -1;
+  bool revoked = false;  // the back end turned it off (VITA_MAP link_t.revoked)
 };
 
 struct ExperienceMap {
   std::vector<MapExperience> experiences;
   std::vector<MapLink> links;
+  std::size_t revoked_links() const;
   const MapExperience* find(int32_t id) const;  // linear: a loop looks up through an ExperienceIndex
 };
 
@@ -200,7 +202,7 @@ struct AteResult {
 
 // The pose samples that claim a pose: those not reported while LOCALISING. `states` is VITA_POSE's
 // localisation state of each `estimate` sample (parallel to it), or empty when none was reported;
-// throws std::invalid_argument when it is neither.
+// throws std::invalid_argument when it is neither (and there are poses).
 std::vector<PoseSample> claimed_poses(const std::vector<PoseSample>& estimate, const std::vector<StateSample>& states);
 
 // Over claimed_poses(estimate, states) (throws as it does).
