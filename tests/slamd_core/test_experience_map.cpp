@@ -83,7 +83,13 @@ TEST(ExperienceMap, AClosureTheRestOfTheMapDisagreesWithIsRevokedAndTheMapKeepsI
     worst = std::max(worst, std::hypot(p.x - ring(i).x, p.y - ring(i).y));
   }
   EXPECT_LT(worst, 0.05) << "a wrong closure that kept its pull bends the ring by decimetres";
-  // Without the scaling (robust_phi 0) the same wrong link bends it.
+  // Without the scaling (robust_phi 0, here set on the map made) the same wrong link bends it.
+  ExperienceMapParams off;
+  off.robust_phi = 0.0;
+  m.set_params(off);
+  m.relax(2000);
+  EXPECT_FALSE(m.links().back().revoked());
+  EXPECT_GT(std::hypot(m.experiences()[10].pose.x - ring(10).x, m.experiences()[10].pose.y - ring(10).y), 0.1);
   ExperienceMapParams plain;
   plain.robust_phi = 0.0;
   ExperienceMap b(plain);

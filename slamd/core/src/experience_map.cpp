@@ -32,6 +32,16 @@ void load(const ParamNode& n, ExperienceMapParams& p) {
 
 ExperienceMap::ExperienceMap(const ExperienceMapParams& params) : params_(params) {}
 
+void ExperienceMap::set_params(const ExperienceMapParams& p) {
+  params_ = p;
+  for (size_t l = 0; l < links_.size(); ++l) {
+    links_[l].sigma2 = link_sigma2(links_[l].delta, links_[l].recognised_ends);
+    lw_[l] = 1.0 / links_[l].sigma2;
+    lrobust_[l] = links_[l].recognised_ends > 0 && params_.robust_phi > 0.0 ? 1 : 0;
+    if (lrobust_[l] == 0) lscale_[l] = links_[l].scale = 1.0;
+  }
+}
+
 const std::vector<Experience>& ExperienceMap::experiences() const {
   sync_poses();
   return meta_;

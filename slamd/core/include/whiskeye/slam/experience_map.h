@@ -154,7 +154,8 @@ class ExperienceMap {
   void set_frozen(bool frozen) { frozen_ = frozen; }
 
   const ExperienceMapParams& params() const { return params_; }
-  void set_params(const ExperienceMapParams& p) { params_ = p; }
+  // New parameters; every link's σ² and whether it is robust follow them.
+  void set_params(const ExperienceMapParams& p);
 
   void serialise(std::vector<uint8_t>& out) const;
   // format_version: the checkpoint's; version 1 had no view shifts (read as 0); before version 6 links
