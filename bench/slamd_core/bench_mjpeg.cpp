@@ -5,6 +5,8 @@
 // docs/performance.md ("### MJPEG decode").
 // Frames: a camera-like grey image (gradients, edges, ±12 grey levels of sensor noise) encoded as a
 // UVC camera sends it (baseline JPEG, YCbCr 4:2:2, quality 85; tests/support/mjpeg_pattern.h).
+// Then what slamd's decoder costs to refuse the probes of docs/reliability.md ("Hostile input,
+// round 3"; tests/support/hostile_jpeg.h).
 #include <benchmark/benchmark.h>
 
 #include <opencv2/core.hpp>
@@ -15,9 +17,11 @@
 #include <algorithm>
 #include <random>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "whiskeye/slamd/mjpeg_decode.h"
+#include "hostile_jpeg.h"
 #include "mjpeg_pattern.h"
 
 namespace {
@@ -55,6 +59,15 @@ void BM_MjpegDecodeSlamd(benchmark::State& state) {
     whiskeye::slamd::decode_mjpeg_grey(jpeg, w, h, grey.data(), static_cast<std::size_t>(w));
     benchmark::DoNotOptimize(grey.data());
   }
+  label(state);
+}
+
+// What the SLAM core and the viewer pay before they allocate the image: check_mjpeg_frame(), which
+// has libjpeg read the header (the decode reads it again).
+void BM_MjpegCheckSlamd(benchmark::State& state) {
+  const auto [w, h] = kSizes[state.range(0)];
+  const std::vector<uint8_t>& jpeg = frame(state.range(0));
+  for (auto _ : state) whiskeye::slamd::check_mjpeg_frame(jpeg, w, h);
   label(state);
 }
 
@@ -96,10 +109,39 @@ void BM_YuyvToGreyReference(benchmark::State& state) {
   label(state);
 }
 
+// The probes, each refused by slamd's decoder (the time is the refusal's): 0 a 640x480 frame hiding a
+// 32000 x 32000 progressive header (905 bytes; 2.0 GB and 5 s before).
+struct Probe {
+  const char* name;
+  int width, height;
+  std::vector<uint8_t> (*make)();
+};
+const Probe kProbes[] = {
+    {"hidden 32000x32000 header", 640, 480,
+     [] { return whiskeye::test::camera_frame_hiding_progressive(640, 480, 32000, 32000); }},
+};
+
+void BM_MjpegRefuseHostile(benchmark::State& state) {
+  const Probe& p = kProbes[state.range(0)];
+  const std::vector<uint8_t> jpeg = p.make();
+  std::vector<uint8_t> grey(static_cast<std::size_t>(p.width) * p.height);
+  for (auto _ : state) {
+    try {
+      whiskeye::slamd::decode_mjpeg_grey(jpeg, p.width, p.height, grey.data(), static_cast<std::size_t>(p.width));
+      state.SkipWithError("the probe was decoded");
+      break;
+    } catch (const whiskeye::slam::InputError&) {
+    }
+  }
+  state.SetLabel(std::string(p.name) + ", " + std::to_string(jpeg.size()) + " bytes");
+}
+
 }  // namespace
 
 BENCHMARK(BM_MjpegDecodeSlamd)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_MjpegCheckSlamd)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_MjpegDecodeImdecode)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_MjpegDecodeTurbojpeg)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_YuyvToGreyReference)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_MjpegRefuseHostile)->Arg(0)->Unit(benchmark::kMicrosecond);
 BENCHMARK_MAIN();

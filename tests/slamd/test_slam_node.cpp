@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include "hostile_jpeg.h"
 #include "mjpeg_pattern.h"
 
 #include <functional>
@@ -448,24 +449,37 @@ TEST_F(SlamNodeTest, AWhiskCycleWithoutAValidSampleIsMappedWithoutTouchAndIsNotA
   EXPECT_NE(lines[0].find("whisk cycle 0 has no valid sample: mapped without touch"), std::string::npos) << lines[0];
 }
 
+// A frame the core cannot use, whatever is wrong with it (the hostile ones from
+// tests/support/hostile_jpeg.h): counted, its reason logged, the cycle mapped without vision.
 TEST_F(SlamNodeTest, AFrameTheCoreCannotUseIsCountedAndLoggedAndTheCycleRunsWithoutVision) {
+  const std::vector<std::pair<std::vector<uint8_t>, std::string>> frames{
+      {std::vector<uint8_t>(500, 0x42), "cycle 0: image: MJPEG frame"},
+      {test::camera_frame_hiding_progressive(640, 480, 32000, 32000),
+       "cycle 1: image: MJPEG frame is 32000x32000 by its JPEG header, the message says 640x480"},
+  };
   std::vector<std::string> lines;
   node_->set_logger([&](const std::string& l) { lines.push_back(l); });
-  image_t junk{};
-  junk.utime = kT0 + kS;
-  junk.width = 640;
-  junk.height = 480;
-  junk.pixelformat = image_t::PIXEL_FORMAT_MJPEG;
-  junk.data.assign(500, 0x42);
-  junk.size = 500;
-  publish(in_, "CAMERA", junk);
-  publish(in_, "WHISK_CYCLE", free_cycle(0, kT0 + kS));
-  node_->flush();
-  ASSERT_EQ(matches_.size(), 1u);
-  EXPECT_FALSE(matches_[0].visual_used);
-  EXPECT_EQ(node_->counters().validation_errors, 1);
-  ASSERT_EQ(lines.size(), 1u);
-  EXPECT_NE(lines[0].find("cycle 0: image: MJPEG frame"), std::string::npos) << lines[0];
+  int64_t now = 0;
+  node_->set_log_clock([&] { return now; });
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    now += 11 * kS;  // past the log's rate limit: each refusal gets its line
+    const int64_t t = kT0 + static_cast<int64_t>(i + 1) * kS;
+    image_t frame{};
+    frame.utime = t;
+    frame.width = 640;
+    frame.height = 480;
+    frame.pixelformat = image_t::PIXEL_FORMAT_MJPEG;
+    frame.data = frames[i].first;
+    frame.size = static_cast<int32_t>(frame.data.size());
+    publish(in_, "CAMERA", frame);
+    publish(in_, "WHISK_CYCLE", free_cycle(static_cast<int64_t>(i), t));
+    node_->flush();
+    ASSERT_EQ(matches_.size(), i + 1);
+    EXPECT_FALSE(matches_[i].visual_used);
+    EXPECT_EQ(node_->counters().validation_errors, static_cast<int64_t>(i + 1));
+    ASSERT_EQ(lines.size(), i + 1);
+    EXPECT_NE(lines[i].find(frames[i].second), std::string::npos) << lines[i];
+  }
 }
 
 // The core decodes no MJPEG itself: the node gives it slamd's decoder (mjpeg_decode.h).

@@ -2,7 +2,10 @@
 #include "viewer_messages.h"
 
 #include "whiskeye/common/channels.h"
+#include "whiskeye/viewer/camera_jpeg.h"
 #include "whiskeye/viewer/viewer_state.h"
+
+#include "hostile_jpeg.h"
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
@@ -319,6 +322,21 @@ TEST(ViewerState, AGreyMjpegOrColourFrameEachConvert) {
   ViewerState s;
   ASSERT_TRUE(feed(s, channels::kCamera, bad));
   EXPECT_EQ(s.camera_jpeg(), nullptr);
+}
+
+// /api/camera.jpg of a frame hiding a 32000 x 32000 progressive header behind a 640x480 one took the
+// viewer from 52 MB to 1.18 GB (MemoryMax=512M on the robot): refused from libjpeg's own header.
+TEST(ViewerState, AnMjpegFrameHidingAHugeHeaderIsNotShownAndSaysWhy) {
+  const std::vector<uint8_t> hostile = whiskeye::test::camera_frame_hiding_progressive(640, 480, 32000, 32000);
+  Frame f;
+  f.utime = kT0;
+  f.width = 640;
+  f.height = 480;
+  f.pixelformat = image_t::PIXEL_FORMAT_MJPEG;
+  f.data = hostile;
+  std::string reason;
+  EXPECT_EQ(frame_to_jpeg(f, 320, 80, &reason), nullptr);
+  EXPECT_EQ(reason, "image: MJPEG frame is 32000x32000 by its JPEG header, the message says 640x480");
 }
 
 }  // namespace

@@ -16,6 +16,45 @@ using slam::InputError;
 
 namespace {
 
+// Decoding costs what the header claims, not what the message weighs: a 331-byte JPEG claiming
+// 10000 x 10000 took 2 s and 550 MB. No camera of this robot comes near 16.8 MP.
+constexpr int64_t kMaxJpegPixels = int64_t{4096} * 4096;
+
+// libjpeg's bound on its whole-image buffers (max_memory_to_use), which a progressive or multi-scan
+// frame needs: libjpeg-turbo 2.1 applies it to those only (a larger one fails with "Backing store
+// not supported"), not to its tables and row buffers. The coefficients of the largest grey image.
+constexpr long kMaxJpegBufferBytes = static_cast<long>(kMaxJpegPixels * sizeof(JCOEF));
+
+// What libjpeg read in the frame's header (jpeg_read_header, up to the first scan), i.e. what it
+// would decode: the one parse whose answer is checked.
+struct JpegHeader {
+  int width = 0, height = 0;
+};
+
+// What a frame's header must be before libjpeg allocates for the image: the message's size, at most
+// kMaxJpegPixels. jpeg_start_decompress allocates what the header claims (a progressive file's
+// whole-image buffer, 2 bytes a pixel: a 905-byte frame hiding a 32000 x 32000 progressive header
+// costs 2 GB there).
+enum class HeaderCheck { kOk, kWrongSize, kTooLarge };
+
+HeaderCheck check_header(const JpegHeader& h, int width, int height) {
+  if (h.width != width || h.height != height) return HeaderCheck::kWrongSize;
+  if (int64_t{width} * height > kMaxJpegPixels) return HeaderCheck::kTooLarge;
+  return HeaderCheck::kOk;
+}
+
+std::string header_refusal(HeaderCheck c, const JpegHeader& h, int width, int height) {
+  const std::string size = std::to_string(width) + "x" + std::to_string(height);
+  switch (c) {
+    case HeaderCheck::kOk: break;
+    case HeaderCheck::kWrongSize:
+      return "image: MJPEG frame is " + std::to_string(h.width) + "x" + std::to_string(h.height) +
+             " by its JPEG header, the message says " + size;
+    case HeaderCheck::kTooLarge: return "image: MJPEG frame of " + size + " is larger than 4096x4096 pixels";
+  }
+  return "image: MJPEG frame refused";
+}
+
 // MJPEG frames are decoded with libjpeg directly (as OpenCV's imdecode does underneath) so that its
 // warnings are seen: a frame cut short in transfer with an end-of-image marker appended decodes
 // "successfully", greyed out where data is missing, with only libjpeg's own unprefixed "Corrupt JPEG
@@ -28,6 +67,8 @@ struct JpegDecoder {
   std::jmp_buf jump;
   char error[JMSG_LENGTH_MAX];
   char warning[JMSG_LENGTH_MAX];
+  JpegHeader header;
+  HeaderCheck check = HeaderCheck::kOk;
 };
 
 void jpeg_on_error(j_common_ptr c) {
@@ -44,11 +85,13 @@ void jpeg_on_message(j_common_ptr c, int level) {
 
 void jpeg_no_output(j_common_ptr) {}
 
-enum class JpegResult { kOk, kError, kWarning, kWrongSize };
+enum class JpegResult { kOk, kError, kWarning, kRefused, kWrongOutput };
 
-// Decodes `data` as greyscale into `out` (width x height, `stride` bytes per row).
-JpegResult decode_jpeg_grey(JpegDecoder* d, const uint8_t* data, std::size_t size, uint8_t* out, std::size_t stride,
-                            int width, int height) {
+// Reads `jpeg`'s header with libjpeg into d->header and checks it (d->check); then, with `out`,
+// decodes the frame as greyscale into `out` (width x height, `stride` bytes per row). Without `out`
+// only the header is read: libjpeg allocates its tables, nothing the size of the image.
+JpegResult run_libjpeg(JpegDecoder* d, std::span<const uint8_t> jpeg, int width, int height, uint8_t* out,
+                       std::size_t stride) {
   d->error[0] = d->warning[0] = '\0';
   d->cinfo.err = jpeg_std_error(&d->err);
   d->err.error_exit = jpeg_on_error;
@@ -59,63 +102,61 @@ JpegResult decode_jpeg_grey(JpegDecoder* d, const uint8_t* data, std::size_t siz
     jpeg_destroy_decompress(&d->cinfo);
     return JpegResult::kError;
   }
-  jpeg_mem_src(&d->cinfo, data, static_cast<unsigned long>(size));
+  d->cinfo.mem->max_memory_to_use = kMaxJpegBufferBytes;
+  jpeg_mem_src(&d->cinfo, jpeg.data(), static_cast<unsigned long>(jpeg.size()));
   jpeg_read_header(&d->cinfo, TRUE);
-  d->cinfo.out_color_space = JCS_GRAYSCALE;
-  jpeg_start_decompress(&d->cinfo);
-  if (static_cast<int>(d->cinfo.output_width) != width || static_cast<int>(d->cinfo.output_height) != height ||
-      d->cinfo.output_components != 1) {
-    jpeg_destroy_decompress(&d->cinfo);
-    return JpegResult::kWrongSize;
+  d->header.width = static_cast<int>(d->cinfo.image_width);
+  d->header.height = static_cast<int>(d->cinfo.image_height);
+  d->check = check_header(d->header, width, height);
+  JpegResult result = JpegResult::kOk;
+  if (d->check != HeaderCheck::kOk) {
+    result = JpegResult::kRefused;
+  } else if (d->err.num_warnings > 0) {
+    result = JpegResult::kWarning;
+  } else if (out != nullptr) {
+    d->cinfo.out_color_space = JCS_GRAYSCALE;
+    jpeg_start_decompress(&d->cinfo);
+    if (static_cast<int>(d->cinfo.output_width) != width || static_cast<int>(d->cinfo.output_height) != height ||
+        d->cinfo.output_components != 1) {
+      jpeg_destroy_decompress(&d->cinfo);
+      return JpegResult::kWrongOutput;
+    }
+    while (d->cinfo.output_scanline < d->cinfo.output_height) {
+      JSAMPROW row = out + static_cast<std::size_t>(d->cinfo.output_scanline) * stride;
+      jpeg_read_scanlines(&d->cinfo, &row, 1);
+    }
+    jpeg_finish_decompress(&d->cinfo);
+    if (d->err.num_warnings > 0) result = JpegResult::kWarning;
   }
-  while (d->cinfo.output_scanline < d->cinfo.output_height) {
-    JSAMPROW row = out + static_cast<std::size_t>(d->cinfo.output_scanline) * stride;
-    jpeg_read_scanlines(&d->cinfo, &row, 1);
-  }
-  jpeg_finish_decompress(&d->cinfo);
-  const bool warned = d->err.num_warnings > 0;
   jpeg_destroy_decompress(&d->cinfo);
-  return warned ? JpegResult::kWarning : JpegResult::kOk;
+  return result;
 }
 
-// Decoding costs what the header claims, not what the message weighs: a 331-byte JPEG claiming
-// 10000 x 10000 took 2 s and 550 MB. No camera of this robot comes near 16.8 MP.
-constexpr int64_t kMaxJpegPixels = int64_t{4096} * 4096;
+// Checks `jpeg` and, with `out`, decodes it (run_libjpeg); throws InputError naming what was wrong.
+void read_mjpeg(std::span<const uint8_t> jpeg, int width, int height, uint8_t* out, std::size_t stride) {
+  if (jpeg.empty()) throw InputError("image: empty MJPEG frame");
+  // A frame cut off in transfer has no end marker; libjpeg would decode it anyway, greying out what
+  // is missing, with a warning only once it ran out of data.
+  if (!jpeg::ends_with_eoi(jpeg)) throw InputError("image: MJPEG frame cut off (no end-of-image marker)");
+  JpegDecoder decoder;
+  switch (run_libjpeg(&decoder, jpeg, width, height, out, stride)) {
+    case JpegResult::kOk: return;
+    case JpegResult::kError: throw InputError(std::string("image: MJPEG frame does not decode: ") + decoder.error);
+    case JpegResult::kWarning: throw InputError(std::string("image: MJPEG frame is damaged (") + decoder.warning + ")");
+    case JpegResult::kRefused: throw InputError(header_refusal(decoder.check, decoder.header, width, height));
+    case JpegResult::kWrongOutput: throw InputError("image: MJPEG frame decodes to another size than its header's");
+  }
+  throw InputError("image: MJPEG frame does not decode");
+}
 
 }  // namespace
 
 void check_mjpeg_frame(std::span<const uint8_t> jpeg, int width, int height) {
-  if (jpeg.empty()) throw InputError("image: empty MJPEG frame");
-  // cv::imdecode took the size from the header, not from the message: a few hundred bytes can
-  // claim 32752 x 32752 pixels (gigabytes, seconds of CPU), so the header is read first.
-  const auto [header_width, header_height] = jpeg::frame_size(jpeg);
-  if (header_width == 0 || header_height == 0) {
-    throw InputError("image: MJPEG frame without a readable JPEG frame header");
-  }
-  if (header_width != width || header_height != height) {
-    throw InputError("image: MJPEG frame is " + std::to_string(header_width) + "x" + std::to_string(header_height) +
-                     " by its JPEG header, the message says " + std::to_string(width) + "x" +
-                     std::to_string(height));
-  }
-  if (int64_t{width} * height > kMaxJpegPixels) {
-    throw InputError("image: MJPEG frame of " + std::to_string(width) + "x" + std::to_string(height) +
-                     " is larger than 4096x4096 pixels");
-  }
-  // A frame cut off in transfer has no end marker; OpenCV would decode it anyway, greying out what
-  // is missing, and that grey would become a template.
-  if (!jpeg::ends_with_eoi(jpeg)) throw InputError("image: MJPEG frame cut off (no end-of-image marker)");
+  read_mjpeg(jpeg, width, height, nullptr, 0);
 }
 
 void decode_mjpeg_grey(std::span<const uint8_t> jpeg, int width, int height, uint8_t* out, std::size_t stride) {
-  check_mjpeg_frame(jpeg, width, height);
-  JpegDecoder decoder;
-  switch (decode_jpeg_grey(&decoder, jpeg.data(), jpeg.size(), out, stride, width, height)) {
-    case JpegResult::kOk: return;
-    case JpegResult::kError: throw InputError(std::string("image: MJPEG frame does not decode: ") + decoder.error);
-    case JpegResult::kWarning: throw InputError(std::string("image: MJPEG frame is damaged (") + decoder.warning + ")");
-    case JpegResult::kWrongSize: throw InputError("image: MJPEG frame decodes to another size than its header's");
-  }
-  throw InputError("image: MJPEG frame does not decode");
+  read_mjpeg(jpeg, width, height, out, stride);
 }
 
 slam::FrameDecoder mjpeg_decoder() {

@@ -1,7 +1,8 @@
 // A JPEG's marker structure, read without decoding: the frame size its header claims, whether it
-// ends, and whether it is put together as a JPEG at all. One home for camerad (which refuses a
-// damaged MJPEG frame before it publishes it, counting it) and slamd (which reads the size before it
-// decodes, since decoding costs what the header claims). Pure; no allocation.
+// ends, and whether it is put together as a JPEG at all: camerad refuses a damaged MJPEG frame with
+// it before it publishes it, counting it. slamd's decoder reads only ends_with_eoi() here: the size
+// it checks is the one libjpeg parsed (a second parser's answer is not the one that counts). Pure;
+// no allocation.
 #pragma once
 
 #include <cstdint>

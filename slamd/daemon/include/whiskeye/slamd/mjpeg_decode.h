@@ -15,16 +15,19 @@
 
 namespace whiskeye::slamd {
 
-// What is checked before decoding, without allocating (so the caller may allocate `out` after it):
-// the size in the JPEG's header must be the message's (`width` x `height`) and at most 4096 x 4096
-// (decoding costs what the header claims), and the frame must end with its end-of-image marker.
-// Throws InputError ("image: MJPEG frame ...").
+// What is checked before decoding, allocating only libjpeg's tables (so the caller may allocate
+// `out` after it). libjpeg reads the header (jpeg_read_header: the one parse whose answer counts, the
+// header libjpeg will decode), which must give the message's size (`width` x `height`) and at most
+// 4096 x 4096 (decoding costs what the header claims). Any warning of libjpeg's while reading the
+// header refuses the frame too, and the frame must end with its end-of-image marker. Throws
+// InputError ("image: MJPEG frame ...").
 void check_mjpeg_frame(std::span<const uint8_t> jpeg, int width, int height);
 
-// Decodes `jpeg` to grey into `out` (`stride` bytes a row, `height` rows), after check_mjpeg_frame().
-// Any warning of libjpeg's refuses the frame (a frame cut short with an EOI appended decodes
-// "successfully", greyed out where data is missing), with libjpeg's words in the reason; libjpeg
-// writes nothing to stderr. Throws InputError ("image: MJPEG frame ...").
+// Decodes `jpeg` to grey into `out` (`stride` bytes a row, `height` rows), after the checks of
+// check_mjpeg_frame() on the header it decodes. Any warning of libjpeg's refuses the frame (a frame
+// cut short with an EOI appended decodes "successfully", greyed out where data is missing), with
+// libjpeg's words in the reason; libjpeg writes nothing to stderr. Throws InputError ("image: MJPEG
+// frame ...").
 void decode_mjpeg_grey(std::span<const uint8_t> jpeg, int width, int height, uint8_t* out, std::size_t stride);
 
 // The two above as the SLAM core's decoder of kPixMjpeg frames.

@@ -1,0 +1,159 @@
+// Hostile JPEG frames built from real ones (see hostile_jpeg.h). Marker codes from ITU-T T.81, B.1.
+#include "hostile_jpeg.h"
+
+#include "mjpeg_pattern.h"
+
+#include <algorithm>
+#include <csetjmp>
+#include <cstdio>
+#include <cstdlib>
+#include <iterator>
+#include <stdexcept>
+#include <string>
+
+// libjpeg's C API, after <cstdio> (it needs FILE).
+#include <jpeglib.h>
+
+namespace whiskeye::test {
+namespace {
+
+constexpr uint8_t kSOI = 0xd8, kEOI = 0xd9, kSOS = 0xda, kDHT = 0xc4, kAPP1 = 0xe1;
+
+bool is_sof(uint8_t m) { return m >= 0xc0 && m <= 0xcf && m != kDHT && m != 0xc8 && m != 0xcc; }
+
+std::size_t length_at(std::span<const uint8_t> j, std::size_t pos) { return (std::size_t{j[pos + 2]} << 8) | j[pos + 3]; }
+
+void append(std::vector<uint8_t>& out, std::span<const uint8_t> j, const JpegSegment& s) {
+  out.insert(out.end(), j.begin() + static_cast<std::ptrdiff_t>(s.begin), j.begin() + static_cast<std::ptrdiff_t>(s.end));
+}
+
+// libjpeg reports a fatal error by longjmp; nothing with a destructor lives between setjmp and it.
+struct Encoder {
+  jpeg_compress_struct cinfo;
+  jpeg_error_mgr err;
+  std::jmp_buf jump;
+  char message[JMSG_LENGTH_MAX];
+};
+
+void on_encoder_error(j_common_ptr c) {
+  auto* e = reinterpret_cast<Encoder*>(reinterpret_cast<char*>(c->err) - offsetof(Encoder, err));
+  (*c->err->format_message)(c, e->message);
+  std::longjmp(e->jump, 1);
+}
+
+struct EncodeOptions {
+  int quality = 85;
+  bool progressive = false;  // libjpeg's simple progression
+};
+
+// `pixels` (width x height grey, no padding) encoded with libjpeg.
+std::vector<uint8_t> encode(std::span<const uint8_t> pixels, int width, int height, const EncodeOptions& o) {
+  Encoder e;
+  unsigned char* buffer = nullptr;
+  unsigned long size = 0;
+  e.cinfo.err = jpeg_std_error(&e.err);
+  e.err.error_exit = on_encoder_error;
+  jpeg_create_compress(&e.cinfo);
+  if (setjmp(e.jump) != 0) {
+    jpeg_destroy_compress(&e.cinfo);
+    std::free(buffer);
+    throw std::runtime_error(std::string("libjpeg: ") + e.message);
+  }
+  jpeg_mem_dest(&e.cinfo, &buffer, &size);
+  e.cinfo.image_width = static_cast<JDIMENSION>(width);
+  e.cinfo.image_height = static_cast<JDIMENSION>(height);
+  e.cinfo.input_components = 1;
+  e.cinfo.in_color_space = JCS_GRAYSCALE;
+  jpeg_set_defaults(&e.cinfo);
+  jpeg_set_quality(&e.cinfo, o.quality, TRUE);
+  if (o.progressive) jpeg_simple_progression(&e.cinfo);
+  jpeg_start_compress(&e.cinfo, TRUE);
+  const auto row_bytes = static_cast<std::size_t>(width);
+  while (e.cinfo.next_scanline < e.cinfo.image_height) {
+    // libjpeg's API takes rows as non-const; it only reads them.
+    JSAMPROW row = const_cast<JSAMPROW>(pixels.data() + e.cinfo.next_scanline * row_bytes);
+    jpeg_write_scanlines(&e.cinfo, &row, 1);
+  }
+  jpeg_finish_compress(&e.cinfo);
+  jpeg_destroy_compress(&e.cinfo);
+  std::vector<uint8_t> jpeg(buffer, buffer + size);
+  std::free(buffer);
+  return jpeg;
+}
+
+}  // namespace
+
+std::vector<JpegSegment> jpeg_segments(std::span<const uint8_t> j) {
+  if (j.size() < 4 || j[0] != 0xff || j[1] != kSOI) throw std::runtime_error("jpeg_segments: no start-of-image marker");
+  std::vector<JpegSegment> out{{kSOI, 0, 2}};
+  std::size_t pos = 2;
+  while (true) {
+    if (pos + 2 > j.size() || j[pos] != 0xff) throw std::runtime_error("jpeg_segments: no marker at " + std::to_string(pos));
+    const uint8_t marker = j[pos + 1];
+    if (marker == kEOI) {
+      out.push_back({kEOI, pos, pos + 2});
+      return out;
+    }
+    if (pos + 4 > j.size()) throw std::runtime_error("jpeg_segments: cut short");
+    std::size_t end = pos + 2 + length_at(j, pos);
+    if (marker == kSOS) {
+      // Entropy-coded data up to the next marker that is neither a stuffed zero nor a restart marker.
+      while (end + 1 < j.size() && !(j[end] == 0xff && j[end + 1] != 0x00 && (j[end + 1] < 0xd0 || j[end + 1] > 0xd7))) {
+        end += j[end] == 0xff ? 2 : 1;
+      }
+    }
+    if (end > j.size()) throw std::runtime_error("jpeg_segments: a segment runs past the end");
+    out.push_back({marker, pos, end});
+    pos = end;
+  }
+}
+
+std::vector<uint8_t> encode_jpeg_scans(std::span<const uint8_t> grey, int width, int height, int stride,
+                                       ScanLayout layout, int quality) {
+  std::vector<uint8_t> pixels(static_cast<std::size_t>(width) * height);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) pixels[static_cast<std::size_t>(y) * width + x] = grey[static_cast<std::size_t>(y) * stride + x];
+  }
+  EncodeOptions o;
+  o.quality = quality;
+  o.progressive = layout == ScanLayout::kProgressive;
+  return encode(pixels, width, height, o);
+}
+
+std::vector<uint8_t> with_frame_size(std::vector<uint8_t> jpeg, int width, int height) {
+  for (const JpegSegment& s : jpeg_segments(jpeg)) {
+    if (!is_sof(s.marker)) continue;
+    jpeg[s.begin + 5] = static_cast<uint8_t>(height >> 8);
+    jpeg[s.begin + 6] = static_cast<uint8_t>(height);
+    jpeg[s.begin + 7] = static_cast<uint8_t>(width >> 8);
+    jpeg[s.begin + 8] = static_cast<uint8_t>(width);
+    return jpeg;
+  }
+  throw std::runtime_error("with_frame_size: no frame header");
+}
+
+std::vector<uint8_t> hide_frame_behind(std::span<const uint8_t> shown, std::span<const uint8_t> hidden) {
+  std::vector<uint8_t> header;  // shown's segments after SOI, up to its first scan
+  for (const JpegSegment& s : jpeg_segments(shown)) {
+    if (s.marker == kSOS) break;
+    if (s.marker != kSOI) append(header, shown, s);
+  }
+  if (header.size() + 2 > 0xffff) throw std::runtime_error("hide_frame_behind: header too long for an APP1 segment");
+  const std::size_t app1 = header.size() + 2;
+  // FF 00 and "00 06": a segment of 6 bytes to a walk that takes FF 00 for one, which then lands on
+  // shown's header inside the APP1 (at offset 10); libjpeg skips the four bytes up to the APP1.
+  const uint8_t start[] = {0xff, kSOI, 0xff, 0x00, 0x00, 0x06, 0xff, kAPP1, static_cast<uint8_t>(app1 >> 8),
+                           static_cast<uint8_t>(app1)};
+  std::vector<uint8_t> out(sizeof(start) + header.size() + hidden.size() - 2);
+  const auto rest = std::copy(header.begin(), header.end(), std::copy(std::begin(start), std::end(start), out.begin()));
+  std::copy(hidden.begin() + 2, hidden.end(), rest);
+  return out;
+}
+
+std::vector<uint8_t> camera_frame_hiding_progressive(int width, int height, int hidden_width, int hidden_height) {
+  const std::vector<uint8_t> flat(64 * 48, 128);
+  const std::vector<uint8_t> hidden = encode_jpeg_scans(flat, 64, 48, 64, ScanLayout::kProgressive);
+  return hide_frame_behind(mjpeg_pattern_jpeg(width, height, 52), with_frame_size(hidden, hidden_width, hidden_height));
+}
+
+}  // namespace whiskeye::test
