@@ -5,8 +5,9 @@
 // docs/performance.md ("### MJPEG decode").
 // Frames: a camera-like grey image (gradients, edges, ±12 grey levels of sensor noise) encoded as a
 // UVC camera sends it (baseline JPEG, YCbCr 4:2:2, quality 85; tests/support/mjpeg_pattern.h).
-// Then what slamd's decoder costs to refuse the probes of docs/reliability.md ("Hostile input,
-// round 3"; tests/support/hostile_jpeg.h).
+// Then the bounds on a hostile frame (tests/support/hostile_jpeg.h): what slamd's decoder costs to
+// refuse the probes of docs/reliability.md ("Hostile input, round 3"), and to decode the costliest
+// frame it takes, at the largest size it takes (4096 x 4096).
 #include <benchmark/benchmark.h>
 
 #include <opencv2/core.hpp>
@@ -110,7 +111,8 @@ void BM_YuyvToGreyReference(benchmark::State& state) {
 }
 
 // The probes, each refused by slamd's decoder (the time is the refusal's): 0 a 640x480 frame hiding a
-// 32000 x 32000 progressive header (905 bytes; 2.0 GB and 5 s before).
+// 32000 x 32000 progressive header (905 bytes; 2.0 GB and 5 s before), 1 a progressive 4096 x 4096
+// frame of 15,000 repeated AC scans (561 kB; 18-30 s before), 2 the same at 640x480 with 40,000.
 struct Probe {
   const char* name;
   int width, height;
@@ -119,6 +121,8 @@ struct Probe {
 const Probe kProbes[] = {
     {"hidden 32000x32000 header", 640, 480,
      [] { return whiskeye::test::camera_frame_hiding_progressive(640, 480, 32000, 32000); }},
+    {"4096x4096, 15,000 AC scans", 4096, 4096, [] { return whiskeye::test::progressive_with_repeated_scans(4096, 4096, 15'000); }},
+    {"640x480, 40,000 AC scans", 640, 480, [] { return whiskeye::test::progressive_with_repeated_scans(640, 480, 40'000); }},
 };
 
 void BM_MjpegRefuseHostile(benchmark::State& state) {
@@ -136,6 +140,19 @@ void BM_MjpegRefuseHostile(benchmark::State& state) {
   state.SetLabel(std::string(p.name) + ", " + std::to_string(jpeg.size()) + " bytes");
 }
 
+// The upper bound on one frame: the costliest baseline frame per pixel the decoder takes
+// (costliest_baseline_jpeg: RGB noise, 4:4:4, quality 100, a restart marker every MCU) at 4096 x 4096.
+void BM_MjpegDecodeCostliestAccepted(benchmark::State& state) {
+  constexpr int kSide = 4096;
+  const std::vector<uint8_t> jpeg = whiskeye::test::costliest_baseline_jpeg(kSide, kSide, 1);
+  std::vector<uint8_t> grey(static_cast<std::size_t>(kSide) * kSide);
+  for (auto _ : state) {
+    whiskeye::slamd::decode_mjpeg_grey(jpeg, kSide, kSide, grey.data(), kSide);
+    benchmark::DoNotOptimize(grey.data());
+  }
+  state.SetLabel("4096x4096, " + std::to_string(jpeg.size() / (1024 * 1024)) + " MiB");
+}
+
 }  // namespace
 
 BENCHMARK(BM_MjpegDecodeSlamd)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
@@ -143,5 +160,6 @@ BENCHMARK(BM_MjpegCheckSlamd)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_MjpegDecodeImdecode)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_MjpegDecodeTurbojpeg)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_YuyvToGreyReference)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
-BENCHMARK(BM_MjpegRefuseHostile)->Arg(0)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_MjpegRefuseHostile)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_MjpegDecodeCostliestAccepted)->Unit(benchmark::kMillisecond);
 BENCHMARK_MAIN();

@@ -50,6 +50,10 @@ const std::vector<uint8_t>& camera_frame() {
   return f;
 }
 
+std::vector<uint8_t> pattern_jpeg(test::ScanLayout layout) {
+  return test::encode_jpeg_scans(test::mjpeg_pattern(640, 480, 52), 640, 480, 640, layout);
+}
+
 TEST(MjpegDecode, ACameraFrameIsCheckedAndDecoded) {
   EXPECT_EQ(check_reason(camera_frame(), 640, 480), "");
   EXPECT_EQ(decode_reason(camera_frame(), 640, 480), "");
@@ -71,6 +75,42 @@ TEST(MjpegDecode, TheSizeCheckedIsTheHeaderLibjpegDecodesNotWhatAnotherParserRea
   // Hiding a frame of the message's size does not pass either: libjpeg warned of the bytes it skipped.
   EXPECT_EQ(check_reason(test::hide_frame_behind(camera_frame(), camera_frame()), 640, 480),
             "image: MJPEG frame is damaged (Corrupt JPEG data: 4 extraneous bytes before marker 0xe1)");
+}
+
+// A progressive frame is decoded from all its scans into a whole-image buffer before its first row:
+// 15,000 repeated scans of AC coefficients (35 bytes each, no warning: libjpeg's progression checks
+// let them follow one another) took 18-30 s at 4096 x 4096, 0.84-1.5 s at 640 x 480 with 40,000, and
+// were taken as a template. No camera sends one: refused from its header, before any scan is read.
+TEST(MjpegDecode, AProgressiveFrameIsRefusedByItsHeaderHoweverFewItsScans) {
+  const std::string says =
+      "image: MJPEG frame is a progressive JPEG; only baseline JPEG (one sequential, Huffman-coded scan) is decoded, "
+      "as a camera sends it";
+  const std::vector<uint8_t> progressive = pattern_jpeg(test::ScanLayout::kProgressive);
+  EXPECT_EQ(check_reason(progressive, 640, 480), says);
+  EXPECT_EQ(decode_reason(progressive, 640, 480), says);
+  const std::vector<uint8_t> scans = test::progressive_with_repeated_scans(640, 480, 40'000);
+  EXPECT_EQ(check_reason(scans, 640, 480), says);
+  EXPECT_EQ(decode_reason(scans, 640, 480), says);
+}
+
+// Sequential frames can hold many scans too (one component in each: then every block of a repeated
+// one is decoded again, 1.5 ms a scan at 640 x 480) and arithmetic coding, which no camera uses.
+TEST(MjpegDecode, AFrameWithSeveralScansOrArithmeticCodingIsRefusedByItsHeader) {
+  const std::string baseline = "; only baseline JPEG (one sequential, Huffman-coded scan) is decoded, as a camera sends it";
+  const std::vector<uint8_t> per_component = pattern_jpeg(test::ScanLayout::kScanPerComponent);
+  const std::string scans = "image: MJPEG frame has its 3 components in several scans (1 in the first)" + baseline;
+  EXPECT_EQ(check_reason(per_component, 640, 480), scans);
+  EXPECT_EQ(decode_reason(test::with_repeated_last_scan(per_component, 1000), 640, 480), scans);
+  EXPECT_EQ(check_reason(pattern_jpeg(test::ScanLayout::kArithmetic), 640, 480),
+            "image: MJPEG frame is arithmetic-coded" + baseline);
+}
+
+// In a frame whose first scan holds every component libjpeg refuses a second scan itself: what
+// keeps a baseline frame's decode to one pass (libjpeg-turbo 2.1 behaviour, pinned).
+TEST(MjpegDecode, ABaselineFrameWithMoreScansAppendedIsRefusedByLibjpeg) {
+  const std::vector<uint8_t> more = test::with_repeated_last_scan(camera_frame(), 100);
+  EXPECT_EQ(check_reason(more, 640, 480), "") << "its header is a camera's";
+  EXPECT_EQ(decode_reason(more, 640, 480), "image: MJPEG frame does not decode: Didn't expect more than one scan");
 }
 
 }  // namespace

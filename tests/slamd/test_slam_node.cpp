@@ -456,6 +456,7 @@ TEST_F(SlamNodeTest, AFrameTheCoreCannotUseIsCountedAndLoggedAndTheCycleRunsWith
       {std::vector<uint8_t>(500, 0x42), "cycle 0: image: MJPEG frame"},
       {test::camera_frame_hiding_progressive(640, 480, 32000, 32000),
        "cycle 1: image: MJPEG frame is 32000x32000 by its JPEG header, the message says 640x480"},
+      {test::progressive_with_repeated_scans(640, 480, 1000), "cycle 2: image: MJPEG frame is a progressive JPEG"},
   };
   std::vector<std::string> lines;
   node_->set_logger([&](const std::string& l) { lines.push_back(l); });

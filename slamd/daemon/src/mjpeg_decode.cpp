@@ -20,37 +20,53 @@ namespace {
 // 10000 x 10000 took 2 s and 550 MB. No camera of this robot comes near 16.8 MP.
 constexpr int64_t kMaxJpegPixels = int64_t{4096} * 4096;
 
-// libjpeg's bound on its whole-image buffers (max_memory_to_use), which a progressive or multi-scan
-// frame needs: libjpeg-turbo 2.1 applies it to those only (a larger one fails with "Backing store
-// not supported"), not to its tables and row buffers. The coefficients of the largest grey image.
+// libjpeg's bound on its whole-image buffers (max_memory_to_use): libjpeg-turbo 2.1 applies it to
+// those only (a larger one fails with "Backing store not supported"), not to its tables and row
+// buffers. A frame decoded here never needs one (see check_header); a backstop should that change:
+// the coefficients of the largest grey image.
 constexpr long kMaxJpegBufferBytes = static_cast<long>(kMaxJpegPixels * sizeof(JCOEF));
 
 // What libjpeg read in the frame's header (jpeg_read_header, up to the first scan), i.e. what it
 // would decode: the one parse whose answer is checked.
 struct JpegHeader {
   int width = 0, height = 0;
+  bool progressive = false, arithmetic = false;
+  int components = 0, components_in_first_scan = 0;
 };
 
-// What a frame's header must be before libjpeg allocates for the image: the message's size, at most
-// kMaxJpegPixels. jpeg_start_decompress allocates what the header claims (a progressive file's
-// whole-image buffer, 2 bytes a pixel: a 905-byte frame hiding a 32000 x 32000 progressive header
-// costs 2 GB there).
-enum class HeaderCheck { kOk, kWrongSize, kTooLarge };
+// What a frame's header must be for the decode to cost at most one pass over the frame's pixels and
+// bytes: the message's size, at most kMaxJpegPixels, and baseline as a camera sends it (sequential,
+// Huffman-coded, every component in its one scan). A progressive or multi-scan file is decoded into
+// a whole-image buffer (2 bytes a pixel and component) that jpeg_start_decompress allocates and fills
+// from every scan before the first row comes out, however many scans: a 905-byte frame hiding a
+// 32000 x 32000 progressive header costs 2 GB there, 15,000 scans of 35 bytes 18 s at 4096 x 4096.
+// In a file whose first scan holds every component libjpeg refuses a second scan itself ("Didn't
+// expect more than one scan").
+enum class HeaderCheck { kOk, kWrongSize, kTooLarge, kProgressive, kArithmetic, kScans };
 
 HeaderCheck check_header(const JpegHeader& h, int width, int height) {
   if (h.width != width || h.height != height) return HeaderCheck::kWrongSize;
   if (int64_t{width} * height > kMaxJpegPixels) return HeaderCheck::kTooLarge;
+  if (h.progressive) return HeaderCheck::kProgressive;
+  if (h.arithmetic) return HeaderCheck::kArithmetic;
+  if (h.components_in_first_scan != h.components) return HeaderCheck::kScans;
   return HeaderCheck::kOk;
 }
 
 std::string header_refusal(HeaderCheck c, const JpegHeader& h, int width, int height) {
   const std::string size = std::to_string(width) + "x" + std::to_string(height);
+  const char* const kBaseline = "; only baseline JPEG (one sequential, Huffman-coded scan) is decoded, as a camera sends it";
   switch (c) {
     case HeaderCheck::kOk: break;
     case HeaderCheck::kWrongSize:
       return "image: MJPEG frame is " + std::to_string(h.width) + "x" + std::to_string(h.height) +
              " by its JPEG header, the message says " + size;
     case HeaderCheck::kTooLarge: return "image: MJPEG frame of " + size + " is larger than 4096x4096 pixels";
+    case HeaderCheck::kProgressive: return "image: MJPEG frame is a progressive JPEG" + std::string(kBaseline);
+    case HeaderCheck::kArithmetic: return "image: MJPEG frame is arithmetic-coded" + std::string(kBaseline);
+    case HeaderCheck::kScans:
+      return "image: MJPEG frame has its " + std::to_string(h.components) + " components in several scans (" +
+             std::to_string(h.components_in_first_scan) + " in the first)" + kBaseline;
   }
   return "image: MJPEG frame refused";
 }
@@ -107,6 +123,10 @@ JpegResult run_libjpeg(JpegDecoder* d, std::span<const uint8_t> jpeg, int width,
   jpeg_read_header(&d->cinfo, TRUE);
   d->header.width = static_cast<int>(d->cinfo.image_width);
   d->header.height = static_cast<int>(d->cinfo.image_height);
+  d->header.progressive = d->cinfo.progressive_mode != 0;
+  d->header.arithmetic = d->cinfo.arith_code != 0;
+  d->header.components = d->cinfo.num_components;
+  d->header.components_in_first_scan = d->cinfo.comps_in_scan;
   d->check = check_header(d->header, width, height);
   JpegResult result = JpegResult::kOk;
   if (d->check != HeaderCheck::kOk) {
