@@ -21,31 +21,6 @@ std::size_t end_without_padding(std::span<const uint8_t> d) {
 
 }  // namespace
 
-FrameSize frame_size(std::span<const uint8_t> d) {
-  if (d.size() < 4 || d[0] != 0xff || d[1] != kSOI) return {};
-  std::size_t pos = 2;
-  while (pos + 4 <= d.size()) {
-    if (d[pos] != 0xff) return {};
-    const uint8_t marker = d[pos + 1];
-    if (marker == 0xff) {  // fill byte
-      ++pos;
-      continue;
-    }
-    if (marker == 0x01 || (marker >= 0xd0 && marker <= 0xd7)) {  // no length field
-      pos += 2;
-      continue;
-    }
-    const std::size_t length = (std::size_t{d[pos + 2]} << 8) | d[pos + 3];
-    if (is_sof(marker)) {
-      if (length < 7 || pos + 9 > d.size()) return {};
-      return {(d[pos + 7] << 8) | d[pos + 8], (d[pos + 5] << 8) | d[pos + 6]};
-    }
-    if (marker == kSOS || marker == kEOI || length < 2) return {};  // scan or end before a frame header
-    pos += 2 + length;
-  }
-  return {};
-}
-
 bool ends_with_eoi(std::span<const uint8_t> d) {
   const std::size_t end = end_without_padding(d);
   return end >= 2 && d[end - 2] == 0xff && d[end - 1] == kEOI;
@@ -62,11 +37,13 @@ const char* structure_name(Structure s) {
   return "?";
 }
 
-Structure check_structure(std::span<const uint8_t> d) {
+Structure check_structure(std::span<const uint8_t> d, FrameSize* size) {
+  if (size != nullptr) *size = {};
   if (d.size() < 2 || d[0] != 0xff || d[1] != kSOI) return Structure::kNoStartMarker;
   if (!ends_with_eoi(d)) return Structure::kCutShort;
   const std::size_t end = end_without_padding(d);  // d[end - 2], d[end - 1] are FF D9
   bool have_frame = false, in_scans = false;
+  FrameSize frame;
   // Any failure once the first scan has begun is damage to the data, not to the header.
   const auto bad = [&] { return in_scans ? Structure::kDamagedData : Structure::kBadHeader; };
   std::size_t pos = 2;
@@ -76,11 +53,19 @@ Structure check_structure(std::span<const uint8_t> d) {
     while (pos + 1 < end && d[pos + 1] == 0xff) ++pos;
     if (pos + 1 >= end) return bad();
     const uint8_t marker = d[pos + 1];
-    if (marker == kEOI) return pos + 2 == end && in_scans ? Structure::kWhole : bad();
+    if (marker == kEOI) {
+      if (pos + 2 != end || !in_scans) return bad();
+      if (size != nullptr) *size = frame;
+      return Structure::kWhole;
+    }
     if (!is_segment(marker) || pos + 4 > end) return bad();
     const std::size_t length = (std::size_t{d[pos + 2]} << 8) | d[pos + 3];
     if (length < 2 || pos + 2 + length > end) return bad();
-    have_frame = have_frame || is_sof(marker);
+    if (is_sof(marker) && !have_frame) {
+      if (length < 7) return bad();
+      frame = {(d[pos + 7] << 8) | d[pos + 8], (d[pos + 5] << 8) | d[pos + 6]};
+      have_frame = true;
+    }
     pos += 2 + length;
     if (marker != kSOS) continue;
     if (!have_frame) return Structure::kBadHeader;

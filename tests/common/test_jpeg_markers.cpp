@@ -1,11 +1,13 @@
 // whiskeye::jpeg: a JPEG's marker structure read without decoding (camerad's MJPEG check, slamd's
-// size check), on frames encoded as a camera sends them (tests/support/mjpeg_pattern.h).
+// end-marker check), on frames encoded as a camera sends them (tests/support/mjpeg_pattern.h) and
+// hostile ones made from them (tests/support/hostile_jpeg.h).
 #include <gtest/gtest.h>
 
 #include <whiskeye/common/jpeg_markers.h>
 
 #include <random>
 
+#include "hostile_jpeg.h"
 #include "mjpeg_pattern.h"
 
 using namespace whiskeye::jpeg;
@@ -30,12 +32,18 @@ std::vector<uint8_t> with_end_marker(std::vector<uint8_t> v) {
   return v;
 }
 
+FrameSize size_of(const std::vector<uint8_t>& j) {
+  FrameSize size{-1, -1};
+  check_structure(j, &size);
+  return size;
+}
+
 }  // namespace
 
 TEST(JpegMarkers, ACameraFrameIsWholeAndSaysItsSize) {
   EXPECT_EQ(check_structure(frame()), Structure::kWhole);
-  EXPECT_EQ(frame_size(frame()).width, 640);
-  EXPECT_EQ(frame_size(frame()).height, 480);
+  EXPECT_EQ(size_of(frame()).width, 640);
+  EXPECT_EQ(size_of(frame()).height, 480);
   EXPECT_TRUE(ends_with_eoi(frame()));
 }
 
@@ -59,7 +67,7 @@ TEST(JpegMarkers, GarbageAfterAValidHeaderIsDamagedData) {
   std::mt19937 rng(29);
   for (int i = 0; i < 30000; ++i) garbage.push_back(static_cast<uint8_t>(rng()));
   EXPECT_EQ(check_structure(with_end_marker(garbage)), Structure::kDamagedData);
-  EXPECT_EQ(frame_size(garbage).width, 640) << "the header itself is intact";
+  EXPECT_EQ(size_of(with_end_marker(garbage)).width, 0) << "a size only of a whole JPEG";
 }
 
 TEST(JpegMarkers, OnlyStuffedBytesRestartMarkersAndFillBytesMayStandInTheData) {
@@ -86,7 +94,7 @@ TEST(JpegMarkers, WhatIsNoJpegOrHasABrokenHeaderIsNamedSo) {
   EXPECT_EQ(check_structure(j), Structure::kBadHeader);
   // A scan before any frame header.
   EXPECT_EQ(check_structure(std::vector<uint8_t>{0xff, 0xd8, 0xff, 0xda, 0x00, 0x02, 0x12, 0x34, 0xff, 0xd9}), Structure::kBadHeader);
-  EXPECT_EQ(frame_size(std::vector<uint8_t>{0xff, 0xd8, 0xff, 0xda, 0x00, 0x02, 0xff, 0xd9}).width, 0);
+  EXPECT_EQ(size_of(std::vector<uint8_t>{0xff, 0xd8, 0xff, 0xda, 0x00, 0x02, 0xff, 0xd9}).width, 0);
   // SOI and EOI alone: no scan.
   EXPECT_EQ(check_structure(std::vector<uint8_t>{0xff, 0xd8, 0xff, 0xd9}), Structure::kBadHeader);
 }
@@ -96,4 +104,14 @@ TEST(JpegMarkers, WhatIsNoJpegOrHasABrokenHeaderIsNamedSo) {
 TEST(JpegMarkers, AFrameCutShortWithAnEndMarkerAppendedIsLeftToTheDecoder) {
   const std::vector<uint8_t> cut(frame().begin(), frame().begin() + static_cast<std::ptrdiff_t>(frame().size() / 2));
   EXPECT_EQ(check_structure(with_end_marker(cut)), Structure::kWhole);
+}
+
+// FF 00 after SOI, as a hostile sender puts it to hide a frame header: a walk taking it for a segment
+// read the 640x480 header inside the APP1 libjpeg skips, while libjpeg decodes the 32000 x 32000 one
+// behind it. Only markers where the segment before ended pass: the header does not parse, no size.
+TEST(JpegMarkers, AFrameHeaderHiddenBehindAStuffedZeroIsABrokenHeaderWithoutASize) {
+  const std::vector<uint8_t> hostile = whiskeye::test::camera_frame_hiding_progressive(640, 480, 32000, 32000);
+  EXPECT_EQ(check_structure(hostile), Structure::kBadHeader);
+  EXPECT_EQ(size_of(hostile).width, 0);
+  EXPECT_EQ(size_of(hostile).height, 0);
 }

@@ -81,14 +81,14 @@ FrameCheck check_frame(uint32_t buffer_flags, std::size_t bytesused, std::size_t
 }
 
 FrameCheck check_mjpeg(std::span<const uint8_t> frame, uint32_t width, uint32_t height) {
-  switch (jpeg::check_structure(frame)) {
+  jpeg::FrameSize size;
+  switch (jpeg::check_structure(frame, &size)) {
     case jpeg::Structure::kWhole: break;
     case jpeg::Structure::kNoStartMarker: return FrameCheck::kJpegNoStartMarker;
     case jpeg::Structure::kBadHeader: return FrameCheck::kJpegBadHeader;
     case jpeg::Structure::kCutShort: return FrameCheck::kJpegCutShort;
     case jpeg::Structure::kDamagedData: return FrameCheck::kJpegDamagedData;
   }
-  const jpeg::FrameSize size = jpeg::frame_size(frame);
   if (static_cast<uint32_t>(size.width) != width || static_cast<uint32_t>(size.height) != height) {
     return FrameCheck::kJpegWrongSize;
   }

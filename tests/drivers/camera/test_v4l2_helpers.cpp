@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "hostile_jpeg.h"
 #include "mjpeg_pattern.h"
 #include "whiskeye/camera/v4l2_capture.h"
 
@@ -130,6 +131,14 @@ TEST(V4l2FrameCheck, AnMjpegFrameCutShortOrWithGarbageAfterItsHeaderIsSkipped) {
   garbage.insert(garbage.end(), {0xff, 0xd9});
   EXPECT_EQ(check_mjpeg(garbage, 640, 480), FrameCheck::kJpegDamagedData);
   EXPECT_EQ(check_mjpeg(std::vector<uint8_t>(614400, 0x80), 640, 480), FrameCheck::kJpegNoStartMarker);
+}
+
+// A frame hiding a 32000 x 32000 progressive header behind a stuffed FF 00 and an APP1 holding a
+// 640x480 one (tests/support/hostile_jpeg.h): camerad never publishes a frame whose size slamd's
+// decoder (libjpeg) would read otherwise than camerad did.
+TEST(V4l2FrameCheck, AnMjpegFrameHidingAnotherFrameHeaderIsSkippedAsABrokenHeader) {
+  EXPECT_EQ(check_mjpeg(whiskeye::test::camera_frame_hiding_progressive(640, 480, 32000, 32000), 640, 480),
+            FrameCheck::kJpegBadHeader);
 }
 
 // The first buffer v4l2loopback 0.12.7 hands a reader that joined its writer with 12 frames written

@@ -1,20 +1,14 @@
-// A JPEG's marker structure, read without decoding: the frame size its header claims, whether it
-// ends, and whether it is put together as a JPEG at all: camerad refuses a damaged MJPEG frame with
-// it before it publishes it, counting it. slamd's decoder reads only ends_with_eoi() here: the size
-// it checks is the one libjpeg parsed (a second parser's answer is not the one that counts). Pure;
-// no allocation.
+// A JPEG's marker structure, read without decoding: whether it ends, whether it is put together as a
+// JPEG at all, and the frame size its header claims. camerad refuses a damaged MJPEG frame with it
+// before it publishes it, counting it; slamd's decoder asks libjpeg for the header it decodes (a
+// second parser's answer is not the one to check) and reads only ends_with_eoi() here. Pure; no
+// allocation.
 #pragma once
 
 #include <cstdint>
 #include <span>
 
 namespace whiskeye::jpeg {
-
-struct FrameSize {
-  int width = 0, height = 0;
-};
-// The frame size in the first SOF segment, or {0, 0} when there is none before the first scan.
-FrameSize frame_size(std::span<const uint8_t> d);
 
 // Whether the data ends with the end-of-image marker (FF D9), zero padding after it ignored (some
 // UVC cameras pad their buffers).
@@ -33,7 +27,15 @@ enum class Structure {
                    // the end, or bytes after an early EOI
 };
 const char* structure_name(Structure s);
-// Linear in the size (one memchr-driven pass over the entropy-coded data).
-Structure check_structure(std::span<const uint8_t> d);
+
+struct FrameSize {
+  int width = 0, height = 0;
+};
+// Linear in the size (one memchr-driven pass over the entropy-coded data). With `size`: the frame
+// size in the first SOF segment of that walk, {0, 0} unless kWhole. It is the size libjpeg decodes:
+// a header passes only if each marker stands where the segment before it ended, so its segments are
+// the ones libjpeg reads (libjpeg skips bytes between segments, a stuffed FF 00 among them, where a
+// walk taking them for a segment reads a frame header libjpeg never does).
+Structure check_structure(std::span<const uint8_t> d, FrameSize* size = nullptr);
 
 }  // namespace whiskeye::jpeg
