@@ -1,8 +1,8 @@
 // Makes the seed corpora of the fuzz targets from real simulator output, shortened so the committed
 // corpora stay small (KBs): scripts/fuzz --make-seeds runs it on a 3 s vita-sim log and its candump.
 //   fuzz_make_seeds SIM.lcmlog SIM.candump OUT_DIR
-// Writes OUT_DIR/{slamd_edge,lcm_log,checkpoint,odometry_reply,whisker_frame}/seed-*. The YAML
-// corpora (params, world) are the files of config/, copied by scripts/fuzz.
+// Writes OUT_DIR/{slamd_edge,lcm_log,checkpoint,odometry_reply,whisker_frame,mjpeg_frame}/seed-*. The
+// YAML corpora (params, world) are the files of config/, copied by scripts/fuzz.
 #include "whiskeye/slamd/checkpoint_store.h"
 #include "whiskeye/slamd/slam_node.h"
 
@@ -14,6 +14,9 @@
 #include <whiskeye/image_t.hpp>
 #include <whiskeye/odometry_t.hpp>
 #include <whiskeye/whisk_cycle_t.hpp>
+
+#include "hostile_jpeg.h"
+#include "mjpeg_pattern.h"
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -252,6 +255,26 @@ int main(int argc, char** argv) {
       for (std::size_t i = 0; i + 1 < hex.size(); i += 2) input.push_back(static_cast<uint8_t>(std::stoul(hex.substr(i, 2), nullptr, 16)));
       write_file(out_dir / "whisker_frame" / ("seed-" + std::to_string(seen.size() - 1)), input);
     }
+  }
+  // mjpeg_frame: [width, height: 2 bytes each, big-endian][JPEG]: the cropped frame as MJPEG, a 64x48
+  // frame as a camera encodes it, and the probes of docs/reliability.md at that size (the hidden
+  // 32000 x 32000 header, repeated AC scans, a scan per component, arithmetic coding, the costliest
+  // baseline frame).
+  {
+    const auto mjpeg_seed = [&](const std::string& name, int w, int h, const std::vector<uint8_t>& jpeg) {
+      std::vector<uint8_t> input{static_cast<uint8_t>(w >> 8), static_cast<uint8_t>(w), static_cast<uint8_t>(h >> 8),
+                                 static_cast<uint8_t>(h)};
+      input.insert(input.end(), jpeg.begin(), jpeg.end());
+      write_file(out_dir / "mjpeg_frame" / ("seed-" + name), input);
+    };
+    const std::vector<uint8_t> pattern = test::mjpeg_pattern(64, 48, 5);
+    mjpeg_seed("simulated", jpeg.width, jpeg.height, jpeg.data);
+    mjpeg_seed("camera", 64, 48, test::mjpeg_pattern_jpeg(64, 48, 5));
+    mjpeg_seed("hidden-header", 64, 48, test::camera_frame_hiding_progressive(64, 48, 32000, 32000));
+    mjpeg_seed("repeated-scans", 64, 48, test::progressive_with_repeated_scans(64, 48, 100));
+    mjpeg_seed("scan-per-component", 64, 48, test::encode_jpeg_scans(pattern, 64, 48, 64, test::ScanLayout::kScanPerComponent));
+    mjpeg_seed("arithmetic", 64, 48, test::encode_jpeg_scans(pattern, 64, 48, 64, test::ScanLayout::kArithmetic));
+    mjpeg_seed("costliest", 32, 16, test::costliest_baseline_jpeg(32, 16, 1));
   }
   std::printf("fuzz_make_seeds: seeds written under %s\n", out_dir.c_str());
   return 0;

@@ -1,8 +1,8 @@
 // JPEG frames a hostile sender could put in a CAMERA message, built in code from frames of the
 // project's own encoders (mjpeg_pattern.h; libjpeg for the scan layouts no camera sends) by splicing
 // markers and segments: the probes of docs/reliability.md ("Hostile input, round 3: camera frames").
-// Used by the tests of slamd's MJPEG decoder, of its callers and of camerad's MJPEG check, and by the
-// decode benchmark.
+// Used by the tests of slamd's MJPEG decoder, of its callers and of camerad's MJPEG check, by the
+// decode benchmark and for the fuzz seeds (fuzz_make_seeds).
 #pragma once
 
 #include <cstddef>
