@@ -49,11 +49,17 @@ constexpr long kMaxYamlValues = 100'000;
 // What every config is refused for before its tree is built, by yaml-cpp's event parser, which reads
 // the text once and expands nothing: an anchor (&name) or an alias (*name), naming its line (an
 // alias stands for a copy of its anchor, and nested aliases expand exponentially: a few hundred
-// bytes, billions of values in every walk of the tree); more than kMaxYamlValues values.
+// bytes, billions of values in every walk of the tree); more than kMaxYamlValues values; a second
+// document (`---` after the first): a config is its first document, so all after it was ignored.
 class NoAnchors final : public YAML::EventHandler {
  public:
   explicit NoAnchors(const std::string& source) : source_(source) {}
-  void OnDocumentStart(const YAML::Mark&) override {}
+  void OnDocumentStart(const YAML::Mark& mark) override {
+    if (++documents_ > 1) {
+      throw ParamError(source_ + ": line " + std::to_string(mark.line + 1) +
+                       ": a second YAML document ('---'): a config is one document (what follows would be ignored)");
+    }
+  }
   void OnDocumentEnd() override {}
   void OnNull(const YAML::Mark& mark, YAML::anchor_t anchor) override { check(mark, anchor); }
   void OnAlias(const YAML::Mark& mark, YAML::anchor_t) override { refuse(mark, "an alias (*name)"); }
@@ -80,6 +86,7 @@ class NoAnchors final : public YAML::EventHandler {
     }
   }
   long values_ = 0;
+  int documents_ = 0;
   [[noreturn]] void refuse(const YAML::Mark& mark, const std::string& what) {
     throw ParamError(source_ + ": line " + std::to_string(mark.line + 1) + ": " + what +
                      ": YAML anchors and aliases are not accepted (write each value out where it is used)");
@@ -87,13 +94,15 @@ class NoAnchors final : public YAML::EventHandler {
   const std::string& source_;
 };
 
-// The first document of `yaml`, refused if it is not valid YAML or holds an anchor or an alias.
+// The one document of `yaml`, refused if it is not valid YAML, holds an anchor or an alias, or is
+// followed by another.
 YAML::Node load_plain_yaml(const std::string& yaml, const std::string& source) {
   try {
     std::istringstream in(yaml);
     YAML::Parser parser(in);
     NoAnchors handler(source);
-    parser.HandleNextDocument(handler);
+    while (parser.HandleNextDocument(handler)) {
+    }
     return YAML::Load(yaml);
   } catch (const YAML::Exception& e) {
     throw ParamError(source + ": not valid YAML: " + e.what());

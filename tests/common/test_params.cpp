@@ -269,6 +269,25 @@ TEST(Params, AnAnchorOrAnAliasIsRefusedNamingItsLineBeforeAnythingIsExpanded) {
   }
 }
 
+// yaml-cpp reads the first document of a file: a `---` and a second map after it (`can: {interface:
+// vcan9}`) were ignored without a word. Any second document, even an empty one, is refused.
+TEST(Params, ASecondYamlDocumentIsRefusedNamingItsLine) {
+  EXPECT_EQ(error_of("cells: 30\n---\ncells: 40\n"),
+            "test.yaml: line 2: a second YAML document ('---'): a config is one document (what follows would be "
+            "ignored)");
+  EXPECT_THAT(error_of("cells: 30\n...\n---\nrate_hz: 5\n"), HasSubstr("test.yaml: line 3: a second YAML document"));
+  EXPECT_THAT(error_of("cells: 30\n--- # empty\n"), HasSubstr("line 2: a second YAML document"));
+  EXPECT_EQ(error_of("# a comment\n---\ncells: 30\n...\n"), "") << "one document, with its markers";
+  const std::string path = whiskeye::testing::scratch_file("params_two_docs", ".yaml");
+  std::ofstream(path) << "name: first\n---\nname: second\n";
+  try {
+    ParamNode::from_file(path);
+    FAIL();
+  } catch (const ParamError& e) {
+    EXPECT_THAT(e.what(), HasSubstr(path + ": line 2: a second YAML document ('---')"));
+  }
+}
+
 TEST(Params, FileErrorsNameTheFile) {
   try {
     ParamNode::from_file("/nonexistent/robot.yaml");

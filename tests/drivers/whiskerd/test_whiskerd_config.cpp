@@ -153,6 +153,19 @@ TEST_F(WhiskerdDropins, AKeyOutsideCalibrationIsRefused) {
   EXPECT_NE(error.find("50-bus.yaml: 'can' is not allowed in a drop-in"), std::string::npos) << error;
 }
 
+// A second document was never read: neither the `can:` a drop-in may not hold, nor whiskerd.yaml's own.
+TEST_F(WhiskerdDropins, ASecondDocumentInADropinOrTheConfigIsRefused) {
+  write("whiskerd.d/50-bus.yaml", "calibration:\n  default: {offset_x: 2.0}\n---\ncan: {interface: vcan9}\n");
+  Params p;
+  std::string error = load_all(p);
+  EXPECT_NE(error.find("50-bus.yaml: line 3: a second YAML document"), std::string::npos) << error;
+  std::filesystem::remove(dir_ / "whiskerd.d/50-bus.yaml");
+  write("whiskerd.yaml", "can: {interface: can0}\n---\ncan: {interface: vcan9}\n");
+  Params q;
+  error = load_all(q);
+  EXPECT_NE(error.find("whiskerd.yaml: line 2: a second YAML document"), std::string::npos) << error;
+}
+
 TEST_F(WhiskerdDropins, AnOutOfRangeValueNamesTheFileAndTheKey) {
   write("whiskerd.d/30-gain.yaml", "calibration:\n  whiskers:\n    - {index: 2, gain_x: 3.0}\n");
   Params p;
