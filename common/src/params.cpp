@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <type_traits>
@@ -107,6 +108,30 @@ YAML::Node load_plain_yaml(const std::string& yaml, const std::string& source) {
   } catch (const YAML::Exception& e) {
     throw ParamError(source + ": not valid YAML: " + e.what());
   }
+}
+
+// An integer parameter, or a list (of lists) of them.
+template <typename T>
+struct IsIntegerParam : std::bool_constant<std::is_integral_v<T> && !std::is_same_v<T, bool>> {};
+template <typename T>
+struct IsIntegerParam<std::vector<T>> : IsIntegerParam<T> {};
+
+// The first scalar of `node` (a scalar or nested lists) written with a leading 0 (021, -007):
+// yaml-cpp reads an integer as C's streams do, in octal (021 is 17), where YAML 1.2 reads 21. Which one
+// was meant cannot be known, so such an integer is refused; 0 itself, 0x15 (hex) and 21 are plain.
+std::optional<YAML::Node> first_leading_zero(const YAML::Node& node) {
+  if (node.IsSequence()) {
+    for (const YAML::Node& item : node) {
+      if (auto found = first_leading_zero(item)) return found;
+    }
+  } else if (node.IsScalar()) {
+    const std::string& text = node.Scalar();
+    const std::size_t digits = !text.empty() && (text[0] == '-' || text[0] == '+') ? 1 : 0;
+    if (text.size() > digits + 1 && text[digits] == '0' && text[digits + 1] >= '0' && text[digits + 1] <= '9') {
+      return node;
+    }
+  }
+  return std::nullopt;
 }
 
 }  // namespace
@@ -315,6 +340,12 @@ void ParamNode::get(const std::string& key, T& value) const {
   if (!n || n.IsNull()) {
     mark_leaf(key, to_text(value), false);
     return;
+  }
+  if constexpr (IsIntegerParam<T>::value) {
+    if (const auto zero = first_leading_zero(n)) {
+      fail(key, "= " + describe(*zero) +
+                    ": an integer with a leading 0 is ambiguous (octal or decimal): write it without the 0 (hex as 0x...)");
+    }
   }
   try {
     value = n.as<T>();

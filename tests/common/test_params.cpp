@@ -288,6 +288,41 @@ TEST(Params, ASecondYamlDocumentIsRefusedNamingItsLine) {
   }
 }
 
+// yaml-cpp reads an integer in C's bases: 021 was 17 (YAML 1.2 says 21), from the file and from a
+// --set alike. A leading 0 is refused; hex, which the CAN ids use, is kept.
+TEST(Params, AnIntegerWithALeadingZeroIsRefusedAndHexIsRead) {
+  EXPECT_EQ(error_of("cells: 021\n"), "test.yaml: 'cells' = '021' (line 1): an integer with a leading 0 is ambiguous "
+                                        "(octal or decimal): write it without the 0 (hex as 0x...)");
+  EXPECT_THAT(error_of("cells: -007\n"), HasSubstr("'cells' = '-007' (line 1): an integer with a leading 0"));
+  EXPECT_THAT(error_of("cells: '021'\n"), HasSubstr("'cells' = '021' (line 1): an integer with a leading 0"));
+  EXPECT_EQ(error_of("rate_hz: 010.5\nnested: {inner: 0.5}\n"), "") << "a float's leading 0 is plain decimal";
+  Example p;
+  load(ParamNode::from_string("cells: 0x15\n"), p);
+  EXPECT_EQ(p.cells, 21);
+
+  auto n = ParamNode::empty();
+  n.set_override("cells", "021", "--set");
+  try {
+    load(n, p);
+    FAIL();
+  } catch (const ParamError& e) {
+    EXPECT_EQ(std::string(e.what()), "--set: 'cells' = '021': an integer with a leading 0 is ambiguous (octal or "
+                                     "decimal): write it without the 0 (hex as 0x...)");
+  }
+
+  std::vector<std::vector<int>> grid{{1}};
+  const auto lists = ParamNode::from_string("grid: [[1, 2], [3, 08]]\n", "test.yaml");
+  try {
+    lists.get("grid", grid);
+    FAIL();
+  } catch (const ParamError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("'grid' = '08' (line 1): an integer with a leading 0"));
+  }
+  int zero = 5;
+  ParamNode::from_string("zero: 0\n").get("zero", zero);
+  EXPECT_EQ(zero, 0);
+}
+
 TEST(Params, FileErrorsNameTheFile) {
   try {
     ParamNode::from_file("/nonexistent/robot.yaml");

@@ -7,7 +7,8 @@
 // key that no loader asked for (a typo) is a ParamError whose message names the file and the full
 // key path. A key given twice in one map is refused at parse time, naming both lines (yaml-cpp would
 // silently keep the first, so an override further down a file was ignored); so is a second YAML
-// document (`---` after the first), which no loader would read.
+// document (`---` after the first), which no loader would read. An integer is decimal or hex (0x15);
+// one with a leading 0 (021: octal 17 to yaml-cpp, 21 to YAML 1.2) is refused, from the file or an override.
 // dump() lists every parameter asked for, with its value and whether it came from the file, so a
 // daemon can print exactly what it runs with. A command-line option that overrides a key goes in
 // through set_override() before the loader runs: the loader checks it like a value from the file,
