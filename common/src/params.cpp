@@ -181,7 +181,11 @@ std::string ParamNode::path_of(const std::string& key) const {
 }
 
 void ParamNode::set_override(const std::string& path, const std::string& value, const std::string& option) {
-  state_->overrides[path] = {value, option};
+  const auto [it, inserted] = state_->overrides.try_emplace(path, value, option);
+  if (!inserted) {
+    throw ParamError(option + ": '" + path + "' is given twice on the command line (" + it->second.second + " and " +
+                     option + "): only one value can count (remove one)");
+  }
 }
 
 YAML::Node ParamNode::lookup(const std::string& key) const {

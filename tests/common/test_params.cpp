@@ -185,22 +185,49 @@ TEST(Params, AnOverrideIsLoadedAndDumpedWithItsOption) {
 }
 
 // What every program runs with (cli::read_config): the file, then the command line's overrides over
-// it in order; no file is every default.
-TEST(Params, AProgramsConfigIsTheFileThenTheCommandLinesOverridesInOrder) {
+// it; no file is every default.
+TEST(Params, AProgramsConfigIsTheFileThenTheCommandLinesOverrides) {
   const std::string path = whiskeye::testing::scratch_file("read_config", ".yaml");
   std::ofstream(path) << "cells: 30\nname: file\n";
   Example p;
-  ParamNode n = cli::read_config(path, {{"name", "first", "--a"}, {"name", "cli", "--name"}});
+  ParamNode n = cli::read_config(path, {{"name", "cli", "--name"}, {"nested.inner", "0.25", "--set"}});
   load(n, p);
   n.check_no_unknown_keys();
   EXPECT_EQ(p.cells, 30);
-  EXPECT_EQ(p.name, "cli") << "the last override of a key wins";
+  EXPECT_EQ(p.name, "cli");
+  EXPECT_EQ(p.inner, 0.25);
   EXPECT_THAT(n.dump(), HasSubstr("name: \"cli\"  (--name)\n"));
   Example defaults;
   ParamNode none = cli::read_config("");
   load(none, defaults);
   EXPECT_EQ(defaults.cells, Example{}.cells);
   EXPECT_THROW(cli::read_config(path + ".missing"), ParamError);
+}
+
+// `--set cells=5 --set cells=7` (or `--set slam.mode=… --mode …`): the later silently took over.
+TEST(Params, AKeyTheCommandLineGivesTwiceIsRefusedNamingBothOptions) {
+  try {
+    cli::read_config("", {{"cells", "5", "--set"}, {"cells", "7", "--set"}});
+    FAIL();
+  } catch (const ParamError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "--set: 'cells' is given twice on the command line (--set and --set): only one value can count (remove one)");
+  }
+  auto n = ParamNode::empty();
+  n.set_override("name", "a", "--set");
+  EXPECT_THROW(
+      {
+        try {
+          n.set_override("name", "b", "--name");
+        } catch (const ParamError& e) {
+          EXPECT_THAT(e.what(), HasSubstr("--name: 'name' is given twice on the command line (--set and --name)"));
+          throw;
+        }
+      },
+      ParamError);
+  Example p;
+  load(n, p);
+  EXPECT_EQ(p.name, "a") << "the refused one changed nothing";
 }
 
 TEST(Params, AnOverrideFailingTheLoadersCheckNamesTheOption) {

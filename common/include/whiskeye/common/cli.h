@@ -48,8 +48,9 @@ struct Override {
 };
 
 // The parameters a program runs with: the YAML file at `path` ("": every default), then the command
-// line's `overrides` over it, in order, each checked by the loader as the file's values are; so what
-// --print-config prints is what runs. A file that cannot be read throws ParamError (run(): exit 2).
+// line's `overrides` over it, each checked by the loader as the file's values are; so what
+// --print-config prints is what runs. A file that cannot be read, or a key two overrides give,
+// throws ParamError (run(): exit 2).
 ParamNode read_config(const std::string& path, const std::vector<Override>& overrides = {});
 
 class Program {

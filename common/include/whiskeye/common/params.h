@@ -54,6 +54,8 @@ class ParamNode {
   // The value of `path` (dotted, from the root: "can.interface") is `value`, given by `option`
   // ("--interface"), whatever the file says. Read by get() as a scalar from the file would be, so the
   // loader's type and range checks apply; a failing check names the option. Call before loading.
+  // A path given a second time (two `--set` of one key, or `--set slam.mode=…` and `--mode`) is a
+  // ParamError naming both options: the later would silently have won.
   void set_override(const std::string& path, const std::string& value, const std::string& option);
 
   // Optional scalar or list-of-scalars parameter: keeps `value` when the key is absent.
