@@ -74,6 +74,37 @@ TEST(LogCheck, AChannelWithoutSequenceNumbersGetsItsRateAndPausesOnly) {
   EXPECT_NEAR(s.rate_hz(), 39.0 / 4.8, 1e-9);
 }
 
+// ODOMETRY seq −2^63 then 2^63 − 1: the loss saturates at int64's largest; the messages sent (2 + it)
+// are beyond int64, and were "of −9223372036854775807 (0.00 %)", which passed --max-loss 0.
+TEST(LogCheck, ALossAcrossTheWholeInt64RangeIsNearlyAllTheMessagesAndFailsAnyMaxLoss) {
+  constexpr int64_t kMin = std::numeric_limits<int64_t>::min();
+  constexpr int64_t kMax = std::numeric_limits<int64_t>::max();
+  LogCheck check;
+  odometry_t odo{};
+  odo.seq = kMin;
+  check.add("ODOMETRY", 1'000'000, bytes(odo));
+  odo.seq = kMax;
+  check.add("ODOMETRY", 1'020'000, bytes(odo));
+  const ChannelStats s = check.channels().at(0);
+  ASSERT_TRUE(s.sequenced);
+  EXPECT_EQ(s.lost, kMax);
+  EXPECT_EQ(s.sent(), 9223372036854775809ull);
+  EXPECT_DOUBLE_EQ(s.lost_fraction(), 1.0);
+  EXPECT_TRUE(s.lost_more_than(0.0));
+  EXPECT_TRUE(s.lost_more_than(0.5));
+  EXPECT_FALSE(s.lost_more_than(1.0));
+}
+
+TEST(LogCheck, AnyLossIsMoreThanNoneAndNoLossIsMoreThanNothing) {
+  LogCheck check;
+  for (int64_t seq : {1, 3}) check.add("WHISKER_SAMPLE", 0, sample(seq));
+  check.add("VITA_POSE", 0, bytes(pose2d_t{}));
+  const auto channels = check.channels();
+  EXPECT_FALSE(channels.at(0).lost_more_than(0.0));  // VITA_POSE: no sequence numbers
+  EXPECT_TRUE(channels.at(1).lost_more_than(0.0));   // WHISKER_SAMPLE: 1 of 3
+  EXPECT_FALSE(channels.at(1).lost_more_than(0.5));
+}
+
 TEST(LogCheck, TimesAcrossTheWholeInt64RangeGiveASmallPositiveRateAndASaturatedPause) {
   LogCheck check;
   pose2d_t pose{};

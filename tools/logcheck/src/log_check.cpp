@@ -27,9 +27,13 @@ double ChannelStats::rate_hz() const {
   return static_cast<double>(count - 1) * 1e6 / static_cast<double>(span_us);
 }
 
+uint64_t ChannelStats::sent() const { return static_cast<uint64_t>(count) + static_cast<uint64_t>(lost); }
+
 double ChannelStats::lost_fraction() const {
-  return count + lost > 0 ? static_cast<double>(lost) / static_cast<double>(count + lost) : 0.0;
+  return sent() > 0 ? static_cast<double>(lost) / static_cast<double>(sent()) : 0.0;
 }
+
+bool ChannelStats::lost_more_than(double max_loss) const { return lost > 0 && lost_fraction() > max_loss; }
 
 void LogCheck::add(std::string_view channel, int64_t utime, std::span<const uint8_t> encoded) {
   auto [it, inserted] = channels_.try_emplace(std::string(channel));

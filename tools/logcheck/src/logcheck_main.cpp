@@ -1,6 +1,6 @@
 // whiskeye-logcheck: what an LCM log lost. Per channel: events, rate, the longest pause, and — where
 // the messages carry sequence numbers — how many never reached the log. Exit 1 when a channel lost
-// more than --max-loss of its messages, the file is damaged, or it holds no event (an empty log is
+// more than --max-loss of its messages (default 0: any), the file is damaged, or it holds no event (an empty log is
 // not "nothing lost"); 2 on a bad command line.
 #include "whiskeye/common/bus.h"
 #include "whiskeye/common/cli.h"
@@ -57,11 +57,11 @@ int check_log(const std::string& file, double max_loss, double gap_factor) {
                 static_cast<long long>(s.longest_loss), static_cast<long long>(s.restarts));
     if (s.lost > 0) {
       char item[160];
-      std::snprintf(item, sizeof item, "%s%s %lld of %lld (%.2f %%, at most %lld in a row)", lost_list.empty() ? "" : ", ",
-                    s.channel.c_str(), static_cast<long long>(s.lost), static_cast<long long>(s.count + s.lost),
+      std::snprintf(item, sizeof item, "%s%s %lld of %llu (%.2f %%, at most %lld in a row)", lost_list.empty() ? "" : ", ",
+                    s.channel.c_str(), static_cast<long long>(s.lost), static_cast<unsigned long long>(s.sent()),
                     100.0 * s.lost_fraction(), static_cast<long long>(s.longest_loss));
       lost_list += item;
-      if (s.lost_fraction() > max_loss) over = true;
+      if (s.lost_more_than(max_loss)) over = true;
     }
   }
   if (!damage.empty()) std::fprintf(stderr, "whiskeye-logcheck: %s\n", damage.c_str());

@@ -29,7 +29,11 @@ struct ChannelStats {
   int64_t longest_loss = 0;     // the most missing in a row
   int64_t restarts = 0;         // a sequence number not above the one before (a sender restarted)
   double rate_hz() const;  // events per second over [min_utime, max_utime]; 0 with fewer than 2 or no span
-  double lost_fraction() const;  // lost / (count + lost)
+  // count + lost: the messages sent. Unsigned: both are int64, their sum (a saturated loss) is not.
+  uint64_t sent() const;
+  double lost_fraction() const;  // lost / sent()
+  // More than `max_loss` (a fraction) of the messages lost; with max_loss 0, any loss at all.
+  bool lost_more_than(double max_loss) const;
 };
 
 class LogCheck {
