@@ -98,5 +98,64 @@ TEST(Channels, AWhiskCycleRenamedInWhiskerdOnlyReachesNoSlamd) {
   EXPECT_EQ(events_through(w), 0);
 }
 
+// slamd's channels as slam.yaml (or a --set) names them: "" when accepted, else the ParamError.
+std::string channels_error(const std::string& slamd_yaml, const std::string& set_key = "",
+                           const std::string& set_value = "") {
+  try {
+    ParamNode root = ParamNode::from_string(slamd_yaml, "slam.yaml");
+    if (!set_key.empty()) root.set_override(set_key, set_value, "--set");
+    NodeParams p;
+    load(root.section("slamd"), p);
+    return "";
+  } catch (const ParamError& e) {
+    return e.what();
+  }
+}
+
+// channel_pose=GROUND_TRUTH wrote slamd's poses into the replay's ground truth (vita-eval then said
+// LEM n/a and exited 0): no slamd channel may be the stack's channel of another type.
+TEST(Channels, ASlamdChannelNamingAnotherTypesChannelIsRefused) {
+  EXPECT_EQ(channels_error("slamd: {channel_pose: GROUND_TRUTH}\n"),
+            "slam.yaml: 'slamd.channel_pose' = \"GROUND_TRUTH\" is the stack's channel of pose2d_t, not of vita_pose_t "
+            "(common/channels.h): give slamd's channel a name of its own");
+  EXPECT_EQ(channels_error("", "slamd.channel_event", "SIM_FAULT"),
+            "--set: 'slamd.channel_event' = \"SIM_FAULT\" is the stack's channel of sim_fault_t, not of vita_event_t "
+            "(common/channels.h): give slamd's channel a name of its own");
+  EXPECT_NE(channels_error("slamd: {channel_map: SIM_CONTACT_TRUTH}\n"), "");
+  EXPECT_NE(channels_error("slamd: {channel_status: DRIVER_STATUS}\n"), "");
+  EXPECT_NE(channels_error("slamd: {channel_odometry: BASE_CMD}\n"), "") << "an input too";
+  EXPECT_NE(channels_error("slamd: {channel_pose: VITA_MAP, channel_map: MAP_2}\n"), "");
+  EXPECT_EQ(channels_error("slamd: {channel_pose: VITA_POSE, channel_camera: CAMERA}\n"), "") << "their own names";
+}
+
+TEST(Channels, TwoSlamdChannelsOfOneNameAreRefused) {
+  EXPECT_EQ(channels_error("slamd: {channel_pose: OUT, channel_map: OUT}\n"),
+            "slam.yaml: 'slamd.channel_map' = \"OUT\" is 'slamd.channel_pose' too: each of slamd's channels needs a "
+            "name of its own");
+  EXPECT_NE(channels_error("slamd: {channel_cycle: LEFT, channel_status: LEFT}\n"), "") << "an output onto an input";
+  EXPECT_NE(channels_error("slamd: {channel_cycle: LEFT, channel_camera: LEFT}\n"), "") << "two inputs";
+}
+
+// `key` set to `value` by a --set is refused with `what` in the line.
+void expect_refused(const std::string& key, const std::string& value, const std::string& what) {
+  const std::string error = channels_error("", key, value);
+  EXPECT_NE(error.find("--set: '" + key + "' = " + what), std::string::npos) << error;
+}
+
+// LCM's publish refuses a name over 63 characters, and it subscribes by regular expression.
+TEST(Channels, ANameOutsideLcmsCharactersOrLengthIsRefusedShownPrintably) {
+  EXPECT_EQ(channels_error("slamd: {channel_pose: " + std::string(63, 'P') + "}\n"), "");
+  EXPECT_EQ(channels_error("slamd: {channel_pose: robot-2/VITA_POSE}\n"), "");
+  EXPECT_EQ(channels_error("slamd: {channel_pose: " + std::string(300, 'P') + "}\n"),
+            "slam.yaml: 'slamd.channel_pose' = \"" + std::string(40, 'P') +
+                "...\" (300 characters) is no channel name: 1 to 63 of A-Z a-z 0-9 _ - / (LCM's limit; it subscribes "
+                "by regular expression)");
+  EXPECT_NE(channels_error("slamd: {channel_pose: " + std::string(64, 'P') + "}\n"), "");
+  expect_refused("slamd.channel_pose", "VITA\xff\xfePOSE", "\"VITA\\xff\\xfePOSE\" is no channel name");
+  expect_refused("slamd.channel_event", "VITA EVENT", "\"VITA EVENT\" is no channel name");
+  expect_refused("slamd.channel_cycle", "WHISK.*", "\"WHISK.*\" is no channel name");
+  expect_refused("slamd.channel_map", "", "\"\" is no channel name");
+}
+
 }  // namespace
 }  // namespace whiskeye::slamd

@@ -5,6 +5,9 @@
 // read a slamd whose output channels were renamed.
 #pragma once
 
+#include <cstddef>
+#include <string_view>
+
 namespace whiskeye::channels {
 
 inline constexpr const char* kWhiskerSample = "WHISKER_SAMPLE";
@@ -47,5 +50,29 @@ inline constexpr ChannelType kChannelTypes[] = {
     {kDriverStatus, "driver_status_t"},
     {kSlamStatus, "slam_status_t"},
 };
+
+// The type kChannelTypes gives `name`, or nullptr for a name the stack does not use.
+constexpr const char* type_of(std::string_view name) {
+  for (const ChannelType& c : kChannelTypes) {
+    if (name == c.channel) return c.type;
+  }
+  return nullptr;
+}
+
+// LCM's longest channel name (LCM_MAX_CHANNEL_NAME_LENGTH in lcm.h): its publish refuses a longer one.
+inline constexpr std::size_t kMaxNameLength = 63;
+
+// A name a configured channel may have: 1 to kMaxNameLength of A-Z a-z 0-9 _ - /. LCM subscribes by
+// regular expression ('.', '*', '|' would subscribe to other channels too); spaces, control bytes and
+// non-ASCII are no one's channel, and would reach lcm-spy, the logs and the journal as they are.
+constexpr bool valid_name(std::string_view name) {
+  if (name.empty() || name.size() > kMaxNameLength) return false;
+  for (const char c : name) {
+    const bool ok = (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' || c == '-' ||
+                    c == '/';
+    if (!ok) return false;
+  }
+  return true;
+}
 
 }  // namespace whiskeye::channels

@@ -31,6 +31,9 @@ struct NodeParams {
   NodeChannels channels;
   bool operator==(const NodeParams&) const = default;
 };
+// Also refuses (ParamError naming the key) a channel name that is no LCM name of ours
+// (channels::valid_name), that another of the eight channels has, or that is the stack's channel of
+// another type (GROUND_TRUTH, SIM_FAULT, DRIVER_STATUS, ...: channels::kChannelTypes).
 void load(const ParamNode& node, NodeParams& params);
 
 }  // namespace whiskeye::slamd
