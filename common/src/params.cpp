@@ -51,7 +51,7 @@ constexpr long kMaxYamlValues = 100'000;
 // the text once and expands nothing: an anchor (&name) or an alias (*name), naming its line (an
 // alias stands for a copy of its anchor, and nested aliases expand exponentially: a few hundred
 // bytes, billions of values in every walk of the tree); more than kMaxYamlValues values; a second
-// document (`---` after the first): a config is its first document, so all after it was ignored.
+// document (`---` after the first), which the tree, built from the first alone, would leave unread.
 class NoAnchors final : public YAML::EventHandler {
  public:
   explicit NoAnchors(const std::string& source) : source_(source) {}
