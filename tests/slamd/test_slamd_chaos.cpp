@@ -13,6 +13,7 @@
 #include "whiskeye/slamd/checkpoint_store.h"
 #include "whiskeye/slamd/cycle_sync.h"
 #include "slamd_files.h"
+#include "private_tmpfs.h"
 #include "scratch.h"
 #include "subprocess.h"
 
@@ -46,9 +47,7 @@
 #include <regex>
 #include <set>
 #include <sstream>
-#include <sched.h>
 #include <span>
-#include <sys/mount.h>
 #include <thread>
 #include <unistd.h>
 
@@ -80,30 +79,6 @@ constexpr double kBurstAt = 120, kBurstSeconds = 1.5;
 // flood, 0.3 s of data is 9 MB), a loss that is counted but is not one of the faults injected here.
 constexpr auto kMaxBehind = std::chrono::milliseconds(100);
 constexpr long kMaxRssKb = 256 * 1024;  // slamd's high-water mark, whatever was thrown at it
-
-// The state directory on a tmpfs of its own (in a private mount namespace), small enough to fill.
-void mount_small_tmpfs(const fs::path& dir) {
-  // Before any thread exists: unshare(CLONE_NEWNS) refuses a multi-threaded process.
-  ASSERT_EQ(::unshare(CLONE_NEWNS), 0) << "unshare(CLONE_NEWNS): " << std::strerror(errno) << " (the test runs as root)";
-  ASSERT_EQ(::mount("none", "/", nullptr, MS_REC | MS_PRIVATE, nullptr), 0) << std::strerror(errno);
-  fs::create_directories(dir);
-  ASSERT_EQ(::mount("chaos", dir.c_str(), "tmpfs", 0, "size=4m,mode=0700"), 0) << std::strerror(errno);
-}
-
-// Writes `path` until the filesystem is full; returns the bytes written.
-std::size_t fill_disk(const fs::path& path) {
-  std::FILE* f = std::fopen(path.c_str(), "wb");
-  if (f == nullptr) return 0;
-  std::setvbuf(f, nullptr, _IONBF, 0);
-  std::size_t written = 0;
-  for (const std::size_t chunk : {std::size_t{65536}, std::size_t{512}}) {
-    const std::vector<char> block(chunk, 'x');
-    while (std::fwrite(block.data(), 1, block.size(), f) == block.size()) written += chunk;
-    std::clearerr(f);
-  }
-  std::fclose(f);
-  return written;
-}
 
 long vm_hwm_kb(int pid) { return static_cast<long>(testing::proc_status_kb(pid, "VmHWM")); }
 
@@ -304,15 +279,15 @@ class SlamdChaos : public ::testing::Test {
  protected:
   ~SlamdChaos() override {
     slamd_.reset();  // before its state directory's tmpfs goes
-    if (mounted_) ::umount2(state_.c_str(), MNT_DETACH);
+    tmpfs_.reset();
   }
 
-  // The state directory on a small tmpfs of its own; before any thread exists.
+  // The state directory on a small tmpfs of its own, small enough to fill; before any thread exists.
   void mount_state_directory() {
     dir_ = testing::scratch_dir("slamd_chaos");
     state_ = dir_ / "state";
-    mount_small_tmpfs(state_);
-    mounted_ = !HasFatalFailure();
+    tmpfs_ = std::make_unique<testing::PrivateTmpfs>(state_.string(), "4m");
+    ASSERT_TRUE(tmpfs_->mounted()) << tmpfs_->error();
   }
 
   // Four minutes of simulated data, and slamd's inputs in it (odometry, whisk cycles, camera frames).
@@ -409,7 +384,7 @@ class SlamdChaos : public ::testing::Test {
         ++hostile_;
       }
       if (!disk_full && !disk_freed_ && cur.event_utime >= at(kDiskFullFrom) && cur.event_utime < at(kDiskFullTo)) {
-        ASSERT_GT(fill_disk(filler), 0u);
+        ASSERT_GT(testing::fill_disk(filler.string()), 0u);
         disk_full = true;
       }
       if (disk_full && cur.event_utime >= at(kDiskFullTo)) {
@@ -715,7 +690,7 @@ class SlamdChaos : public ::testing::Test {
 
   fs::path dir_;
   fs::path state_;  // slamd's state directory, on its own tmpfs
-  bool mounted_ = false;
+  std::unique_ptr<testing::PrivateTmpfs> tmpfs_;
   std::unique_ptr<LogReader> reader_;  // the simulated log, mapped: the inputs' data are views into it
   std::vector<Input> inputs_;
   int64_t t0_ = 0;  // the first input's log time

@@ -1,5 +1,7 @@
 #include "whiskeye/slamd/checkpoint_store.h"
 
+#include "whiskeye/common/output_file.h"
+
 #include <zlib.h>
 
 #include <algorithm>
@@ -59,26 +61,6 @@ uint32_t crc_of_file(std::span<const uint8_t> header, std::span<const uint8_t> p
 [[noreturn]] void fail(const std::string& path, const std::string& what,
                        CheckpointError::Kind kind = CheckpointError::Kind::kCorrupt) {
   throw CheckpointError(path + ": " + what, kind);
-}
-
-void write_all(int fd, const uint8_t* data, std::size_t size, const std::string& path) {
-  while (size > 0) {
-    const ssize_t n = ::write(fd, data, size);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      fail(path, std::string("write failed: ") + std::strerror(errno));
-    }
-    data += n;
-    size -= static_cast<std::size_t>(n);
-  }
-}
-
-void fsync_directory(const std::string& dir) {
-  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY);
-  if (fd < 0) fail(dir, std::string("cannot open directory to sync: ") + std::strerror(errno));
-  const int rc = ::fsync(fd);
-  ::close(fd);
-  if (rc != 0) fail(dir, std::string("directory fsync failed: ") + std::strerror(errno));
 }
 
 constexpr char kPrefix[] = "checkpoint-";
@@ -223,30 +205,11 @@ Checkpoint read_checkpoint(const std::string& path) {
 
 void write_checkpoint_file(const std::string& path, uint64_t sequence, std::span<const uint8_t> payload) {
   const std::vector<uint8_t> header = checkpoint_header(sequence, payload);
-
-  const fs::path final_path(path);
-  const fs::path dir = final_path.has_parent_path() ? final_path.parent_path() : fs::path(".");
-  // A char, not a one-character string: GCC 12 at -O3 raises a bogus -Wrestrict on "x" + std::string&&
-  // (GCC bug 105329), which breaks the Release build.
-  const std::string tmp = (dir / ('.' + final_path.filename().string() + ".tmp")).string();
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) fail(tmp, std::string("cannot create: ") + std::strerror(errno));
   try {
-    write_all(fd, header.data(), header.size(), tmp);
-    write_all(fd, payload.data(), payload.size(), tmp);
-    if (::fsync(fd) != 0) fail(tmp, std::string("fsync failed: ") + std::strerror(errno));
-  } catch (...) {
-    ::close(fd);
-    ::unlink(tmp.c_str());
-    throw;
+    write_file_atomically(path, {header, payload});
+  } catch (const OutputFileError& e) {
+    throw CheckpointError(e.what());
   }
-  ::close(fd);
-  if (::rename(tmp.c_str(), path.c_str()) != 0) {
-    const std::string err = std::strerror(errno);
-    ::unlink(tmp.c_str());
-    fail(path, "rename failed: " + err);
-  }
-  fsync_directory(dir.string());
 }
 
 CheckpointStore::CheckpointStore(std::string directory, int keep) : directory_(std::move(directory)), keep_(std::max(1, keep)) {

@@ -9,7 +9,8 @@
 //         24  uint64   payload size in bytes
 //         32  payload  (VitaSlam::serialise(), which carries its own version)
 // A write goes to a hidden temp file in the same directory, is fsync'ed, renamed over the final name
-// and the directory is fsync'ed: a crash leaves either the old or the new checkpoint, never half of one.
+// and the directory is fsync'ed (write_file_atomically, whiskeye/common/output_file.h): a crash leaves
+// either the old or the new checkpoint, never half of one.
 // Files are named checkpoint-<n>.vslam, n one more than any file in the directory: the newest file is
 // always the last one written, whatever map it holds (a resumed one, or a new one after --fresh), so
 // rotation never prunes what was just written. One process at a time owns a directory (an flock on
@@ -80,7 +81,7 @@ std::vector<uint8_t> checkpoint_header(uint64_t sequence, std::span<const uint8_
 // Only a regular file is read, and its payload only once the header agrees with the file's size, so
 // a wrong path (/dev/zero, a FIFO, a huge stray file) is refused before anything is allocated.
 Checkpoint read_checkpoint(const std::string& path);
-// Writes one checkpoint file atomically (temp + fsync + rename + directory fsync).
+// Writes one checkpoint file atomically (write_file_atomically); CheckpointError "<path>: <reason>".
 void write_checkpoint_file(const std::string& path, uint64_t sequence, std::span<const uint8_t> payload);
 
 // A directory of numbered checkpoints, newest kept, older ones pruned.
