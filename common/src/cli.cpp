@@ -2,6 +2,7 @@
 #include "whiskeye/common/cli.h"
 #include "whiskeye/common/log.h"
 
+#include "whiskeye/common/output_file.h"
 #include "whiskeye/common/params.h"
 
 #include <cstdio>
@@ -41,6 +42,19 @@ CLI::Option* Program::add_lcm_url(std::string& url) {
 
 CLI::Option* Program::add_output(std::string& path, const std::string& what) {
   return app_.add_option("-o,--output", path, what);
+}
+
+void refuse_output_onto_input(const std::string& output_option, const std::string& output,
+                              const std::vector<InputFile>& inputs) {
+  for (const InputFile& in : inputs) {
+    if (in.path.empty() || !same_regular_file(output, in.path)) continue;
+    throw UsageError(output_option + " " + output + " is the file given to " + in.option + " (" + in.path +
+                     "): writing it would destroy it");
+  }
+}
+
+void refuse_unwritable_output(const std::string& option, const std::string& path) {
+  if (const std::string why = output_file_problem(path); !why.empty()) throw UsageError(option + " " + path + ": " + why);
 }
 
 void Program::error(const std::string& reason) const {

@@ -292,6 +292,37 @@ TEST_F(SlamdBinary, BadInvocationsFailWithAOneLineReason) {
   EXPECT_THAT(p7.output(), HasSubstr("slam.match.tactile_veto"));
 }
 
+// --output onto a file slamd reads (the replayed log by its own path, a hard link or a symbolic link
+// to it; the config): refused before the output is opened, one line, exit 2, and the file untouched.
+// It was truncated to 0 bytes, and the replay then failed ("the LCM log got shorter while being read").
+TEST_F(SlamdBinary, AnOutputThatIsAFileItReadsIsRefusedAndLeftUntouched) {
+  const std::string log = (dir_ / "input.lcmlog").string();
+  fs::copy_file(sim_log_, log, fs::copy_options::overwrite_existing);
+  const std::string before = slurp(log);
+  const std::string hard = (dir_ / "hard.lcmlog").string();
+  const std::string soft = (dir_ / "soft.lcmlog").string();
+  fs::remove(hard);
+  fs::remove(soft);
+  fs::create_hard_link(log, hard);
+  fs::create_symlink(log, soft);
+  for (const std::string& out : {log, hard, soft, (dir_ / "." / "input.lcmlog").string()}) {
+    Subprocess p({kSlamd, "--replay", log, "--output", out, "--config", kConfig});
+    EXPECT_EQ(p.wait(60), 2) << p.output();
+    EXPECT_EQ(p.output(), "slamd: --output " + out + " is the file given to --replay (" + log +
+                              "): writing it would destroy it\n");
+    EXPECT_EQ(fs::file_size(log), before.size()) << "-o " << out << " touched the input";
+  }
+  EXPECT_TRUE(slurp(log) == before);
+  EXPECT_TRUE(fs::is_symlink(soft));
+
+  const std::string config = (dir_ / "slam.yaml").string();
+  fs::copy_file(kConfig, config, fs::copy_options::overwrite_existing);
+  Subprocess p({kSlamd, "--replay", log, "--output", config, "--config", config});
+  EXPECT_EQ(p.wait(60), 2) << p.output();
+  EXPECT_THAT(p.output(), HasSubstr("is the file given to --config"));
+  EXPECT_EQ(slurp(config), slurp(kConfig));
+}
+
 // --set overrides a parameter of the file, as --print-config shows and a run uses.
 TEST_F(SlamdBinary, SetOverridesAParameterOfTheFile) {
   Subprocess p({kSlamd, "--config", kConfig, "--set", "slam.experience_map.drift_per_m=1000", "--set",

@@ -71,6 +71,10 @@ int main(int argc, char** argv) {
   return program.run(argc, argv, [&] {
     if (o.localise && o.map_file.empty()) throw cli::UsageError("--localise needs --map FILE");
     if (!o.replay_in.empty() && o.replay_out.empty()) throw cli::UsageError("--replay needs --output FILE");
+    // Before the output log is opened, which truncates it.
+    cli::refuse_output_onto_input(
+        "--output", o.replay_out,
+        {{"--replay", o.replay_in}, {"--config", o.config}, {"--robot", o.robot}, {"--map", o.map_file}});
     const Parameters p = load_parameters(o);  // a ParamError (a bad file, a --mode it does not know): exit 2
     if (program.print_config(p.dump)) return 0;
     return o.replay_in.empty() ? slamd::run_live(p, o) : slamd::run_replay(p, o);

@@ -4,7 +4,8 @@
 //   --print-config     the parameters in use, command-line overrides included, then exit 0;
 //   --version          "<program> <version>" (the build's project version and git description);
 //   --lcm-url URL      where the program talks LCM;
-//   -o/--output FILE   where the program writes its one output file;
+//   -o/--output FILE   where the program writes its one output file; no output is a file the
+//                      program reads (refuse_output_onto_input());
 //   exit status        0 done, 1 runtime failure, 2 bad command line or configuration, with one line
 //                      "<program>: <reason>" on stderr (command-line errors too).
 // A program builds its options on app(), then hands its body to run(), which parses and maps every
@@ -52,6 +53,24 @@ struct Override {
 // --print-config prints is what runs. A file that cannot be read, or a key two overrides give,
 // throws ParamError (run(): exit 2).
 ParamNode read_config(const std::string& path, const std::vector<Override>& overrides = {});
+
+// A file the program reads and the option that gave it, for refuse_output_onto_input().
+struct InputFile {
+  std::string option;  // "--replay", "-c", ...
+  std::string path;    // empty: not given (skipped)
+};
+
+// Before `output` (given by `output_option`) is opened: UsageError "<output_option> <output> is the
+// file given to <option> (<path>): writing it would destroy it" when it is one of `inputs`, the same
+// regular file (device and inode, symbolic links followed: a hard link, a symbolic link and another
+// spelling of the path are caught). An output that does not exist yet is none of them.
+void refuse_output_onto_input(const std::string& output_option, const std::string& output,
+                              const std::vector<InputFile>& inputs);
+
+// Before the work whose result is written with write_file_atomically (whiskeye/common/output_file.h):
+// UsageError "<option> <path>: <why>" when that write would be refused (a FIFO, a directory, a
+// device, a symbolic link, a missing directory), so that it is said before, not after, the work.
+void refuse_unwritable_output(const std::string& option, const std::string& path);
 
 class Program {
  public:
