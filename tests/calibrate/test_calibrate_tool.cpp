@@ -7,6 +7,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -15,6 +17,7 @@
 #include <vector>
 
 #include "bringup_rig.h"
+#include "private_tmpfs.h"
 #include "scratch.h"
 #include "subprocess.h"
 #include "whiskeye/whiskerd/config.h"
@@ -22,6 +25,7 @@
 
 using namespace whiskeye;
 using ::testing::HasSubstr;
+using ::testing::Not;
 using whiskeye::testing::Subprocess;
 
 namespace {
@@ -187,6 +191,75 @@ TEST_F(CalibrateTool, ADropinWithATypoIsOneLineNamingTheFileAndTheKey) {
   const auto [wstatus, wout] = run({WHISKERD_EXE, "-c", typo_etc + "/whiskerd.yaml", "--print-config"});
   EXPECT_EQ(wstatus, 2) << wout;
   EXPECT_THAT(wout, HasSubstr(typo + ": unknown key 'calibration.whiskers[0].ofset_x'"));
+}
+
+// On a full disk the drop-in whiskerd loads stays as it was (it became a 0-byte file whiskerd loaded
+// with exit 0); with room again the same run replaces it whole.
+TEST_F(CalibrateTool, OnAFullDiskTheDropinInUseStaysWholeAndNothingElseIsLeft) {
+  // Before any child process (unshare refuses a process with threads; a fork is none).
+  whiskeye::testing::PrivateTmpfs disk(path("full_etc"), "256k");
+  ASSERT_TRUE(disk.mounted()) << disk.error();
+  const std::string etc = disk.dir(), cfg = etc + "/whiskerd.yaml", dropin = etc + "/whiskerd.d/20-rest.yaml";
+  std::filesystem::create_directories(etc + "/whiskerd.d");
+  std::filesystem::copy_file(WHISKEYE_SOURCE_DIR "/config/whiskerd.yaml", cfg);
+  const std::string log = simulate("rest", "full_rest", {"--bringup-duration", "1"});
+  const auto [first, first_out] = run({CALIBRATE_EXE, "rest", "--input", log, "-c", cfg, "-o", dropin});
+  ASSERT_EQ(first, 0) << first_out;
+  std::ifstream in(dropin);
+  const std::string good((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_GT(good.size(), 1000u);
+
+  ASSERT_GT(whiskeye::testing::fill_disk(etc + "/filler"), 0u);
+  const auto [status, out] = run({CALIBRATE_EXE, "rest", "--input", log, "-c", cfg, "-o", dropin});
+  EXPECT_EQ(status, 1) << out;
+  EXPECT_THAT(out, HasSubstr("whiskeye-calibrate: " + dropin + ": cannot write: No space left on device\n"));
+  EXPECT_THAT(out, Not(HasSubstr("wrote")));
+  std::ifstream after_in(dropin);
+  const std::string after((std::istreambuf_iterator<char>(after_in)), std::istreambuf_iterator<char>());
+  EXPECT_TRUE(after == good) << "the drop-in in use is now " << after.size() << " bytes, was " << good.size();
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(etc + "/whiskerd.d"), {}), 1) << "a temp file was left";
+  whiskerd::Params loaded;
+  EXPECT_THAT(whiskerd::load_with_dropins(ParamNode::from_file(cfg), cfg, loaded), HasSubstr("# drop-in " + dropin));
+
+  std::filesystem::remove(etc + "/filler");
+  const auto [again, again_out] = run({CALIBRATE_EXE, "rest", "--input", log, "-c", cfg, "-o", dropin});
+  EXPECT_EQ(again, 0) << again_out;
+  EXPECT_THAT(again_out, HasSubstr("rest: wrote " + dropin));
+}
+
+// -o that is not a file the drop-in can replace, or is a file the tool reads: one line, exit 2, before
+// the log is read or the bus listened to, and the file left as it was. A FIFO blocked the tool for
+// ever; a symbolic link was followed.
+TEST_F(CalibrateTool, AnOutputThatCannotBeReplacedOrIsAnInputIsRefusedBeforeAnythingIsRead) {
+  namespace fs = std::filesystem;
+  const std::string log = simulate("rest", "refused_rest", {"--bringup-duration", "1"});
+  const std::string d = path("refused");
+  fs::create_directories(d);
+  ASSERT_EQ(::mkfifo((d + "/fifo.yaml").c_str(), 0644), 0);
+  std::ofstream(d + "/elsewhere") << "kept";
+  fs::create_symlink(d + "/elsewhere", d + "/link.yaml");
+  fs::create_hard_link(log, d + "/hard.log");
+  const std::pair<std::string, std::string> cases[] = {
+      {d + "/fifo.yaml", ": is a FIFO, not a regular file"},
+      {d + "/link.yaml", ": is a symbolic link (to " + d + "/elsewhere), not followed: give the file itself"},
+      {d, ": is a directory, not a regular file"},
+      {d + "/missing/20-rest.yaml", ": its directory " + d + "/missing cannot be used: No such file or directory"},
+      {log, " is the file given to --input (" + log + "): writing it would destroy it"},
+      {d + "/hard.log", " is the file given to --input (" + log + "): writing it would destroy it"},
+      {config(), " is the file given to --config (" + config() + "): writing it would destroy it"},
+  };
+  const std::string log_before = std::to_string(fs::file_size(log));
+  for (const auto& [out, why] : cases) {
+    Subprocess p({CALIBRATE_EXE, "rest", "--input", log, "-c", config(), "-o", out});
+    EXPECT_EQ(p.wait(20), 2) << out << ": " << p.output();
+    EXPECT_EQ(p.output(), "whiskeye-calibrate: -o " + out + why + "\n");
+  }
+  EXPECT_TRUE(fs::is_fifo(d + "/fifo.yaml"));
+  EXPECT_TRUE(fs::is_symlink(d + "/link.yaml"));
+  std::ifstream kept(d + "/elsewhere");
+  EXPECT_EQ(std::string((std::istreambuf_iterator<char>(kept)), std::istreambuf_iterator<char>()), "kept");
+  EXPECT_EQ(std::to_string(fs::file_size(log)), log_before);
+  EXPECT_FALSE(fs::exists(d + "/missing"));
 }
 
 TEST_F(CalibrateTool, ALogThatIsNotACandumpIsOneLineNamingTheLine) {

@@ -3,6 +3,7 @@
 
 #include <whiskeye/common/cli.h>
 #include <whiskeye/common/config_path.h>
+#include <whiskeye/common/output_file.h>
 #include <whiskeye/common/params.h>
 
 #include <atomic>
@@ -39,6 +40,14 @@ Setup load_setup(const Options& o, std::string* printed = nullptr) {
   const std::string text = whiskerd::load_with_dropins(ParamNode::from_file(s.config), s.config, s.params);
   if (printed) *printed = text;
   return s;
+}
+
+// A subcommand that writes a drop-in refuses a bad -o before it listens or reads: one that is the log
+// or the config it reads, or that cannot be replaced atomically (a FIFO, a link, a missing directory).
+void check_output(const Options& o, const Setup& s) {
+  if (o.output.empty()) return;
+  cli::refuse_output_onto_input("-o", o.output, {{"--input", o.input}, {"--config", s.config}});
+  cli::refuse_unwritable_output("-o", o.output);
 }
 
 // The seconds a recording spans, first frame to last plus one sample period (`fallback` if empty).
@@ -129,10 +138,8 @@ int finish(const char* what, const Options& o, const Setup& s, Result result) {
     std::cout << text;
     return cli::kExitOk;
   }
-  std::ofstream out(o.output, std::ios::trunc);
-  out << text;
-  out.flush();
-  if (!out) throw std::runtime_error(o.output + ": cannot write the drop-in");
+  // whiskerd reads it: the old drop-in or the new one, never part (a full disk, a kill, two runs at once).
+  write_file_atomically(o.output, text);
   std::cerr << kProgram << ": " << what << ": wrote " << o.output << "\n";
   return cli::kExitOk;
 }
@@ -157,6 +164,7 @@ int run_bus(const Options& o) {
 
 int run_rest(const Options& o) {
   const Setup s = load_setup(o);
+  check_output(o, s);
   Recording r(s.params.mode, s.params.ids);
   record(o, s, r);
   return finish("rest", o, s, estimate_rest(r, s.params, Bounds{}));
@@ -164,6 +172,7 @@ int run_rest(const Options& o) {
 
 int run_map(const Options& o) {
   const Setup s = load_setup(o);
+  check_output(o, s);
   Recording r(s.params.mode, s.params.ids);
   std::vector<int> order = o.expect;
   if (order.empty()) {
@@ -215,6 +224,7 @@ int run_map(const Options& o) {
 int run_gain(const Options& o) {
   if (!(o.deflection > 0.0 && o.deflection < 1.0)) throw cli::UsageError("gain: --deflection D (0 < D < 1) is required");
   const Setup s = load_setup(o);
+  check_output(o, s);
   Recording r(s.params.mode, s.params.ids);
   record(o, s, r);
   return finish("gain", o, s, fit_gains(find_pushes(r), o.expect, o.deflection, s.params));
@@ -222,6 +232,7 @@ int run_gain(const Options& o) {
 
 int run_theta(const Options& o) {
   const Setup s = load_setup(o);
+  check_output(o, s);
   Recording r(s.params.mode, s.params.ids);
   const double stop = o.stop_deg > 0 ? o.stop_deg * kPi / 180.0 : s.params.controller.pattern.theta_limit;
   if (!o.input.empty()) {
