@@ -197,6 +197,48 @@ TEST(VitaSim, BadInputExitsNonZero) {
   fs::remove(bad);
 }
 
+// No output onto a file vita-sim reads (by its path, a hard link or a symbolic link): one line, exit 2,
+// before anything is opened (the LCM log and the candump were truncated when opened), the file intact.
+TEST(VitaSim, AnOutputThatIsAFileItReadsIsRefusedBeforeAnythingIsOpened) {
+  const std::string world = temp_path("own_world.yaml"), hard = temp_path("own_hard.yaml"), soft = temp_path("own_soft.yaml");
+  const std::string whiskerd = temp_path("own_whiskerd.yaml");
+  fs::copy_file(test::source_path("config/worlds/aliased_arena.yaml"), world, fs::copy_options::overwrite_existing);
+  fs::copy_file(test::source_path("config/whiskerd.yaml"), whiskerd, fs::copy_options::overwrite_existing);
+  fs::remove(hard);
+  fs::remove(soft);
+  fs::create_hard_link(world, hard);
+  fs::create_symlink(world, soft);
+  const std::string world_text = slurp(world), whiskerd_text = slurp(whiskerd);
+  const std::string refused = " is the file given to --world (" + world + "): writing it would destroy it\n";
+  const std::pair<std::string, std::string> cases[] = {
+      {"-o " + world, "vita-sim: --output " + world + refused},
+      {"-o " + hard, "vita-sim: --output " + hard + refused},
+      {"--candump " + soft, "vita-sim: --candump " + soft + refused},
+      {"--plot-world " + world, "vita-sim: --plot-world " + world + refused},
+      {"-o " + temp_path("own.lcmlog") + " --candump " + whiskerd + " --whiskerd-config " + whiskerd,
+       "vita-sim: --candump " + whiskerd + " is the file given to --whiskerd-config (" + whiskerd +
+           "): writing it would destroy it\n"},
+  };
+  for (const auto& [args, line] : cases) {
+    std::string err;
+    EXPECT_EQ(vita_sim_stderr("--world " + world + " --duration 1 " + args, err), 2) << args;
+    EXPECT_EQ(err, line) << args;
+  }
+  std::string err;
+  EXPECT_EQ(vita_sim_stderr("--bringup rest --candump " + temp_path("own.log") + " --whiskerd-config " + whiskerd +
+                                " --write-true-calibration " + whiskerd,
+                            err),
+            2);
+  EXPECT_EQ(err, "vita-sim: --write-true-calibration " + whiskerd + " is the file given to --whiskerd-config (" +
+                     whiskerd + "): writing it would destroy it\n");
+  EXPECT_TRUE(slurp(world) == world_text);
+  EXPECT_TRUE(slurp(whiskerd) == whiskerd_text);
+  EXPECT_TRUE(fs::is_symlink(soft));
+  EXPECT_FALSE(fs::exists(temp_path("own.lcmlog")));
+  EXPECT_FALSE(fs::exists(temp_path("own.log")));
+  for (const std::string& f : {world, hard, soft, whiskerd}) fs::remove(f);
+}
+
 TEST(VitaSim, LapsAndDurationBeyondTheWorldFilesBoundsExitWith2NamingTheOption) {
   // An output vita-sim cannot create: were a bound missing, the run would fail at once (exit 1)
   // instead of writing for days.

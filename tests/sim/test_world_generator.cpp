@@ -1,11 +1,14 @@
 // The world generator: reproducible draws within the documented ranges, the premise measured again
 // on the written world, the stress family breaking it, and the CLI's errors. Integration: each draw
 // renders and matches a lap of views (the check itself is unit-tested in test_alias_check.cpp).
+#include "private_tmpfs.h"
+#include "scratch.h"
 #include "sim_test_util.h"
 
 #include "whiskeye/sim/world_generator.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -237,6 +240,48 @@ TEST(VitaSimGenerate, WritesTheWorldsJsonBesideItWithTheYamlsNumbers) {
   EXPECT_NE(text.find("\"header\": [\n  \"" + first + "\""), std::string::npos) << text;
   fs::remove(world);
   fs::remove(json);
+}
+
+// The world a later run reads is replaced whole or not at all: on a full disk the old world stays
+// (it was left cut short or empty), exit 1 naming the file; an --output-world that is a FIFO, a
+// symbolic link or the --slam-config is refused before the draw, exit 2.
+TEST(VitaSimGenerate, TheWorldFileIsReplacedWholeOrNotAtAllAndNeverOntoAnInput) {
+  testing::PrivateTmpfs disk(testing::scratch_dir("world_generator_disk") + "/disk", "512k");
+  const std::string world = disk.dir() + "/w.yaml", json = disk.dir() + "/w.json", err = temp_path("err.txt");
+  ASSERT_TRUE(disk.mounted()) << disk.error();
+  std::ofstream(world) << "# the old world\n";
+  std::ofstream(json) << "{}\n";
+  ASSERT_GT(testing::fill_disk(disk.dir() + "/filler"), 0u);
+  EXPECT_EQ(vita_sim("--generate-world --world-seed 2 -q --output-world " + world + " --output-world-json " + json, err), 1);
+  EXPECT_EQ(slurp(err), "vita-sim: " + world + ": cannot write: No space left on device\n");
+  EXPECT_EQ(slurp(world), "# the old world\n");
+  EXPECT_EQ(slurp(json), "{}\n");
+  EXPECT_EQ(std::distance(fs::directory_iterator(disk.dir()), {}), 3) << "a temp file was left";
+  fs::remove(disk.dir() + "/filler");
+  EXPECT_EQ(vita_sim("--generate-world --world-seed 2 -q --output-world " + world + " --output-world-json " + json, err), 0)
+      << slurp(err);
+  EXPECT_EQ(slurp(world), aliased(2).yaml);
+  EXPECT_EQ(slurp(json), aliased(2).json);
+
+  const std::string fifo = temp_path("fifo.yaml"), link = temp_path("link.yaml"), slam = temp_path("slam.yaml");
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0644), 0);
+  fs::create_symlink(world, link);
+  fs::copy_file(test::source_path("config/slam.yaml"), slam);
+  EXPECT_EQ(vita_sim("--generate-world --output-world " + fifo, err), 2);
+  EXPECT_EQ(slurp(err), "vita-sim: --output-world " + fifo + ": is a FIFO, not a regular file\n");
+  EXPECT_EQ(vita_sim("--generate-world --output-world-json " + link + " --output-world " + temp_path("x.yaml"), err), 2);
+  EXPECT_EQ(slurp(err), "vita-sim: --output-world-json " + link + ": is a symbolic link (to " + world +
+                            "), not followed: give the file itself\n");
+  const std::string cmd = std::string(VITA_SIM_EXE) + " --robot " + test::source_path("config/robot.yaml") +
+                          " --slam-config " + slam + " --generate-world --output-world " + slam + " 2>" + err;
+  const int status = std::system(cmd.c_str());
+  EXPECT_EQ(WIFEXITED(status) ? WEXITSTATUS(status) : -1, 2);
+  EXPECT_EQ(slurp(err), "vita-sim: --output-world " + slam + " is the file given to --slam-config (" + slam +
+                            "): writing it would destroy it\n");
+  EXPECT_EQ(slurp(slam), slurp(test::source_path("config/slam.yaml")));
+  EXPECT_TRUE(fs::is_fifo(fifo));
+  EXPECT_TRUE(fs::is_symlink(link));
+  for (const std::string& f : {fifo, link, slam, err}) fs::remove(f);
 }
 
 TEST(VitaSimGenerate, BadGeneratorOptionsExitTwoNamingTheOption) {

@@ -3,6 +3,7 @@
 
 #include <whiskeye/common/cli.h>
 #include <whiskeye/common/config_path.h>
+#include <whiskeye/common/output_file.h>
 #include <whiskeye/common/params.h>
 
 #include <fstream>
@@ -81,10 +82,10 @@ int run_bringup(const BringupOptions& o, const std::string& candump_path, const 
     truth_params.channel = truth.channel;
     std::vector<whiskerd::CalibrationEntry> entries;
     for (int w = 0; w < wp::kNumWhiskers; ++w) entries.push_back({w, whiskerd::calibration_keys(truth_params, w)});
-    std::ofstream t(o.true_calibration_out, std::ios::trunc);
-    t << whiskerd::format_dropin(entries, "the true calibration vita-sim drew (seed " +
-                                              std::to_string(o.calibration_seed) + ")");
-    if (!t) throw std::runtime_error(o.true_calibration_out + ": cannot write the true calibration");
+    // A whiskerd drop-in: written as whiskeye-calibrate writes its own.
+    write_file_atomically(o.true_calibration_out,
+                          whiskerd::format_dropin(entries, "the true calibration vita-sim drew (seed " +
+                                                               std::to_string(o.calibration_seed) + ")"));
   }
   return 0;
 }

@@ -2,10 +2,10 @@
 #include "whiskeye/sim/generate_cli.h"
 
 #include "whiskeye/common/config_path.h"
+#include "whiskeye/common/output_file.h"
 #include "whiskeye/common/params.h"
 #include "whiskeye/slam/vita_slam.h"
 
-#include <fstream>
 #include <iostream>
 #include <stdexcept>
 
@@ -101,16 +101,9 @@ int run_generate(const GenerateCliOptions& cli, const RobotGeometry& robot, cons
     std::cerr << "vita-sim: " << e.what() << "\n";
     return 2;
   }
-  std::ofstream out(output_world, std::ios::binary | std::ios::trunc);
-  out << g.yaml;
-  out.flush();
-  if (!out) throw std::runtime_error(output_world + ": cannot write the world");
-  if (!output_json.empty()) {
-    std::ofstream js(output_json, std::ios::binary | std::ios::trunc);
-    js << g.json;
-    js.flush();
-    if (!js) throw std::runtime_error(output_json + ": cannot write the world's JSON");
-  }
+  // A later run (vita-sim --world, the suite) reads both: the old file or the new one, never part.
+  write_file_atomically(output_world, g.yaml);
+  if (!output_json.empty()) write_file_atomically(output_json, g.json);
   if (!quiet) {
     std::cerr << "vita-sim: wrote " << output_world << " (" << options.family << ", world seed " << options.world_seed
               << ", draw " << g.attempts << "): " << g.report.place_pairs.size() << " look-alike pairs of places, "

@@ -5,6 +5,7 @@
 
 #include "whiskeye/common/bus.h"
 #include "whiskeye/common/config_path.h"
+#include "whiskeye/common/output_file.h"
 #include "whiskeye/figure/png_file.h"
 #include "whiskeye/sim/can_log.h"
 #include "whiskeye/sim/lcm_sink.h"
@@ -80,12 +81,11 @@ int apply_world_options(const CLI::App& app, const VitaSimOptions& o, World& wor
   return 0;
 }
 
-// The boards' traffic as whiskerd is configured to receive it (its config, --can-mode over it);
-// fills in the config's path and interface where the options left them empty. Returns 0, or 2 with
+// The boards' traffic as whiskerd is configured to receive it (its config, found by run_vita_sim,
+// --can-mode over it); fills in the interface where the options left it empty. Returns 0, or 2 with
 // one line on stderr.
 int board_traffic(VitaSimOptions& o, BoardTrafficParams& traffic) {
   whiskerd::Params wd;
-  if (o.whiskerd_config.empty()) o.whiskerd_config = default_config_path("whiskerd.yaml", "--whiskerd-config");
   {
     const ParamNode root = ParamNode::from_file(o.whiskerd_config);
     whiskerd::load(root, wd);
@@ -227,6 +227,31 @@ int simulate(VitaSimOptions& o, const World& world, const RobotGeometry& robot) 
   return 0;
 }
 
+// No file vita-sim writes is one it reads (exit 2, before anything is opened: the LCM log and the
+// candump are truncated when opened), and the files written atomically can be (a world generated for
+// minutes is not lost to a FIFO or a symbolic link at the end).
+void check_outputs(const VitaSimOptions& o) {
+  const std::vector<cli::InputFile> inputs{{"--world", o.world_path},
+                                           {"--robot", o.robot_path},
+                                           {"--rcp", o.rcp_path},
+                                           {"--whiskerd-config", o.whiskerd_config},
+                                           {"--slam-config", o.generate.slam_config}};
+  const std::pair<const char*, const std::string*> outputs[] = {
+      {"--output", &o.output},
+      {"--candump", &o.candump_path},
+      {"--plot-world", &o.plot_path},
+      {"--plot-views", &o.views_path},
+      {"--output-world", &o.generate.output_world},
+      {"--output-world-json", &o.generate.output_world_json},
+      {"--write-true-calibration", &o.bringup.true_calibration_out}};
+  for (const auto& [option, path] : outputs) {
+    if (!path->empty()) cli::refuse_output_onto_input(option, *path, inputs);
+  }
+  for (const auto& [option, path] : {outputs[4], outputs[5], outputs[6]}) {
+    if (!path->empty()) cli::refuse_unwritable_output(option, *path);
+  }
+}
+
 }  // namespace
 
 std::string fault_summary(const FaultRecord& f, int64_t start_utime) {
@@ -271,6 +296,14 @@ std::string fault_summary(const FaultRecord& f, int64_t start_utime) {
 
 int run_vita_sim(const CLI::App& app, VitaSimOptions& o) {
   const RobotGeometry robot = load_robot(o.robot_path);
+  // The default configs each mode reads, found now so that no output is one of them either.
+  if (o.whiskerd_config.empty() && (!o.candump_path.empty() || !o.bringup.session.empty())) {
+    o.whiskerd_config = default_config_path("whiskerd.yaml", "--whiskerd-config").string();
+  }
+  if (o.generate.generate && o.generate.slam_config.empty()) {
+    o.generate.slam_config = default_config_path("slam.yaml", "--slam-config").string();
+  }
+  check_outputs(o);
   if (o.generate.generate) return run_generate(o.generate, robot, load_controller(o.rcp_path), o.quiet);
   if (!o.bringup.session.empty()) {
     return run_bringup(o.bringup, o.candump_path, o.whiskerd_config, o.can_interface, o.seed, o.start_utime);
