@@ -27,6 +27,7 @@
 #include <utility>
 #include <vector>
 
+#include <sys/stat.h>
 #include <sys/wait.h>
 
 namespace whiskeye {
@@ -544,6 +545,53 @@ TEST_F(VitaEvalBinary, MeasuresTheRecoveryFromAKidnapInTheTableTheJsonTheTraceAn
   EXPECT_GT(count_colour(png, 40, 160, 40), 50);    // the first correct localisation (green)
   EXPECT_GT(count_colour(png, 40, 40, 220), 20);    // the false one (red)
   EXPECT_GT(count_colour(png, 120, 220, 255), 100);  // the LOCALISING stretch (band)
+}
+
+// No output onto a file vita-eval reads: the --json (the input by its path, a hard link to the
+// --map-truth log), a trace or a plot that is a link to the input: exit 2 with the line naming both,
+// and the file untouched (the JSON used to replace the log). The JSON is refused before the logs are
+// read, the traces and plots before the first of them is written.
+TEST_F(VitaEvalBinary, AnOutputThatIsAFileItReadsIsRefusedAndTheFileIsUntouched) {
+  namespace fs = std::filesystem;
+  const std::string log = file("vita.lcmlog"), truth = file("truth.lcmlog");
+  write_log(log, Script{});
+  write_log(truth, Script{});
+  const std::string before = read_text(log), truth_before = read_text(truth);
+  fs::create_hard_link(truth, file("truth-link.json"));
+  fs::create_directories(file("trace"));
+  fs::create_symlink(log, file("trace/vita_trace.csv"));
+  fs::create_directories(file("plots"));
+  fs::create_hard_link(log, file("plots/vita_trail.png"));
+  const std::string refused = "): writing it would destroy it\n";
+  EXPECT_EQ(WEXITSTATUS(run_vita_eval("--input " + log + " --json " + log, file("out1.txt"))), 2);
+  EXPECT_EQ(read_text(file("out1.txt")), "vita-eval: --json " + log + " is the file given to --input (" + log + refused);
+  EXPECT_EQ(WEXITSTATUS(run_vita_eval("--input " + log + " --map-truth " + truth + " --json " + file("truth-link.json"),
+                                      file("out2.txt"))),
+            2);
+  EXPECT_EQ(read_text(file("out2.txt")),
+            "vita-eval: --json " + file("truth-link.json") + " is the file given to --map-truth (" + truth + refused);
+  EXPECT_EQ(WEXITSTATUS(run_vita_eval("--input " + log + " --trace " + file("trace") + " --plots " + file("plots"),
+                                      file("out3.txt"))),
+            2);
+  const std::string out3 = read_text(file("out3.txt"));
+  EXPECT_NE(out3.find("vita-eval: --trace " + file("trace/vita_trace.csv") + " is the file given to --input (" + log +
+                      refused),
+            std::string::npos)
+      << out3;
+  EXPECT_FALSE(fs::exists(file("plots/vita_experience_map.png"))) << "the traces are checked before any plot is written";
+  fs::remove(file("trace/vita_trace.csv"));
+  EXPECT_EQ(WEXITSTATUS(run_vita_eval("--input " + log + " --plots " + file("plots"), file("out4.txt"))), 2);
+  const std::string out4 = read_text(file("out4.txt"));
+  EXPECT_NE(out4.find("vita-eval: --plots " + file("plots/vita_trail.png") + " is the file given to --input (" + log +
+                      refused),
+            std::string::npos)
+      << out4;
+  EXPECT_TRUE(read_text(log) == before) << "the input log was written";
+  EXPECT_TRUE(read_text(truth) == truth_before) << "the --map-truth log was written";
+
+  ASSERT_EQ(::mkfifo(file("fifo.json").c_str(), 0644), 0);
+  EXPECT_EQ(WEXITSTATUS(run_vita_eval("--input " + log + " --json " + file("fifo.json"), file("out5.txt"))), 2);
+  EXPECT_EQ(read_text(file("out5.txt")), "vita-eval: --json " + file("fifo.json") + ": is a FIFO, not a regular file\n");
 }
 
 TEST_F(VitaEvalBinary, ASecondSessionIsJudgedByTheFirstSessionsTruthAndAClockThatOverlapsItIsRefused) {

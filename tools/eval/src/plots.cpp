@@ -239,7 +239,11 @@ std::string localisation_title(const Localisation& l, int64_t origin) {
   return buf;
 }
 
-std::vector<std::string> write(const Figure& fig, const std::string& base) {
+std::vector<std::string> write(const Figure& fig, const std::string& base, const BeforeWrite& before_write) {
+  if (before_write) {
+    before_write(base + ".png");
+    before_write(base + ".svg");
+  }
   fig.write_png(base + ".png");
   fig.write_svg(base + ".svg");
   return {base + ".png", base + ".svg"};
@@ -267,7 +271,8 @@ std::string plot_stem(const std::string& label) {
   return s;
 }
 
-std::vector<std::string> plot_run(const std::string& dir, const PlotRun& run, const PlotScene& scene) {
+std::vector<std::string> plot_run(const std::string& dir, const PlotRun& run, const PlotScene& scene,
+                                  const BeforeWrite& before_write) {
   const std::string base = (std::filesystem::path(dir) / plot_stem(run.label)).string();
   const EvalInput& input = *run.input;
   const EvalResult& result = *run.result;
@@ -284,7 +289,7 @@ std::vector<std::string> plot_run(const std::string& dir, const PlotRun& run, co
     world_legend(fig, scene);
     truth_legend(fig, input);
     map_legend(fig, input.map.revoked_links());
-    keep(write(fig, base + "_experience_map"));
+    keep(write(fig, base + "_experience_map", before_write));
   }
 
   const std::vector<PoseSample> est = sorted_estimate(input);
@@ -347,7 +352,7 @@ std::vector<std::string> plot_run(const std::string& dir, const PlotRun& run, co
     }
     fig.legend({LegendEntry::Kind::Note, kBlack, 0, "ring: the estimate just before the event"});
     fig.colour_bar({"time since the first pose (s)", 0.0, duration});
-    keep(write(fig, base + "_trail"));
+    keep(write(fig, base + "_trail", before_write));
   }
 
   {  // The re-localisations.
@@ -393,7 +398,7 @@ std::vector<std::string> plot_run(const std::string& dir, const PlotRun& run, co
       fig.legend({LegendEntry::Kind::Dot, kMagenta, 3, "estimate just before the event"});
       fig.legend({LegendEntry::Kind::Ring, kMagenta, 7, "the target experience (final map)"});
     }
-    keep(write(fig, base + "_relocalisations"));
+    keep(write(fig, base + "_relocalisations", before_write));
   }
 
   if (result.localisation && !result.localisation->instants.empty()) {  // Kidnaps and session starts.
@@ -414,13 +419,13 @@ std::vector<std::string> plot_run(const std::string& dir, const PlotRun& run, co
     fig.legend({LegendEntry::Kind::Dot, kGreen, 9, "first correct localisation (and its target, ring)"});
     fig.legend({LegendEntry::Kind::Line, kLocalisedPath, 2, "driven after it"});
     fig.share_axes(true);
-    keep(write(fig, base + "_localisation"));
+    keep(write(fig, base + "_localisation", before_write));
   }
   return written;
 }
 
 std::vector<std::string> plot_comparison(const std::string& dir, const std::vector<PlotRun>& runs,
-                                         const PlotScene& scene) {
+                                         const PlotScene& scene, const BeforeWrite& before_write) {
   Figure fig("experience maps side by side");
   bool any_truth = false;
   std::size_t revoked = 0;
@@ -436,7 +441,7 @@ std::vector<std::string> plot_comparison(const std::string& dir, const std::vect
   if (any_truth) fig.legend({LegendEntry::Kind::Line, kGrey, 2, "ground truth"});
   map_legend(fig, revoked);
   fig.share_axes(true);
-  return write(fig, (std::filesystem::path(dir) / "comparison").string());
+  return write(fig, (std::filesystem::path(dir) / "comparison").string(), before_write);
 }
 
 }  // namespace whiskeye::eval

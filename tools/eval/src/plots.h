@@ -9,6 +9,7 @@
 #include "whiskeye/eval/metrics.h"
 #include "whiskeye/sim/world.h"
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -41,13 +42,17 @@ Placement place(const EvalInput& input, const EvalResult& result, const PlotScen
 // The file-name stem of a run label: "vita#2" -> "vita-2" ('#' breaks URLs, make and LaTeX).
 std::string plot_stem(const std::string& label);
 
+// Called with each file's path before it is written; throws to refuse it.
+using BeforeWrite = std::function<void(const std::string& path)>;
+
 // Writes DIR/<stem>_experience_map, DIR/<stem>_trail and DIR/<stem>_relocalisations, each .png and
 // .svg; returns the paths written. Throws std::runtime_error naming a file it cannot write.
-std::vector<std::string> plot_run(const std::string& dir, const PlotRun& run, const PlotScene& scene);
+std::vector<std::string> plot_run(const std::string& dir, const PlotRun& run, const PlotScene& scene,
+                                  const BeforeWrite& before_write = {});
 
 // DIR/comparison.png and .svg: every run's experience map in a panel of its own, side by side at one
 // scale (the three modes of an experiment).
 std::vector<std::string> plot_comparison(const std::string& dir, const std::vector<PlotRun>& runs,
-                                         const PlotScene& scene);
+                                         const PlotScene& scene, const BeforeWrite& before_write = {});
 
 }  // namespace whiskeye::eval

@@ -5,6 +5,8 @@
 #include "plots.h"
 #include "report.h"
 
+#include "whiskeye/common/cli.h"
+#include "whiskeye/common/output_file.h"
 #include "whiskeye/eval/metrics.h"
 #include "whiskeye/eval/options.h"
 #include "whiskeye/sim/world.h"
@@ -12,7 +14,6 @@
 #include <cstdio>
 #include <exception>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <optional>
 #include <set>
@@ -38,12 +39,8 @@ bool parse_start(const std::string& text, Pose2& pose) {
   return true;
 }
 
-// Writes `text` to `path`; throws naming the file if it cannot.
-void write_text(const std::string& path, const std::string& text) {
-  std::ofstream out(path);
-  out << text;
-  if (!out) throw std::runtime_error("cannot write " + path);
-}
+// Writes `text` to `path` atomically (the suite reads the JSON); throws naming the file if it cannot.
+void write_text(const std::string& path, const std::string& text) { write_file_atomically(path, text); }
 
 // The metrics' parameters from the options. Returns 0, or 2 with one line on stderr.
 int eval_params(const VitaEvalOptions& o, EvalParams& params) {
@@ -122,42 +119,65 @@ RunReport evaluate_input(const std::string& path, const std::vector<PoseSample>&
   return r;
 }
 
-// The plots, the TUM trajectories and the per-cycle traces, where asked for.
+// The plots, the TUM trajectories and the per-cycle traces, where asked for; none of them onto a file
+// read (the TUM files' and traces' names checked before anything is written, each plot's before it is).
 void write_plots_and_traces(const VitaEvalOptions& o, const std::vector<RunReport>& reports,
                             const std::vector<EvalInput>& inputs, const PlotScene& scene) {
+  std::vector<std::string> tums, traces;
+  for (const RunReport& r : reports) {
+    if (!o.tum_dir.empty()) {
+      const std::string stem = (std::filesystem::path(o.tum_dir) / plot_stem(r.label)).string();
+      for (const char* suffix : {"_estimate.tum", "_groundtruth.tum"}) {
+        tums.push_back(stem + suffix);
+        refuse_output_onto_input(o, "--tum", tums.back());
+      }
+    }
+    if (!o.trace_dir.empty()) {
+      traces.push_back((std::filesystem::path(o.trace_dir) / (plot_stem(r.label) + "_trace.csv")).string());
+      refuse_output_onto_input(o, "--trace", traces.back());
+    }
+  }
   if (!o.plots_dir.empty()) {
     std::filesystem::create_directories(o.plots_dir);
     std::vector<PlotRun> runs;
+    const auto not_an_input = [&](const std::string& path) { refuse_output_onto_input(o, "--plots", path); };
     for (std::size_t i = 0; i < reports.size(); ++i) {
       runs.push_back({reports[i].label, &inputs[i], &reports[i].result});
-      plot_run(o.plots_dir, runs.back(), scene);
+      plot_run(o.plots_dir, runs.back(), scene, not_an_input);
     }
-    if (runs.size() > 1) plot_comparison(o.plots_dir, runs, scene);
+    if (runs.size() > 1) plot_comparison(o.plots_dir, runs, scene, not_an_input);
   }
   if (!o.tum_dir.empty()) {
     std::filesystem::create_directories(o.tum_dir);
     for (std::size_t i = 0; i < reports.size(); ++i) {
-      const std::filesystem::path stem = std::filesystem::path(o.tum_dir) / plot_stem(reports[i].label);
-      write_text(stem.string() + "_estimate.tum", format_tum(claimed_poses(inputs[i].estimate, inputs[i].states)));
-      write_text(stem.string() + "_groundtruth.tum", format_tum(GroundTruth(inputs[i].ground_truth).samples()));
+      write_text(tums[2 * i], format_tum(claimed_poses(inputs[i].estimate, inputs[i].states)));
+      write_text(tums[2 * i + 1], format_tum(GroundTruth(inputs[i].ground_truth).samples()));
     }
   }
   if (!o.trace_dir.empty()) {
     std::filesystem::create_directories(o.trace_dir);
     for (std::size_t i = 0; i < reports.size(); ++i) {
-      write_text((std::filesystem::path(o.trace_dir) / (plot_stem(reports[i].label) + "_trace.csv")).string(),
-                 format_trace_csv(trace_cycles(inputs[i], reports[i].result.exm,
-                                               reports[i].result.localisation ? &*reports[i].result.localisation
-                                                                              : nullptr)));
+      const auto* localisation = reports[i].result.localisation ? &*reports[i].result.localisation : nullptr;
+      write_text(traces[i], format_trace_csv(trace_cycles(inputs[i], reports[i].result.exm, localisation)));
     }
   }
 }
 
 }  // namespace
 
+void refuse_output_onto_input(const VitaEvalOptions& o, const std::string& option, const std::string& path) {
+  std::vector<cli::InputFile> read{{"--map-truth", o.map_truth_path}, {"--world", o.world_path}};
+  for (const std::string& input : o.inputs) read.push_back({"--input", input});
+  cli::refuse_output_onto_input(option, path, read);
+}
+
 int run_vita_eval(const VitaEvalOptions& o) {
   EvalParams params;
   if (const int status = eval_params(o, params); status != 0) return status;
+  if (!o.json_path.empty()) {
+    refuse_output_onto_input(o, "--json", o.json_path);
+    cli::refuse_unwritable_output("--json", o.json_path);
+  }
   std::vector<PoseSample> map_truth;
   if (!o.map_truth_path.empty()) map_truth = load_ground_truth(o.map_truth_path);
   PlotScene scene;

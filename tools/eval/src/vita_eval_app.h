@@ -32,9 +32,15 @@ struct VitaEvalOptions {
 // Adds every vita-eval option to `app`, bound to `options`, and sets the defaults they show.
 void add_vita_eval_options(CLI::App& app, VitaEvalOptions& options);
 
+// Refuses (cli::UsageError: exit 2) `path`, a file vita-eval is to write, given by `option`, when it
+// is one of the files it reads: an --input, the --map-truth log, the --world (the same file, by
+// device and inode). Called before each output is opened.
+void refuse_output_onto_input(const VitaEvalOptions& options, const std::string& option, const std::string& path);
+
 // Evaluates, prints the table to stdout and writes what was asked for; what each input lacks or lost
 // on stderr. Returns the exit status (2 with one line on stderr for a bad option value or world);
-// throws std::runtime_error for a log it cannot read or a file it cannot write (exit 1).
+// throws std::runtime_error for a log it cannot read or a file it cannot write (exit 1), and
+// cli::UsageError for an output that is one of its inputs or (--json) cannot be written there (exit 2).
 int run_vita_eval(const VitaEvalOptions& options);
 
 }  // namespace whiskeye::eval
