@@ -3,6 +3,7 @@ metrics, the one-line error exit, number formatting and the atomic JSON files of
 import hashlib
 import json
 import os
+import secrets
 import sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -57,7 +58,30 @@ def read_json(path):
 
 
 def write_json(path, doc):
-    """Atomically: a reader (another node, the aggregation) sees the old file or the whole new one."""
-    with open(path + ".tmp", "w") as f:
-        json.dump(doc, f, indent=1, sort_keys=True)
-    os.replace(path + ".tmp", path)
+    """Atomically: a reader (another node, the aggregation) sees the old file or the whole new one. The
+    temp file beside it is this writer's own (created exclusive, a random name: two suites writing one
+    results folder no longer share one, which tore the file and made the second rename fail), synced
+    before the rename and the folder after it, so a node that crashes leaves one of the two as well."""
+    d = os.path.dirname(path) or "."
+    while True:
+        tmp = os.path.join(d, f".{os.path.basename(path)}.{secrets.token_hex(8)}.tmp")
+        try:
+            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+            break
+        except FileExistsError:
+            continue
+    try:
+        with os.fdopen(fd, "w") as f:
+            json.dump(doc, f, indent=1, sort_keys=True)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+        raise
+    folder = os.open(d, os.O_RDONLY | os.O_DIRECTORY)
+    try:
+        os.fsync(folder)
+    finally:
+        os.close(folder)

@@ -9,6 +9,7 @@ import argparse
 import json
 import os
 import shutil
+import subprocess
 import sys
 import tempfile
 import unittest
@@ -17,7 +18,7 @@ SOURCE = sys.argv.pop(1)
 sys.dont_write_bytecode = True
 sys.path.insert(0, os.path.join(SOURCE, "python"))
 
-from whiskeye_suite import cli, pipeline, report, slurm, stats, study, targets  # noqa: E402
+from whiskeye_suite import cli, common, pipeline, report, slurm, stats, study, targets  # noqa: E402
 
 THRESHOLDS = {"correct_m": 0.08, "correct_deg": 4.6, "false_closure_m": 0.25, "false_closure_deg": 15.0}
 
@@ -313,6 +314,41 @@ class StudyComparison(InTempDir):
             md = f.read()
         self.assertIn("- world 2 (seed 5002) under fast: slamd exited 1 (see log)", md)
         self.assertIn("| 2 | 5002 | 0.850 | 1.000 | 0.050 | 0 | — | — | — | — |", md)
+
+
+class AtomicJson(InTempDir):
+    WRITER = """
+import sys
+sys.path.insert(0, sys.argv[1])
+from whiskeye_suite.common import write_json
+for _ in range(100):
+    write_json(sys.argv[2], {"writer": sys.argv[3], "rows": [sys.argv[3] * 64] * 2000})
+"""
+
+    def test_two_writers_of_one_file_never_tear_it_nor_fail_and_leave_no_temp_file(self):
+        # Two suites on one results folder: each write_json had the same temp file (PATH.tmp), so one
+        # rename found it gone (FileNotFoundError) and a reader could see the two interleaved.
+        path = os.path.join(self.tmp, "suite.json")
+        common.write_json(path, {"writer": "a", "rows": []})
+        writers = [subprocess.Popen([sys.executable, "-c", self.WRITER, os.path.join(SOURCE, "python"), path, w],
+                                    stderr=subprocess.PIPE, text=True) for w in ("a", "b")]
+        reads = 0
+        while any(w.poll() is None for w in writers):
+            with open(path) as f:
+                doc = json.load(f)  # a torn file does not parse
+            self.assertIn(doc["writer"], ("a", "b"))
+            reads += 1
+        for w in writers:
+            self.assertEqual(w.wait(), 0, w.stderr.read())
+        self.assertGreater(reads, 0)
+        self.assertEqual(os.listdir(self.tmp), ["suite.json"])
+        self.assertEqual(oct(os.stat(path).st_mode & 0o777), oct(0o666 & ~current_umask()))
+
+
+def current_umask():
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
 
 
 if __name__ == "__main__":
