@@ -7,6 +7,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <functional>
 
 namespace whiskeye::slam {
@@ -63,6 +65,37 @@ TEST(Localiser, WithoutAPriorCommitsToThePlaceASequenceOfRecognitionsAgreesOn) {
   EXPECT_FALSE(loc.localising());
   EXPECT_EQ(loc.localisations(), 1);
   EXPECT_EQ(loc.hypotheses(), 0);
+}
+
+// A localisation count at its end stays there: restored at INT64_MAX, a commit wrapped it to -2^63
+// and the checkpoint written back was refused ("bad localisation counters"), for ever.
+TEST(Localiser, ALocalisationCountAtItsEndStaysThereAndItsCheckpointLoads) {
+  Ring ring([](int i) { return i == 26 ? 100 : half_ring_alias(i); });
+  Localiser fresh;
+  std::vector<uint8_t> blob;
+  fresh.serialise(blob);
+  // state u8, recognitions u32 (none), evidence_below i32, localising_m f64, kidnaps i64, localisations i64
+  constexpr size_t kLocalisations = 1 + 4 + 4 + 8 + 8;
+  const int64_t end = std::numeric_limits<int64_t>::max();
+  std::memcpy(blob.data() + kLocalisations, &end, sizeof end);
+  Localiser loc;
+  size_t pos = 0;
+  loc.deserialise(blob, pos, Ring::kN);
+  ASSERT_EQ(loc.localisations(), end);
+  loc.start(false);
+  ring.map.set_current(0, between(Ring::pose(0), Ring::pose(25)));
+  EXPECT_FALSE(loc.on_localising_cycle(5, 0.0, ring.map));
+  ring.step();
+  EXPECT_FALSE(loc.on_localising_cycle(100, 0.25, ring.map));
+  ring.step();
+  ASSERT_TRUE(loc.on_localising_cycle(7, 0.25, ring.map));  // committed
+  EXPECT_EQ(loc.localisations(), end);
+  std::vector<uint8_t> again;
+  loc.serialise(again);
+  Localiser back;
+  pos = 0;
+  EXPECT_NO_THROW(back.deserialise(again, pos, Ring::kN));
+  EXPECT_EQ(back.localisations(), end);
 }
 
 TEST(Localiser, NeverCommitsWhileTheCandidatePlacesLookTheSame) {

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cstring>
 
+#include <limits>
 #include <map>
 #include <memory>
 #include <optional>
@@ -535,6 +536,37 @@ std::vector<uint8_t> as_format_4(const std::vector<uint8_t>& blob, const VitaSla
   for (uint8_t b : out) h = (h ^ b) * 16777619u;
   out.insert(out.end(), reinterpret_cast<const uint8_t*>(&h), reinterpret_cast<const uint8_t*>(&h) + 4);
   return out;
+}
+
+// A counter at its end stays there: restored at INT64_MAX, a cycle wrapped it to -2^63 and the
+// checkpoint written back was taken as a map (a negative count of cycles), where a negative count
+// is no real map's and is refused at load.
+TEST(VitaSlam, ACounterAtItsEndStaysThereAndTheCheckpointWrittenBackLoads) {
+  World w;
+  VitaSlam a(SlamParams{}, w.geometry);
+  for (int c = 1; c <= 3; ++c) tour_cycle(a, w, c);
+  std::vector<uint8_t> blob = a.serialise_unsealed();
+  constexpr size_t kCycles = 8 + 4 + 1 + 8 + 1;  // magic, version, mode, odometry clock and its flag
+  const int64_t end = std::numeric_limits<int64_t>::max();
+  std::memcpy(blob.data() + kCycles, &end, sizeof end);
+  VitaSlam::seal(blob);
+  VitaSlam b = VitaSlam::deserialise(blob, SlamParams{}, w.geometry);
+  ASSERT_EQ(b.stats().cycles, end);
+  tour_cycle(b, w, 4);
+  EXPECT_EQ(b.stats().cycles, end);
+  const VitaSlam again = VitaSlam::deserialise(b.serialise(), SlamParams{}, w.geometry);
+  EXPECT_EQ(again.stats().cycles, end);
+  // A negative count: refused, naming it.
+  std::vector<uint8_t> negative = a.serialise_unsealed();
+  const int64_t minus = -5;
+  std::memcpy(negative.data() + kCycles, &minus, sizeof minus);
+  VitaSlam::seal(negative);
+  try {
+    VitaSlam::deserialise(negative, SlamParams{}, w.geometry);
+    ADD_FAILURE() << "a negative cycle count was loaded";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("negative"), std::string::npos) << e.what();
+  }
 }
 
 TEST(VitaSlam, AMapSavedInTheFormatBeforeResumesWithEveryTemplateFullySensed) {

@@ -2,6 +2,7 @@
 #include "whiskeye/slam/localiser.h"
 
 #include "binary_io.h"
+#include "counters.h"
 #include "whiskeye/slam/experience_map.h"
 
 #include <algorithm>
@@ -65,7 +66,7 @@ bool Localiser::on_tracking_recognition(bool refused, int recognised_template, i
   const int evidence_below = std::find_if(recent_.begin(), recent_.end(), [](const TrackedRecognition& r) {
                                return r.refused;
                              })->first_new_id;
-  ++kidnaps_detected_;
+  count(kidnaps_detected_);
   // Odometry was trusted until now: where it says the robot is starts as far ahead as a commit must be.
   start(true, params_.commit_margin, evidence_below);
   return true;
@@ -214,7 +215,7 @@ Commit Localiser::commit(const Hypothesis& h, const ExperienceMap& map, bool gav
   hyps_.clear();
   recent_.clear();
   localising_m_ = 0.0;
-  ++localisations_;
+  count(localisations_);
   return c;
 }
 

@@ -4,6 +4,7 @@
 #include "whiskeye/common/odometry_limits.h"
 
 #include "binary_io.h"
+#include "counters.h"
 
 #include <algorithm>
 #include <cmath>
@@ -52,7 +53,7 @@ double VitaSlam::tau_of(const Terms& terms) const {
 // One cycle in the four steps of vita_slam.h, each a member function below.
 CycleResult VitaSlam::process_cycle(const CycleInput& in) {
   CycleResult out;
-  ++stats_.cycles;
+  count(stats_.cycles);
   if (resume_gap_s_ && !in.odometry.empty()) {
     const double gap_s = (static_cast<double>(in.odometry.front().utime) - static_cast<double>(last_odometry_utime_)) * 1e-6;
     // A checkpoint written while localising goes on as it was: restarting would give a saved map a
@@ -84,7 +85,7 @@ void VitaSlam::integrate_odometry(const std::vector<OdometrySample>& odometry) {
     const bool usable = std::isfinite(o.vx) && std::isfinite(o.vy) && std::isfinite(o.omega) &&
                         std::hypot(o.vx, o.vy) <= kMaxOdometrySpeed && std::abs(o.omega) <= kMaxOdometryTurnRate;
     if (!usable) {
-      ++stats_.odometry_rejected;
+      count(stats_.odometry_rejected);
       continue;
     }
     if (have_odometry_time_ && o.utime < last_odometry_utime_) {
@@ -94,17 +95,17 @@ void VitaSlam::integrate_odometry(const std::vector<OdometrySample>& odometry) {
       // for as long as the step, even across a restart from a checkpoint.
       const double back_s = (static_cast<double>(last_odometry_utime_) - static_cast<double>(o.utime)) * 1e-6;
       if (back_s <= params_.max_odometry_dt) {
-        ++stats_.odometry_rejected;
+        count(stats_.odometry_rejected);
         continue;
       }
-      ++stats_.odometry_gaps;
+      count(stats_.odometry_gaps);
       have_odometry_time_ = false;
     }
     double dt = 0.0;
     if (have_odometry_time_) {
       dt = static_cast<double>(o.utime - last_odometry_utime_) * 1e-6;
       if (dt > params_.max_odometry_dt) {
-        ++stats_.odometry_gaps;
+        count(stats_.odometry_gaps);
         dt = params_.max_odometry_dt;
       }
     }
@@ -130,7 +131,7 @@ VitaSlam::CycleTemplates VitaSlam::make_templates(const CycleInput& in, CycleRes
     try {
       t.visual = make_visual_template(*in.image, params_.visual, decoder_ ? &*decoder_ : nullptr);
     } catch (const InputError& e) {
-      ++stats_.bad_images;
+      count(stats_.bad_images);
       out.image_warning = e.what();
     }
   }
@@ -140,7 +141,7 @@ VitaSlam::CycleTemplates VitaSlam::make_templates(const CycleInput& in, CycleRes
     if (any_valid) {
       t.tactile = make_tactile_template(*in.whisk, geometry_, params_.tactile);
     } else {
-      ++stats_.empty_whisk_cycles;
+      count(stats_.empty_whisk_cycles);
       out.whisk_warning = "whisk cycle " + std::to_string(in.whisk->cycle) + " has no valid sample";
     }
   }
@@ -331,6 +332,10 @@ VitaSlam VitaSlam::deserialise(std::span<const uint8_t> data, const SlamParams& 
   s.stats_.empty_whisk_cycles = bin::get<int64_t>(in, pos);
   s.stats_.odometry_rejected = bin::get<int64_t>(in, pos);
   s.stats_.odometry_gaps = bin::get<int64_t>(in, pos);
+  for (const int64_t c : {s.stats_.cycles, s.stats_.bad_images, s.stats_.empty_whisk_cycles, s.stats_.odometry_rejected,
+                          s.stats_.odometry_gaps}) {
+    if (c < 0) throw std::runtime_error("checkpoint: a negative cycle or input counter");
+  }
   s.store_ = TemplateStore::deserialise(in, pos, params.visual.template_width, params.visual.template_height, version);
   s.cells_.deserialise(in, pos);
   s.map_.deserialise(in, pos, version, s.store_.size());
