@@ -586,16 +586,20 @@ TEST(ExperienceMap, SerialisationRoundTripsExactly) {
     return x;
   };
   constexpr std::size_t kFirst = 8, kTemplateId = kFirst + 7 * 8 + 8;
+  // Two experiences of 7 f64, i64, 3 i32, u8, i32, u8; the link count; the first link's ends.
+  constexpr std::size_t kLinkDx = kFirst + 2 * (7 * 8 + 8 + 3 * 4 + 1 + 4 + 1) + 8 + 2 * 4;
   for (const auto& [what, blob] : {std::pair{"template", patched(kTemplateId, int32_t{1 << 27})},
                                    std::pair{"template 2 of 2", patched(kTemplateId, int32_t{2})},
                                    std::pair{"visual template 5 of 2", patched(kTemplateId + 4, int32_t{5})},
                                    std::pair{"tactile template -7 of 2", patched(kTemplateId + 8, int32_t{-7})},
                                    std::pair{"heading", patched(kFirst + 2 * 8, 0.0)},
-                                   std::pair{"pose", patched(kFirst, std::nan(""))}}) {
+                                   std::pair{"pose", patched(kFirst, std::nan(""))},
+                                   std::pair{"beyond 10000000 m", patched(kFirst, 1e300)},
+                                   std::pair{"longer than 10000000 m", patched(kLinkDx, 1e300)}}) {
     ExperienceMap x;
     pos = 0;
     try {
-      x.deserialise(blob, pos, 2, 2);
+      x.deserialise(blob, pos, VitaSlam::kCheckpointFormat, 2);
       ADD_FAILURE() << what;
     } catch (const std::runtime_error& e) {
       EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
@@ -604,7 +608,7 @@ TEST(ExperienceMap, SerialisationRoundTripsExactly) {
   a[7] = 0xff;  // corrupt the experience count (its most significant byte)
   pos = 0;
   ExperienceMap bad;
-  EXPECT_THROW(bad.deserialise(a, pos, 2, 2), std::runtime_error);
+  EXPECT_THROW(bad.deserialise(a, pos, VitaSlam::kCheckpointFormat, 2), std::runtime_error);
 }
 
 }  // namespace

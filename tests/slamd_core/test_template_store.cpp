@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <random>
 
 namespace whiskeye::slam {
@@ -339,6 +340,29 @@ TEST(TemplateMatch, AWhiskerWithoutDataWhenTheTemplateWasMadeCountsNeither) {
   TemplateStore three = s;
   three.add({nullptr, &q}, 0, 0, 0);  // distances 1, 1, 0 (the two healthy ones agree)
   EXPECT_NEAR(three.estimate_sigmas(p).sigma_sda, std::sqrt(1.0 / 3.0), 1e-6);
+}
+
+// A saved map's template with a NaN (or impossible) visual mean or SDA entry is refused by name: the
+// prefilter compares the means, and a NaN SDA makes every tactile distance NaN.
+TEST(TemplateMatch, ACheckpointedTemplateWithANonFiniteMeanOrSdaIsRefused) {
+  for (const int which : {0, 1, 2}) {
+    TemplateStore s(64, 40);
+    VisualTemplate v = random_template(90);
+    TactileTemplate t = random_tactile(91);
+    if (which == 0) v.mean = std::nanf("");
+    if (which == 1) v.mean = 1.5f;  // a mean intensity is in [0, 1]
+    if (which == 2) t.sda[5] = std::numeric_limits<float>::infinity();
+    s.add({&v, &t}, 1, 2, 3);
+    std::vector<uint8_t> blob;
+    s.serialise(blob);
+    size_t pos = 0;
+    try {
+      TemplateStore::deserialise(blob, pos, 64, 40, VitaSlam::kCheckpointFormat);
+      ADD_FAILURE() << "loaded, case " << which;
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find(which == 2 ? "SDA" : "visual mean"), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST(TemplateMatch, TheSensedWhiskersAreCheckpointedAndOlderFormatsReadAsAllSensed) {

@@ -424,6 +424,10 @@ void ExperienceMap::deserialise(const std::vector<uint8_t>& in, size_t& pos, uin
     if (!finite({x, y, c, s, e.pc_x, e.pc_y, e.pc_theta}) || std::abs(c * c + s * s - 1.0) > 1e-6) {
       throw std::runtime_error("checkpoint: experience " + std::to_string(i) + " has a non-finite pose or heading");
     }
+    if (std::abs(x) > kMaxMapExtent_m || std::abs(y) > kMaxMapExtent_m) {
+      throw std::runtime_error("checkpoint: experience " + std::to_string(i) + " lies beyond " +
+                               std::to_string(static_cast<int>(kMaxMapExtent_m)) + " m of the map's origin");
+    }
     m.add_experience({x, y, std::atan2(s, c)}, e);
     // Restore the exact heading representation, not its round trip through an angle.
     m.c_.back() = c;
@@ -439,6 +443,10 @@ void ExperienceMap::deserialise(const std::vector<uint8_t>& in, size_t& pos, uin
     d.theta = bin::get<double>(in, pos);
     const auto ut = bin::get<int64_t>(in, pos);
     if (!finite({d.x, d.y, d.theta})) throw std::runtime_error("checkpoint: link " + std::to_string(l) + " is not finite");
+    if (std::hypot(d.x, d.y) > kMaxMapExtent_m) {
+      throw std::runtime_error("checkpoint: link " + std::to_string(l) + " is longer than " +
+                               std::to_string(static_cast<int>(kMaxMapExtent_m)) + " m");
+    }
     int recognised = 0;
     double scale = 1.0;
     if (format_version >= 6) {

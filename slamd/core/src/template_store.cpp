@@ -580,6 +580,17 @@ TemplateStore TemplateStore::deserialise(const std::vector<uint8_t>& in, size_t&
       !std::all_of(s.decay_.begin(), s.decay_.end(), [](double v) { return std::isfinite(v); })) {
     throw std::runtime_error("checkpoint: a template's pose-cell coordinates or decay are not finite");
   }
+  // A template's mean intensity is in [0, 1] (VisualTemplate::mean); its SDA entries are deflections
+  // per second, finite.
+  if (!std::all_of(s.visual_mean_.begin(), s.visual_mean_.end(), [](float v) { return v >= 0.0f && v <= 1.0f; })) {
+    throw std::runtime_error("checkpoint: a template's visual mean is outside 0..1 (or not a number)");
+  }
+  for (size_t i = 0; i < n; ++i) {
+    const float* sda = s.sda_.row(i);
+    if (!std::all_of(sda, sda + kSdaSize, [](float v) { return std::isfinite(v); })) {
+      throw std::runtime_error("checkpoint: template " + std::to_string(i) + " has an SDA entry that is not finite");
+    }
+  }
   for (size_t i = 0; i < n; ++i) block_means(s.visual_.row(i), s.width_, s.height_, s.blocks_.append());
   return s;
 }

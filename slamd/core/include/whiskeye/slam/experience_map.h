@@ -75,6 +75,10 @@ struct ExperienceMapParams {
 };
 // A link's scale s² below this (its pull all but gone) is reported as revoked.
 inline constexpr double kRevokedScale = 0.01;
+// No map reaches this far from its origin, nor has a link this long (m; 10,000 km, days of driving at
+// the fastest odometry slamd takes): a checkpoint that does is refused (one link of 1e300 m spread
+// through the relaxation to every experience).
+inline constexpr double kMaxMapExtent_m = 1e7;
 void load(const ParamNode& node, ExperienceMapParams& p);
 
 struct Experience {
