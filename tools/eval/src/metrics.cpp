@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <span>
 #include <stdexcept>
 #include <utility>
 
@@ -146,12 +147,14 @@ Alignment align_by_first_experience(const ExperienceMap& map, const GroundTruth&
   return a;
 }
 
-Alignment align_best_fit(const std::vector<PoseSample>& estimate, const GroundTruth& gt) {
+namespace {
+
+// An estimated pose (map frame) and the ground truth (world) at its time.
+using TruthPair = std::pair<Pose2, Pose2>;
+
+// The best-fit rigid SE(2) transform of the pairs' positions (closed form; align_best_fit's).
+Alignment align_pairs(std::span<const TruthPair> pairs) {
   Alignment a;
-  std::vector<std::pair<Pose2, Pose2>> pairs;  // (estimate in map, ground truth in world)
-  for (const PoseSample& s : estimate) {
-    if (const auto g = gt.at(s.utime)) pairs.emplace_back(s.pose, *g);
-  }
   if (pairs.size() < 2) {
     a.reason = "fewer than 2 pose samples with ground truth";
     return a;
@@ -183,6 +186,16 @@ Alignment align_best_fit(const std::vector<PoseSample>& estimate, const GroundTr
   a.T_world_map = {qx - (c * px - s * py), qy - (s * px + c * py), wrap_angle(th)};
   a.valid = true;
   return a;
+}
+
+}  // namespace
+
+Alignment align_best_fit(const std::vector<PoseSample>& estimate, const GroundTruth& gt) {
+  std::vector<TruthPair> pairs;
+  for (const PoseSample& s : estimate) {
+    if (const auto g = gt.at(s.utime)) pairs.emplace_back(s.pose, *g);
+  }
+  return align_pairs(pairs);
 }
 
 // ---- LEM ----
@@ -264,15 +277,13 @@ LemResult compute_lem(const std::vector<PoseSample>& estimate, const GroundTruth
 
 namespace {
 
-// Position errors of `samples` under `T_world_map` (every sample has ground truth).
-std::vector<double> position_errors(const std::vector<PoseSample>& samples, const GroundTruth& gt,
-                                    const Pose2& T_world_map) {
+// Position errors of the pairs' estimates under `T_world_map`.
+std::vector<double> position_errors(std::span<const TruthPair> pairs, const Pose2& T_world_map) {
   std::vector<double> e;
-  e.reserve(samples.size());
-  for (const PoseSample& s : samples) {
-    const Pose2 g = *gt.at(s.utime);
-    const Pose2 w = compose(T_world_map, s.pose);
-    e.push_back(std::hypot(w.x - g.x, w.y - g.y));
+  e.reserve(pairs.size());
+  for (const auto& [est, truth] : pairs) {
+    const Pose2 w = compose(T_world_map, est);
+    e.push_back(std::hypot(w.x - truth.x, w.y - truth.y));
   }
   return e;
 }
@@ -303,15 +314,22 @@ AteResult compute_ate(const std::vector<PoseSample>& estimate, const std::vector
                       const GroundTruth& gt, double window_laps) {
   AteResult r;
   r.window_laps = window_laps;
-  std::vector<PoseSample> used = claimed_poses(estimate, states);
-  r.samples_localising = estimate.size() - used.size();
-  const auto outside = std::remove_if(used.begin(), used.end(), [&](const PoseSample& s) { return !gt.at(s.utime); });
-  r.samples_outside_gt = static_cast<std::size_t>(used.end() - outside);
-  used.erase(outside, used.end());
+  const std::vector<PoseSample> claimed = claimed_poses(estimate, states);
+  r.samples_localising = estimate.size() - claimed.size();
+  // Each claimed pose with the truth at its time, looked up once.
+  std::vector<PoseSample> used;
+  std::vector<TruthPair> pairs;
+  for (const PoseSample& s : claimed) {
+    if (const std::optional<Pose2> g = gt.at(s.utime)) {
+      used.push_back(s);
+      pairs.emplace_back(s.pose, *g);
+    }
+  }
+  r.samples_outside_gt = claimed.size() - used.size();
   r.samples_used = used.size();
-  r.alignment = align_best_fit(used, gt);
+  r.alignment = align_pairs(pairs);
   if (!r.alignment.valid) return r;
-  const std::vector<double> e = position_errors(used, gt, r.alignment.T_world_map);
+  const std::vector<double> e = position_errors(pairs, r.alignment.T_world_map);
   AteStats st;
   st.rmse = rms(e, 0, e.size());
   for (const double x : e) {
@@ -337,10 +355,9 @@ AteResult compute_ate(const std::vector<PoseSample>& estimate, const std::vector
     w.end_utime = used[end - 1].utime;
     w.samples = end - begin;
     w.rmse = rms(e, begin, end);
-    const std::vector<PoseSample> part(used.begin() + static_cast<std::ptrdiff_t>(begin),
-                                       used.begin() + static_cast<std::ptrdiff_t>(end));
-    if (const Alignment own = align_best_fit(part, gt); own.valid) {
-      w.rmse_own_fit = rms(position_errors(part, gt, own.T_world_map), 0, part.size());
+    const std::span<const TruthPair> part(pairs.data() + begin, end - begin);
+    if (const Alignment own = align_pairs(part); own.valid) {
+      w.rmse_own_fit = rms(position_errors(part, own.T_world_map), 0, part.size());
     }
     r.windows.push_back(w);
     begin = end;
