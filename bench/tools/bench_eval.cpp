@@ -27,9 +27,9 @@ EvalInput synthetic_run(int n) {
     in.ground_truth.push_back({t, truth});
     in.estimate.push_back({t, est});
     in.map.experiences.push_back({i, est, t, false});
-    if (i > 0) in.map.links.push_back({i - 1, i});
+    if (i > 0) in.map.links.push_back({i - 1, i, false, {}});
     const bool reloc = i >= n / 4 && i % 10 == 0;
-    if (reloc) in.map.links.push_back({i, i - n / 4});
+    if (reloc) in.map.links.push_back({i, i - n / 4, false, {}});
     in.events.push_back({t, i, reloc ? EventType::kRelocalise : EventType::kNewExperience, i - 1,
                          reloc ? i - n / 4 : i});
   }

@@ -1,7 +1,7 @@
 """Evaluates ViTa-SLAM over a suite of generated worlds (docs/evaluation.md, "The world suite").
 
   scripts/suite [--worlds N] [--suite-seed S] [--family aliased|stress] [--faults]
-                [--scenario normal|kidnap|restart] [--jobs J]
+                [--scenario normal|kidnap|restart|outliers] [--jobs J]
                 [--results DIR] [--quick] [--laps K] [--camera-format yuyv|grey|mjpeg] [--config FILE] [--check] [--bin DIR]
                 [--executor local|slurm] [--partition P] [--sbatch-args "..."] [--retry-failed]
 
@@ -23,6 +23,11 @@ slamd) is localised in by 4 more sessions that start at drawn places of the path
 (in laps), the false localisations before it, the time spent LOCALISING and the error after it
 (vita-eval, docs/evaluation.md); --check applies the global-localisation issue's targets. With
 --quick: 1 world, 1 kidnap (or 1 session of 2 laps), the world's own laps.
+--scenario outliers: every world's run is replayed twice more in each mode with a wrong closure added
+for every closure the SLAM makes (slamd --inject-wrong-closures: random, far away; group, 5 consecutive
+cycles onto an earlier pass elsewhere), and compared with the clean run: ATE against the clean run's,
+the wrong links kept (vita-eval's links against the truth); --check applies the back-end issue's
+outlier targets. With --quick: 1 world of 2 laps.
 --aggregate-only: rewrite suite.json/.md and the plots from the suite seed's worlds already in DIR.
 --executor slurm: the same worlds as one `sbatch --array` job (a task per world) and a dependent
 aggregation job; waits for them (at most --timeout seconds) unless --no-wait. DIR must be on a
@@ -56,7 +61,7 @@ def parse_args(argv):
     p.add_argument("--family", default="aliased", help="world family: aliased (default) or stress")
     p.add_argument("--faults", action="store_true", help="every world gets the standard sensor-fault set")
     p.add_argument("--scenario", default="normal", help="normal (default); kidnap: 3 kidnaps a world; restart: "
-                   "4 sessions localising in each world's saved map")
+                   "4 sessions localising in each world's saved map; outliers: wrong closures injected")
     p.add_argument("--jobs", type=int, default=None,
                    help="worlds run at once (default: every core; slurm: array tasks at once, default no limit)")
     p.add_argument("--results", default=None, help="results folder (default results/suite/<family>-s<seed>...)")
@@ -91,13 +96,13 @@ def parse_args(argv):
     if a.family not in ("aliased", "stress"):
         fail(f"--family: unknown family '{a.family}' (aliased or stress)")
     if a.scenario not in SCENARIOS:
-        fail(f"--scenario: unknown scenario '{a.scenario}' (normal, kidnap or restart)")
+        fail(f"--scenario: unknown scenario '{a.scenario}' (normal, kidnap, restart or outliers)")
     if a.executor not in ("local", "slurm"):
         fail(f"--executor: unknown executor '{a.executor}' (local or slurm)")
     if a.worlds is None:
         a.worlds = (1 if a.scenario != "normal" else 3) if a.quick else 24
-    if a.quick and a.laps is None and a.scenario == "normal":
-        a.laps = 1
+    if a.quick and a.laps is None and a.scenario in ("normal", "outliers"):
+        a.laps = 1 if a.scenario == "normal" else 2  # closures (and so wrong ones) need a second lap
     if a.laps is not None and a.scenario == "kidnap":
         fail("--laps: a kidnap scenario runs each world's own laps (its kidnaps are drawn for them)")
     if not 1 <= a.worlds <= 10000:

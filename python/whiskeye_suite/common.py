@@ -10,7 +10,10 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 SCRIPT = os.path.join(ROOT, "scripts", "suite")  # the entry point the Slurm jobs call back into
 PROGRAMS = ("vita-sim", "slamd", "vita-eval")
 MODES = ("visual", "tactile", "vita")
-SCENARIOS = ("normal", "kidnap", "restart")
+SCENARIOS = ("normal", "kidnap", "restart", "outliers")
+# --scenario outliers: each world's run replayed again with one wrong closure added per closure the SLAM
+# makes (slamd --inject-wrong-closures), of each kind, and compared with the clean run.
+WRONG_CLOSURE_KINDS = ("random", "group")
 KIDNAPS_PER_WORLD = 3  # --scenario kidnap (1 with --quick)
 RESTART_SESSIONS = 4  # --scenario restart: sessions localising in each world's map (1 with --quick) ...
 RESTART_SESSION_LAPS = 2  # ... each this many laps

@@ -9,7 +9,8 @@ import subprocess
 import time
 
 from .common import (KIDNAPS_PER_WORLD, MODES, PROGRAMS, RESTART_SESSION_LAPS, RESTART_SESSION_UTIME,
-                     RESTART_SESSION_UTIME_STEP, RESTART_SESSIONS, file_digest, read_json, world_seed, write_json)
+                     RESTART_SESSION_UTIME_STEP, RESTART_SESSIONS, WRONG_CLOSURE_KINDS, file_digest, read_json,
+                     world_seed, write_json)
 
 
 class WorldFailed(Exception):
@@ -60,6 +61,10 @@ def metrics_of(run):
         "experiences": run["counts"]["map_experiences"],
         # Links of the final map the back end revoked (none from a slamd before it).
         "links_revoked": run["counts"].get("map_links_revoked"),
+        # The final map's links against the truth (vita-eval): wrong ones kept bend the map.
+        "links_wrong": (run.get("links") or {}).get("wrong"),
+        "links_wrong_kept": (run.get("links") or {}).get("wrong_kept"),
+        "links_right_revoked": (run.get("links") or {}).get("right_revoked"),
         "relocalisations": exm["relocalisations_total"],
         "false_closures": exm.get("false_closures"),
         "false_closure_worst_m": exm.get("false_closure_worst_m"),
@@ -199,7 +204,7 @@ def replay_and_evaluate(a, bins, index, key, label, config, world, generated, si
             run([os.path.join(bins, "slamd"), "--replay", sim_log, "--output", out, "--mode", mode, "--config",
                  config, "--robot", a.robot, *saved], log)
         timings["replay_s"] = time.monotonic() - t
-        if last:
+        if last and a.scenario != "outliers":
             os.remove(sim_log)
         t = time.monotonic()
         evaluate = [os.path.join(bins, "vita-eval"), "--json", os.path.join(d, "metrics.json"), "--trace",
@@ -210,6 +215,12 @@ def replay_and_evaluate(a, bins, index, key, label, config, world, generated, si
             evaluate += ["--plots", os.path.join(d, "plots"), "--world", world]  # the world under the maps
         run(evaluate, log)
         timings["evaluate_s"] = time.monotonic() - t
+        if a.scenario == "outliers":
+            t = time.monotonic()
+            outliers = run_outliers(a, bins, seed, world, sim_log, outs, d, log, config)
+            timings["outliers_s"] = time.monotonic() - t
+            if last:
+                os.remove(sim_log)
         if a.scenario == "restart":
             t = time.monotonic()
             sessions = run_sessions(a, bins, seed, world, scratch, outs, d, log, config)
@@ -231,6 +242,8 @@ def replay_and_evaluate(a, bins, index, key, label, config, world, generated, si
         localisation = sessions
     else:
         localisation = None
+    if a.scenario == "outliers":
+        outliers = {kind: {r["mode"]: metrics_of(r) for r in read_json(path)["runs"]} for kind, path in outliers.items()}
     rec = {
         "index": index,
         "world_seed": seed,
@@ -242,6 +255,7 @@ def replay_and_evaluate(a, bins, index, key, label, config, world, generated, si
         "thresholds": thresholds_of(evaluated["params"]),
         "timings_s": {k: round(v, 2) for k, v in timings.items()},
         "localisation": localisation,
+        **({"outliers": outliers} if a.scenario == "outliers" else {}),
         "rerun": f"vita-sim --generate-world --world-seed {seed} --family {a.family}{' --faults' if a.faults else ''}"
                  + (f" --kidnaps {1 if a.quick else KIDNAPS_PER_WORLD}" if a.scenario == "kidnap" else "") + " "
                  f"--output-world w.yaml && scripts/demo --world w.yaml --seed {seed}"
@@ -251,6 +265,30 @@ def replay_and_evaluate(a, bins, index, key, label, config, world, generated, si
     if os.path.exists(os.path.join(d, "failed.json")):
         os.remove(os.path.join(d, "failed.json"))
     return rec
+
+
+def run_outliers(a, bins, seed, world, sim_log, outs, d, log, config):
+    """--scenario outliers: the world's simulator log replayed again in every mode with wrong closures
+    injected, each kind into its own metrics-<kind>.json. Returns those files by kind."""
+    out = {}
+    for kind in WRONG_CLOSURE_KINDS:
+        try:
+            for mode, o in zip(MODES, outs):
+                run([os.path.join(bins, "slamd"), "--replay", sim_log, "--output", o, "--mode", mode, "--config",
+                     config, "--robot", a.robot, "--inject-wrong-closures", kind, "--inject-seed", str(seed)], log)
+            js = os.path.join(d, f"metrics-{kind}.json")
+            evaluate = [os.path.join(bins, "vita-eval"), "--json", js]
+            for o in outs:
+                evaluate += ["--input", o]
+            if not a.no_plots:
+                evaluate += ["--plots", os.path.join(d, f"plots-{kind}"), "--world", world]
+            run(evaluate, log)
+            out[kind] = js
+        finally:
+            for f in outs:
+                if os.path.exists(f):
+                    os.remove(f)
+    return out
 
 
 def instants_of(run, session=None):

@@ -7,11 +7,12 @@ import threading
 import time
 
 from .cli import executor_options, world_options
-from .common import METRICS, MODES, ROOT, SCRIPT, file_digest, fmt, world_seed, write_json
+from .common import METRICS, MODES, ROOT, SCRIPT, WRONG_CLOSURE_KINDS, file_digest, fmt, world_seed, write_json
 from .plots import write_plots
 from .stats import distribution, percentile
-from .targets import (FOOLED_ARCR, FOOLED_ENM_RATIO, check_localisation_targets, check_targets,
-                      fooled, fooled_where_fusion_is_not, localisation_summary, miss_lines, vita_conditions)
+from .targets import (FOOLED_ARCR, FOOLED_ENM_RATIO, check_localisation_targets, check_outlier_targets,
+                      check_targets, fooled, fooled_where_fusion_is_not, localisation_summary, miss_lines,
+                      outlier_ratio, outlier_summary, vita_conditions)
 
 
 def localisation_markdown(worlds, scenario):
@@ -51,6 +52,30 @@ def localisation_markdown(worlds, scenario):
     return md
 
 
+def outliers_markdown(worlds, summary):
+    """The outlier section of suite.md: per kind and mode the ATE ratio to the clean run and the wrong
+    links kept; each world's ratios."""
+    md = ["", "## Wrong closures injected", "",
+          "Each world's run replayed with one wrong closure added for every closure the SLAM made (slamd "
+          "--inject-wrong-closures; random: far away; group: 5 consecutive cycles onto an earlier pass elsewhere). "
+          "ATE ratio: the injected run's over the clean run's (median, 90th percentile, worst); wrong links kept: "
+          "links of the final map off by more than the false-closure tolerance against the truth and not revoked.", "",
+          "| kind | mode | ATE ratio median | 90th pct | worst | wrong links kept median | worst | worlds keeping one |",
+          "|---|---|---|---|---|---|---|---|"]
+    for kind in WRONG_CLOSURE_KINDS:
+        for m in MODES:
+            x = summary[kind][m]
+            md.append(f"| {kind} | {m} | {fmt(x['ate_ratio']['median'], '.3f')} | {fmt(x['ate_ratio']['p10'], '.3f')} | "
+                      f"{fmt(x['ate_ratio']['worst'], '.3f')} | {fmt(x['wrong_links_kept']['median'], '.1f')} | "
+                      f"{fmt(x['wrong_links_kept']['worst'], '.0f')} | {x['worlds_keeping_a_wrong_link']} |")
+    md += ["", "| world | seed | ViTa ATE clean (m) | " + " | ".join(f"{k} ratio" for k in WRONG_CLOSURE_KINDS) + " |",
+           "|" + "---|" * (3 + len(WRONG_CLOSURE_KINDS))]
+    for w in worlds:
+        md.append(f"| {w['index']} | {w['world_seed']} | {fmt(w['modes']['vita']['ate'], '.3f')} | "
+                  + " | ".join(fmt(outlier_ratio(w, k), ".3f") for k in WRONG_CLOSURE_KINDS) + " |")
+    return md
+
+
 def ran_as(a):
     if a.slurm_array:
         return f"as Slurm array job {a.slurm_array}"
@@ -75,6 +100,9 @@ def aggregate(a, records, failed, wall_s):
         summary[m]["false_closures"]["worlds_with_any"] = sum(1 for w in worlds if (w["modes"][m]["false_closures"] or 0) > 0)
     if a.scenario == "normal":
         targets = check_targets(worlds, a.family, a.faults)
+    elif a.scenario == "outliers":
+        targets = check_outlier_targets(worlds, WRONG_CLOSURE_KINDS) if a.family == "aliased" and worlds else []
+        summary["outliers"] = {k: {m: outlier_summary(worlds, k, m) for m in MODES} for k in WRONG_CLOSURE_KINDS}
     else:
         targets = check_localisation_targets(worlds, a.scenario) if a.family == "aliased" else []
         summary["localisation"] = {m: localisation_summary(worlds, m) for m in MODES}
@@ -141,12 +169,14 @@ def aggregate(a, records, failed, wall_s):
                f"thresholds on {beyond} of {len(steps)} worlds."]
     md += ["", f"Single senses *fooled* (ARCR < {FOOLED_ARCR} with an EnM ≥ {FOOLED_ENM_RATIO:g}× ViTa's): "
            f"vision on {fooled_counts['visual']} of {len(worlds)} worlds, touch on {fooled_counts['tactile']}.", ""]
-    if a.scenario != "normal" and worlds:
+    if a.scenario == "outliers" and worlds:
+        md += outliers_markdown(worlds, summary["outliers"]) + [""]
+    elif a.scenario != "normal" and worlds:
         md += localisation_markdown(worlds, a.scenario) + [""]
     if not worlds:
         md += ["No world finished: no distribution and no target check.", ""]
     elif checked:
-        issue = "robust-SLAM issue" if a.scenario == "normal" else "global-localisation issue"
+        issue = {"normal": "robust-SLAM issue", "outliers": "back-end issue"}.get(a.scenario, "global-localisation issue")
         md += [f"## Targets ({issue})", "", "| target | measured | |", "|---|---|---|"]
         md += [f"| {t['target']} | {t['measured']} | {'met' if t['met'] else '**MISSED**'} |" for t in targets]
         md += ["", "Every target met." if not misses else "Missed:"] + [f"- {x}" for x in misses] + [""]

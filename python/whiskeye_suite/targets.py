@@ -24,6 +24,10 @@ LOCALISED_MAX_LAPS = 2.0  # ... and within this many after every one
 NO_FALSE_LOCALISATION_SHARE = 0.95  # no false localisation after at least this share ...
 MAX_FALSE_LOCALISATIONS = 1  # ... and at most this many after any
 LEM_AFTER_LOCALISATION_M = 0.10  # the mean position error from the localisation on
+# The back-end issue's outlier targets for ViTa (docs/evaluation.md): with a wrong closure injected for
+# every closure, ATE within this many times the clean run's on at least this share of worlds ...
+OUTLIER_ATE_RATIO, OUTLIER_ATE_SHARE = 1.2, 0.90
+OUTLIER_ATE_RATIO_MAX = 2.0  # ... and within this on every world
 
 
 def targets_help():
@@ -205,6 +209,45 @@ def check_localisation_targets(worlds, scenario):
     worst_lem = max((i["lem_after_m"] for i in ins if i["lem_after_m"] is not None), default=None)
     add(f"ViTa: error after the localisation <= {LEM_AFTER_LOCALISATION_M:.2f} m (mean position error of its events)",
         f"worst {fmt(worst_lem, '.3f')} m", not bad, bad)
+    return targets
+
+
+def outlier_ratio(w, kind, mode="vita"):
+    """`mode`'s ATE with wrong closures of `kind` injected over its clean run's on world `w` (None: n/a)."""
+    clean = w["modes"][mode]["ate"]
+    injected = (((w.get("outliers") or {}).get(kind) or {}).get(mode) or {}).get("ate")
+    return None if clean is None or injected is None or clean <= 0 else injected / clean
+
+
+def outlier_summary(worlds, kind, mode):
+    """Over the worlds: the ATE ratio to the clean run, and the wrong links the map kept."""
+    kept = [(((w.get("outliers") or {}).get(kind) or {}).get(mode) or {}).get("links_wrong_kept") for w in worlds]
+    return {"ate_ratio": distribution([outlier_ratio(w, kind, mode) for w in worlds], "low"),
+            "wrong_links_kept": distribution(kept, "low"),
+            "worlds_keeping_a_wrong_link": sum(1 for k in kept if k)}
+
+
+def check_outlier_targets(worlds, kinds):
+    """The back-end issue's outlier targets for ViTa, per kind of injected closure: a list of
+    {target, measured, met, worlds_missed} as check_targets(); n/a is a miss."""
+    targets = []
+    name = lambda w: f"world {w['index']} (seed {w['world_seed']})"  # noqa: E731
+    n = len(worlds)
+    for kind in kinds:
+        ratios = {w["index"]: outlier_ratio(w, kind) for w in worlds}
+        good = [w for w in worlds if ratios[w["index"]] is not None and ratios[w["index"]] <= OUTLIER_ATE_RATIO]
+        need = -(-round(OUTLIER_ATE_SHARE * 100) * n // 100)
+        targets.append({"target": f"ViTa with {kind} wrong closures: ATE <= {OUTLIER_ATE_RATIO:g}x the clean run's on "
+                                  f">= {OUTLIER_ATE_SHARE:.0%} of worlds",
+                        "measured": f"{len(good)} of {n} worlds (need {need})", "met": len(good) >= need,
+                        "worlds_missed": [name(w) for w in worlds if w not in good]})
+        bad = [w for w in worlds if ratios[w["index"]] is None or ratios[w["index"]] > OUTLIER_ATE_RATIO_MAX]
+        worst = max(worlds, key=lambda w: (ratios[w["index"]] is None, ratios[w["index"]] or 0))
+        shown = f"worst {fmt(ratios[worst['index']], '.2f')}x on {name(worst)}"
+        targets.append({"target": f"ViTa with {kind} wrong closures: ATE <= {OUTLIER_ATE_RATIO_MAX:g}x the clean run's "
+                                  "on every world",
+                        "measured": shown if not bad else f"missed on {len(bad)} of {n} worlds; {shown}",
+                        "met": not bad, "worlds_missed": [name(w) for w in bad]})
     return targets
 
 

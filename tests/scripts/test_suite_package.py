@@ -115,6 +115,24 @@ class Targets(unittest.TestCase):
         self.assertFalse(arr[0]["met"])  # ViTa n/a where vision has one: the worst
         self.assertIn("ViTa n/a on 1", arr[0]["measured"])
 
+    def test_outlier_targets_judge_the_ate_ratio_to_the_clean_run(self):
+        def injected(w, random_ate, group_ate):
+            w["outliers"] = {"random": {"vita": dict(w["modes"]["vita"], ate=random_ate)},
+                             "group": {"vita": dict(w["modes"]["vita"], ate=group_ate)}}
+            return w
+        worlds = [injected(world(i), 0.055, 0.05) for i in range(1, 23)]  # clean ATE 0.05
+        worlds += [injected(world(23), 0.07, 0.05), injected(world(24), 0.11, None)]
+        found = targets.check_outlier_targets(worlds, ("random", "group"))
+        self.assertEqual(len(found), 4)
+        share = self.named(found, "ViTa with random wrong closures: ATE <= 1.2x the clean run's on >= 90%")
+        self.assertEqual((share["met"], share["measured"]), (True, "22 of 24 worlds (need 22)"))
+        cap = self.named(found, "ViTa with random wrong closures: ATE <= 2x the clean run's on every world")
+        self.assertFalse(cap["met"])  # 0.11 / 0.05 = 2.2
+        self.assertEqual(cap["worlds_missed"], ["world 24 (seed 5024)"])
+        self.assertIn("worst 2.20x on world 24", cap["measured"])
+        group = self.named(found, "ViTa with group wrong closures: ATE <= 2x")
+        self.assertEqual(group["worlds_missed"], ["world 24 (seed 5024)"], "n/a is a miss")
+
     def test_no_target_on_stress(self):
         self.assertEqual(targets.check_targets([world(1)], "stress", False), [])
 

@@ -120,6 +120,22 @@ TEST_F(SlamdBinary, TruncatedLogIsReplayedUpToTheBreakThenFailsNamingIt) {
   ASSERT_FALSE(o.maps.empty()) << "and the final map written";
 }
 
+// The back end's test instrument: a wrong closure for every closure, said on the last line; refused
+// without --replay and for a kind it does not know.
+TEST_F(SlamdBinary, InjectsWrongClosuresIntoAReplayOnlyAndSaysHowMany) {
+  const std::string out = (dir_ / "injected.lcmlog").string();
+  std::string log;
+  ASSERT_EQ(replay(out, {"--inject-wrong-closures", "random", "--inject-seed", "3"}, &log), 0) << log;
+  EXPECT_THAT(log, HasSubstr("slamd: injected "));
+  EXPECT_THAT(log, HasSubstr(" wrong closures (random, seed 3)"));
+  Subprocess live({kSlamd, "--config", kConfig, "--inject-wrong-closures", "random"});
+  EXPECT_EQ(live.wait(30), 2);
+  EXPECT_THAT(live.output(), HasSubstr("--replay"));
+  std::string bad;
+  EXPECT_EQ(replay(out, {"--inject-wrong-closures", "everywhere"}, &bad), 2);
+  EXPECT_THAT(bad, HasSubstr("--inject-wrong-closures"));
+}
+
 TEST_F(SlamdBinary, ModesDifferInWhatTheyCompare) {
   for (const std::string mode : {"visual", "tactile"}) {
     const std::string out = (dir_ / ("mode_" + mode + ".lcmlog")).string();

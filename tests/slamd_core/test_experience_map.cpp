@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <limits>
 
 namespace whiskeye::slam {
 namespace {
@@ -90,6 +91,60 @@ TEST(ExperienceMap, AClosureTheRestOfTheMapDisagreesWithIsRevokedAndTheMapKeepsI
   m.relax(2000);
   EXPECT_FALSE(m.links().back().revoked());
   EXPECT_GT(std::hypot(m.experiences()[10].pose.x - ring(10).x, m.experiences()[10].pose.y - ring(10).y), 0.1);
+}
+
+// The shipped σ's make a ring of odometry soft: bending it a metre costs less than a robust link's
+// whole bounded cost, so wrong closures that keep any pull at all (DCS weakens, it never zeroes)
+// bend it over the loops, and the more of them the surer. A wrong closure beyond the drift budget it
+// was made within has none: 80 of them, as many as the ring has links, leave the ring as it was.
+TEST(ExperienceMap, WrongClosuresBeyondTheirGateHaveNoPullHoweverMany) {
+  const int n = 80;
+  const double step = kTwoPi / n;
+  const auto ring = [&](int i) { return Pose2{std::cos(i * step), std::sin(i * step), wrap_angle(i * step + kPi / 2)}; };
+  const auto worst_after = [&](double gate_m, int* kept) {
+    ExperienceMap m;  // shipped parameters
+    for (int i = 0; i < n; ++i) {
+      m.add_experience(ring(i), Experience{});
+      if (i > 0) m.add_link(i - 1, i, between(ring(i - 1), ring(i)), i);
+    }
+    m.add_link(n - 1, 0, between(ring(n - 1), ring(0)), 100, 1, gate_m);  // the lap closed where it is
+    for (int i = 0; i < n; ++i) {  // each experience "recognised" as the one across the ring (2 m away)
+      m.add_link(i, (i + n / 2 + 3) % n, Pose2{}, 200 + i, 1, gate_m);
+    }
+    for (int k = 0; k < 50; ++k) m.relax(20);  // 50 cycles' relaxation
+    *kept = 0;
+    for (size_t l = static_cast<size_t>(n); l < m.links().size(); ++l) *kept += m.links()[l].revoked() ? 0 : 1;
+    double worst = 0.0;
+    for (int i = 0; i < n; ++i) {
+      const Pose2& p = m.experiences()[static_cast<size_t>(i)].pose;
+      worst = std::max(worst, std::hypot(p.x - ring(i).x, p.y - ring(i).y));
+    }
+    return worst;
+  };
+  int kept = 0;
+  EXPECT_LT(worst_after(0.3, &kept), 0.01);
+  EXPECT_EQ(kept, 0) << "every wrong closure revoked";
+  // Without a gate (DCS alone) the same closures fold the ring.
+  EXPECT_GT(worst_after(std::numeric_limits<double>::infinity(), &kept), 0.1);
+}
+
+// A closure made within its gate keeps its pull as the map comes to agree with it, and a link whose
+// residual leaves its gate regains it when the map comes back (revocable, not deleted).
+TEST(ExperienceMap, AGatedLinkRegainsItsPullWhenTheMapComesWithinItsGate) {
+  ExperienceMap m;
+  m.add_experience({0, 0, 0}, Experience{});
+  m.add_experience({0.1, 0, 0}, Experience{});
+  m.add_experience({0.5, 0, 0}, Experience{});
+  m.add_link(0, 1, {0.1, 0, 0}, 0);
+  m.add_link(1, 2, {0.1, 0, 0}, 0, 1, 0.2);  // says 2 is at 0.2 m: 0.3 m off, beyond its gate
+  EXPECT_TRUE(m.links()[1].revoked()) << "judged when made: a map published before the next relaxation shows it";
+  m.relax(100);
+  EXPECT_TRUE(m.links()[1].revoked());
+  EXPECT_NEAR(m.experiences()[2].pose.x, 0.5, 1e-12) << "no pull while revoked";
+  m.add_link(0, 2, {0.3, 0, 0}, 1);  // odometry puts it at 0.3 m: within the gate again
+  m.relax(2000);
+  EXPECT_FALSE(m.links()[1].revoked());
+  EXPECT_GT(m.links()[1].scale, 0.9);
 }
 
 // A link's weight is its information: odometry between places the robot was at is precise, an end
@@ -494,6 +549,22 @@ TEST(ExperienceMap, ReadsLinksOfAnOlderCheckpointAsOdometryOrAReLocalisationsByT
   EXPECT_EQ(r.links()[2].recognised_ends, 1);
   EXPECT_EQ(r.links()[3].recognised_ends, 0) << "where the robot was when it was made is not in the old format";
   for (const Link& l : r.links()) EXPECT_EQ(l.scale, 1.0);
+  // Format 6 had no gates: its links have none (the back end as it was when the map was made).
+  const std::vector<uint8_t> v6 = testing::map_as_format_6(now);
+  ExperienceMap r6;
+  pos = 0;
+  r6.deserialise(v6, pos, 6, 4);
+  EXPECT_EQ(pos, v6.size());
+  ASSERT_EQ(r6.links().size(), 4u);
+  EXPECT_EQ(r6.links()[2].recognised_ends, 1);
+  for (const Link& l : r6.links()) EXPECT_EQ(l.gate_m, std::numeric_limits<double>::infinity());
+  // Today's format keeps each link's gate: the re-localisation's is the drift budget it was made within.
+  ExperienceMap r7;
+  pos = 0;
+  r7.deserialise(now, pos, VitaSlam::kCheckpointFormat, 4);
+  EXPECT_EQ(r7.links()[2].gate_m, m.links()[2].gate_m);
+  EXPECT_LT(m.links()[2].gate_m, 1.0);
+  EXPECT_EQ(m.links()[0].gate_m, std::numeric_limits<double>::infinity()) << "odometry between places is not gated";
 }
 
 TEST(ExperienceMap, ARetiredExperienceIsNeverACandidateAndStaysRetiredInACheckpoint) {

@@ -516,7 +516,7 @@ TEST(VitaSlam, ARestoredCheckpointProducesByteIdenticalResults) {
 }
 
 // The checkpoint `blob` (today's format) as format 4 wrote it: without the templates' sensed
-// whiskers (format 5) and the links' recognised ends and scales (format 6).
+// whiskers (format 5), the links' recognised ends and scales (format 6) and their gates (format 7).
 std::vector<uint8_t> as_format_4(const std::vector<uint8_t>& blob, const VitaSlam& written) {
   constexpr size_t kHeader = 8 + 4 + 1 + 8 + 1 + 5 * 8;  // magic .. stats
   const auto n = static_cast<size_t>(written.templates().size());
@@ -578,7 +578,7 @@ TEST(VitaSlam, AMapSavedInTheFormatBeforeResumesWithEveryTemplateFullySensed) {
   const std::vector<uint8_t> blob = a.serialise();
   const std::vector<uint8_t> old = as_format_4(blob, a);
   const std::size_t links = a.map().links().size();
-  ASSERT_EQ(old.size(), blob.size() - sizeof(uint64_t) - 4 * static_cast<size_t>(a.templates().size()) - 9 * links - 1);
+  ASSERT_EQ(old.size(), blob.size() - sizeof(uint64_t) - 4 * static_cast<size_t>(a.templates().size()) - 17 * links - 1);
   // The synthetic places sense every whisker: the same templates as the original's.
   const VitaSlam restored = VitaSlam::deserialise(old, SlamParams{}, w.geometry);
   std::vector<uint8_t> templates_now, templates_then;

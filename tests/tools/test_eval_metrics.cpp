@@ -43,9 +43,34 @@ ExperienceMap exact_chain_map(const GroundTruth& gt, const Pose2& T_world_map, i
   for (int i = 0; i < n; ++i) {
     const int64_t t = i * every_us;
     map.experiences.push_back({i, compose(inverse(T_world_map), *gt.at(t)), t, i % 2 == 0});
-    if (i > 0) map.links.push_back({i - 1, i});
+    if (i > 0) map.links.push_back({i - 1, i, false, {}});
   }
   return map;
+}
+
+// Each link judged by the truth at its ends' creation: the right ones (a 1 cm odometry error, a
+// neighbour 0.2 m off), the wrong ones beyond 0.25 m or 15 degrees, kept or revoked.
+TEST(Links, AreJudgedAgainstTheTruthAtTheirEndsCreationAndCountedKeptOrRevoked) {
+  // The robot drives along x at 0.1 m/s, turning nothing; experience i made at i seconds.
+  std::vector<PoseSample> samples;
+  for (int i = 0; i <= 10; ++i) samples.push_back({i * 1'000'000, {0.1 * i, 0.0, 0.0}});
+  const GroundTruth gt(samples);
+  ExperienceMap map;
+  for (int i = 0; i <= 10; ++i) map.experiences.push_back({i, {5.0, 5.0, 1.0}, i * 1'000'000, false});  // map poses unused
+  map.links = {{0, 1, false, {0.11, 0.0, 0.0}},          // odometry, 1 cm off: right
+               {1, 5, false, {0.2, 0.0, 0.0}},           // a neighbour: 0.2 m off, right
+               {2, 9, false, {0.0, 0.0, 0.0}},           // 0.7 m off, kept: wrong
+               {3, 8, true, {0.0, 0.0, 0.0}},            // 0.5 m off, revoked
+               {4, 5, false, {0.1, 0.0, 0.3}},           // 17 degrees off: wrong
+               {6, 7, true, {0.1, 0.0, 0.0}},            // right, revoked
+               {6, 42, false, {0.0, 0.0, 0.0}}};         // no such experience: not judged
+  const LinkJudgement j = judge_links(map, gt, EvalParams{});
+  EXPECT_EQ(j.judged, 6u);
+  EXPECT_EQ(j.wrong, 3u);
+  EXPECT_EQ(j.wrong_kept, 2u);
+  EXPECT_EQ(j.right_revoked, 1u);
+  ASSERT_TRUE(j.worst_kept_m.has_value());
+  EXPECT_NEAR(*j.worst_kept_m, 0.7, 1e-9);
 }
 
 TEST(GroundTruth, InterpolatesHeadingAcrossThePiWrap) {
@@ -346,7 +371,7 @@ TEST(Enm, MatchesTheHandWorkedExampleOfTheDocs) {
   ExperienceMap map;
   map.experiences.push_back({1, {0.0, 0.0, 0.0}, 0, false});
   map.experiences.push_back({2, {-1.0, 1.0, kPi / 2 + 0.1}, 10, false});
-  map.links.push_back({1, 2});
+  map.links.push_back({1, 2, false, {}});
   const EnmResult r = compute_enm(map, gt);
   EXPECT_NEAR(*r.translation, 0.0, 1e-24);
   EXPECT_NEAR(*r.rotation, 0.01, 1e-12);
@@ -370,7 +395,7 @@ TEST(Enm, HeadingsAcrossThePiWrapGiveTheirSmallError) {
   ExperienceMap map;
   map.experiences.push_back({1, {1.0, 0.0, 0.0}, 0, false});
   map.experiences.push_back({2, {1.0, 0.0, wrap_angle(3.15)}, 10, false});
-  map.links.push_back({1, 2});
+  map.links.push_back({1, 2, false, {}});
   const EnmResult r = compute_enm(map, gt);
   EXPECT_NEAR(*r.rotation, 0.0004, 1e-12);
   EXPECT_NEAR(*r.translation, 0.0, 1e-20);
@@ -379,9 +404,9 @@ TEST(Enm, HeadingsAcrossThePiWrapGiveTheirSmallError) {
 TEST(Enm, ExcludesAndCountsLinksItCannotEvaluate) {
   const GroundTruth gt(circle_gt(10.0, 10.0));
   ExperienceMap map = exact_chain_map(gt, Pose2{}, 3, kSecond);
-  map.links.push_back({2, 42});                               // no such experience
+  map.links.push_back({2, 42, false, {}});                               // no such experience
   map.experiences.push_back({3, Pose2{}, 60 * kSecond, false});  // created after ground truth ends
-  map.links.push_back({2, 3});
+  map.links.push_back({2, 3, false, {}});
   const EnmResult r = compute_enm(map, gt);
   EXPECT_EQ(r.links_used, 2u);
   EXPECT_EQ(r.links_excluded, 2u);

@@ -540,6 +540,29 @@ class QuickScenarios(unittest.TestCase):
         left = [f for _, _, files in os.walk(self.tmp) for f in files if f.endswith((".lcmlog", ".vslam"))]
         self.assertEqual(left, [])
 
+    def test_wrong_closures_injected_into_one_world_are_revoked_and_leave_vitas_map_as_it_was(self):
+        # The CI version of the outlier targets: one world of 2 laps, a wrong closure added for every
+        # closure the SLAM makes (random, and in groups of 5). ViTa keeps none of them, and its ATE is
+        # the clean run's within the targets; --check says so (exit 0).
+        with tempfile.TemporaryDirectory() as d:
+            r = suite("--quick", "--scenario", "outliers", "--check", "--no-plots", "--bin", BIN, "--results", d)
+            self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
+            with open(os.path.join(d, "suite.json")) as f:
+                doc = json.load(f)
+            log = read(os.path.join(d, "world-001", "run.log"))
+            self.assertEqual([t["met"] for t in doc["targets"]], [True] * 4, doc["targets"])
+            [w] = doc["worlds"]
+            self.assertEqual(w["modes"]["vita"]["links_wrong"], 0, "the clean run has no wrong link")
+            for kind in ("random", "group"):
+                self.assertEqual(log.count(f"--inject-wrong-closures {kind}"), 3, log)
+                v = w["outliers"][kind]["vita"]
+                self.assertGreater(v["links_wrong"], 10, "wrong closures were injected")
+                self.assertEqual(v["links_wrong_kept"], 0, f"{kind}: ViTa's back end kept a wrong link")
+                self.assertEqual(v["links_right_revoked"], 0)
+                self.assertLessEqual(v["ate"], 1.2 * w["modes"]["vita"]["ate"])
+            self.assertIn("## Wrong closures injected", read(os.path.join(d, "suite.md")))
+            self.assertEqual([f for _, _, files in os.walk(d) for f in files if f.endswith(".lcmlog")], [])
+
     def test_a_kidnap_scenario_with_laps_is_refused(self):
         r = suite("--quick", "--scenario", "kidnap", "--laps", "2", "--bin", BIN, "--results", self.tmp)
         self.assertEqual(r.returncode, 2)

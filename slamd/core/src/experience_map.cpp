@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -29,6 +30,20 @@ void load(const ParamNode& n, ExperienceMapParams& p) {
   n.get("place_sigma_m", p.place_sigma_m, 0.0, 10.0);
   n.get("robust_phi", p.robust_phi, 0.0, 1e6);
 }
+
+namespace {
+
+// A robust link's scale s² for its squared position residual r2 (m²), weight 1/σ² `w`, gate² and DCS's Φ:
+// beyond its gate, no pull (the map disagrees with it: were it pulled at all, a ring of odometry as
+// soft as a robot's would give way to it over the loops); within, dynamic covariance scaling
+// s = min(1, 2Φ / (Φ + χ²)), χ² = r2 · w.
+inline double robust_scale(double r2, double w, double gate2, double phi) {
+  const double chi2 = r2 * w;
+  const double sc = r2 > gate2 ? 0.0 : chi2 <= phi ? 1.0 : 2.0 * phi / (phi + chi2);
+  return sc * sc;
+}
+
+}  // namespace
 
 ExperienceMap::ExperienceMap(const ExperienceMapParams& params) : params_(params) {}
 
@@ -86,15 +101,17 @@ double ExperienceMap::link_sigma2(const Pose2& delta, int recognised_ends) const
   return odometry * odometry + recognised_ends * params_.place_sigma_m * params_.place_sigma_m;
 }
 
-void ExperienceMap::add_link(int from, int to, const Pose2& delta, int64_t utime, int recognised_ends) {
+void ExperienceMap::add_link(int from, int to, const Pose2& delta, int64_t utime, int recognised_ends, double gate_m) {
   if (from < 0 || to < 0 || from >= size() || to >= size() || from == to) {
     throw std::invalid_argument("ExperienceMap::add_link: bad ends " + std::to_string(from) + " -> " + std::to_string(to));
   }
   if (recognised_ends < 0 || recognised_ends > 2) {
     throw std::invalid_argument("ExperienceMap::add_link: " + std::to_string(recognised_ends) + " recognised ends");
   }
+  if (!(gate_m > 0.0)) throw std::invalid_argument("ExperienceMap::add_link: gate " + std::to_string(gate_m) + " m");
   const double sigma2 = link_sigma2(delta, recognised_ends);
-  links_.push_back({from, to, delta, utime, recognised_ends, sigma2, 1.0});
+  links_.push_back({from, to, delta, utime, recognised_ends, sigma2, 1.0, gate_m});
+  lgate2_.push_back(gate_m * gate_m);
   lfrom_.push_back(from);
   lto_.push_back(to);
   ldx_.push_back(delta.x);
@@ -104,12 +121,29 @@ void ExperienceMap::add_link(int from, int to, const Pose2& delta, int64_t utime
   lw_.push_back(1.0 / sigma2);
   lrobust_.push_back(recognised_ends > 0 && params_.robust_phi > 0.0 ? 1 : 0);
   lscale_.push_back(1.0);
+  if (lrobust_.back() != 0) {
+    // Judged at once, as the next relaxation would: a map published before then shows it as it stands.
+    const auto a = static_cast<size_t>(from), b = static_cast<size_t>(to);
+    const double ex = x_[b] - (x_[a] + c_[a] * delta.x - s_[a] * delta.y);
+    const double ey = y_[b] - (y_[a] + s_[a] * delta.x + c_[a] * delta.y);
+    lscale_.back() = links_.back().scale = robust_scale(ex * ex + ey * ey, lw_.back(), lgate2_.back(), params_.robust_phi);
+  }
 }
 
 void ExperienceMap::set_current(int id, const Pose2& offset) {
   current_ = id;
   offset_ = offset;
   current_recognised_ = false;
+}
+
+bool ExperienceMap::link_current_to(int to, int64_t utime) {
+  const int from = current_;
+  if (from < 0 || to == from) return false;
+  for (size_t l = 0; l < lfrom_.size(); ++l) {
+    if ((lfrom_[l] == from && lto_[l] == to) || (lfrom_[l] == to && lto_[l] == from)) return false;
+  }
+  add_link(from, to, offset_, utime, 1 + (current_recognised_ ? 1 : 0), drift_budget());
+  return true;
 }
 
 void ExperienceMap::jump_to(int id, const Pose2& offset) {
@@ -203,6 +237,7 @@ void ExperienceMap::relax(int loops) {
   double* __restrict scale = lscale_.data();
   const double* __restrict lw = lw_.data();
   const uint8_t* __restrict robust = lrobust_.data();
+  const double* __restrict gate2 = lgate2_.data();
   double* __restrict x = x_.data();
   double* __restrict y = y_.data();
   double* __restrict c = c_.data();
@@ -219,12 +254,7 @@ void ExperienceMap::relax(int loops) {
       const double px = x[a] + ca * ldx_[l] - sa * ldy_[l];
       const double py = y[a] + sa * ldx_[l] + ca * ldy_[l];
       double ex = x[b] - px, ey = y[b] - py;
-      // Dynamic covariance scaling: s = min(1, 2Φ / (Φ + χ²)), the pull weighted by s².
-      if (robust[l] != 0) {
-        const double chi2 = (ex * ex + ey * ey) * lw[l];
-        const double sc = chi2 <= phi ? 1.0 : 2.0 * phi / (phi + chi2);
-        scale[l] = sc * sc;
-      }
+      if (robust[l] != 0) scale[l] = robust_scale(ex * ex + ey * ey, lw[l], gate2[l], phi);
       const double w = lw[l] * scale[l];
       ex *= w;
       ey *= w;
@@ -282,7 +312,10 @@ Event ExperienceMap::on_cycle(int template_id, int visual_template_id, int tacti
     const Pose2 pose = current_pose();
     const int from = current_;
     const int id = add_experience(pose, meta);
-    if (from >= 0) add_link(from, id, offset_, utime, current_recognised_ ? 1 : 0);
+    if (from >= 0) {
+      const double gate = current_recognised_ ? drift_budget() : std::numeric_limits<double>::infinity();
+      add_link(from, id, offset_, utime, current_recognised_ ? 1 : 0, gate);
+    }
     set_current(id);
     ev = {EventType::NewExperience, from, id};
   };
@@ -334,13 +367,7 @@ Event ExperienceMap::on_cycle(int template_id, int visual_template_id, int tacti
       ev.gate_refused = !within_budget && refused_beyond;
     } else if (nearest != current_) {
       const int from = current_;
-      if (from >= 0 && !frozen_) {
-        bool linked = false;
-        for (size_t l = 0; l < lfrom_.size() && !linked; ++l) {
-          linked = (lfrom_[l] == from && lto_[l] == nearest) || (lfrom_[l] == nearest && lto_[l] == from);
-        }
-        if (!linked) add_link(from, nearest, offset_, utime, 1 + (current_recognised_ ? 1 : 0));
-      }
+      if (!frozen_) link_current_to(nearest, utime);
       set_current(nearest);
       current_recognised_ = true;
       travel_ = 0.0;
@@ -382,6 +409,7 @@ void ExperienceMap::serialise(std::vector<uint8_t>& out) const {
     bin::put<int64_t>(out, links_[l].utime_created);
     bin::put<uint8_t>(out, static_cast<uint8_t>(links_[l].recognised_ends));
     bin::put<double>(out, lscale_[l]);
+    bin::put<double>(out, links_[l].gate_m);
   }
   bin::put<int32_t>(out, current_);
   bin::put<uint8_t>(out, current_recognised_ ? 1 : 0);
@@ -449,17 +477,22 @@ void ExperienceMap::deserialise(const std::vector<uint8_t>& in, size_t& pos, uin
     }
     int recognised = 0;
     double scale = 1.0;
+    double gate = std::numeric_limits<double>::infinity();
     if (format_version >= 6) {
       recognised = bin::get<uint8_t>(in, pos);
       scale = bin::get<double>(in, pos);
       if (!std::isfinite(scale) || scale < 0.0 || scale > 1.0) {
         throw std::runtime_error("checkpoint: link " + std::to_string(l) + " has a scale outside [0, 1]");
       }
+    }
+    if (format_version >= 7) {
+      gate = bin::get<double>(in, pos);
+      if (!(gate > 0.0)) throw std::runtime_error("checkpoint: link " + std::to_string(l) + " has a gate that is not > 0");
     } else if (to >= 0 && to < m.size() && ut > m.meta_[static_cast<size_t>(to)].utime_created) {
       recognised = 1;  // made after its `to`: a re-localisation's link
     }
     try {
-      m.add_link(from, to, d, ut, recognised);
+      m.add_link(from, to, d, ut, recognised, gate);
     } catch (const std::invalid_argument& e) {
       throw std::runtime_error(std::string("checkpoint: ") + e.what());
     }

@@ -225,6 +225,8 @@ void VitaSlam::update_map(int64_t utime, const CycleTemplates& templates, PoseCe
     // the first evidence.
     if (localiser_.on_tracking_recognition(out.event.gate_refused, recognised, size_before, map_)) {
       localise(utime, recognised, templates, pc, out);
+    } else if (wrong_closures_ && !localise_only_) {
+      wrong_closures_->on_cycle(out.event, map_, utime);
     }
   }
   out.localising = localiser_.localising();

@@ -67,6 +67,12 @@ int main(int argc, char** argv) {
   auto* replay = app.add_option("--replay", o.replay_in, "process this LCM log offline")->check(CLI::ExistingFile);
   program.add_output(o.replay_out, "with --replay: output LCM log")->needs(replay);
   app.add_flag("--timing", o.timing, "with --replay: measure latencies into SLAM_STATUS (output no longer byte-identical)");
+  app.add_option("--inject-wrong-closures", o.inject_wrong_closures,
+                 "with --replay: a test of the back end: for every loop closure the SLAM makes, add one wrong one "
+                 "(random: far away; local: 0.5-1.5 m off; group: 5 consecutive cycles onto an earlier pass elsewhere)")
+      ->needs(replay)
+      ->check(CLI::IsMember({"random", "local", "group"}));
+  app.add_option("--inject-seed", o.inject_seed, "with --inject-wrong-closures: the draws' seed (default 1)");
   program.add_print_config(o.print_config);
   return program.run(argc, argv, [&] {
     if (o.localise && o.map_file.empty()) throw cli::UsageError("--localise needs --map FILE");

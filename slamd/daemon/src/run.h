@@ -14,6 +14,7 @@
 
 #include <cstdio>
 #include <memory>
+#include <cstdint>
 #include <string>
 
 namespace whiskeye::slamd {
@@ -34,6 +35,8 @@ struct Options {
   std::string replay_in;
   std::string replay_out;
   bool timing = false;
+  std::string inject_wrong_closures;  // --inject-wrong-closures KIND (a test of the back end; replay only)
+  uint64_t inject_seed = 1;
   bool print_config = false;
 };
 

@@ -54,7 +54,14 @@ int run_replay(const Parameters& cfg, const Options& o) {
   DecodeErrors errors;  // logged by the node, rate-limited
   std::optional<CheckpointStore> store;
   open_store(store, o.state_dir, o.checkpoint_keep, o.localise);
-  SlamNode node(in, out, make_slam(cfg, o, store ? &*store : nullptr), cfg.node, errors);
+  std::unique_ptr<slam::VitaSlam> slam = make_slam(cfg, o, store ? &*store : nullptr);
+  if (!o.inject_wrong_closures.empty()) {
+    slam::WrongClosureParams wrong;
+    wrong.kind = *slam::wrong_closure_kind(o.inject_wrong_closures);  // the option admits only the kinds
+    wrong.seed = o.inject_seed;
+    slam->inject_wrong_closures(wrong);
+  }
+  SlamNode node(in, out, std::move(slam), cfg.node, errors);
   node.set_logger(warn_line);
   // A camera frame's pixels are read only if a cycle takes the frame (one in five on the arena):
   // its header now, for the checks, the rest on demand.
@@ -121,6 +128,10 @@ int run_replay(const Parameters& cfg, const Options& o) {
                "%lld rejected, %lld undecodable\n",
                data, wall, wall > 0 ? data / wall : 0.0, static_cast<long long>(st.cycles), st.num_templates,
                st.num_experiences, static_cast<long long>(st.validation_errors), static_cast<long long>(st.decode_errors));
+  if (!o.inject_wrong_closures.empty()) {
+    info_line("injected " + std::to_string(node.slam().wrong_closures_added()) + " wrong closures (" +
+              o.inject_wrong_closures + ", seed " + std::to_string(o.inject_seed) + ")");
+  }
   // A damaged log (a corrupt event, a last event cut off): every readable event was replayed and the
   // output is complete; the exit status still says the input was damaged.
   if (reader.damage().damaged()) {

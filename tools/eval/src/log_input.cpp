@@ -104,7 +104,7 @@ LoadedRun load_run(const std::string& path) {
   for (const experience_t& e : last_map.experiences) {
     run.input.map.experiences.push_back({e.id, {e.x, e.y, e.theta}, e.utime_created, e.dense != 0});
   }
-  for (const link_t& l : last_map.links) run.input.map.links.push_back({l.from_id, l.to_id, l.revoked != 0});
+  for (const link_t& l : last_map.links) run.input.map.links.push_back({l.from_id, l.to_id, l.revoked != 0, {l.dx, l.dy, l.dtheta}});
   run.mode = mode_name(last_map.mode);
   if (run.mode == "unknown" && pose_mode) run.mode = mode_name(*pose_mode);
   return run;

@@ -815,6 +815,28 @@ ExmResult count_exm_without_truth(const std::vector<ExperienceEvent>& events, co
   return exm(events, map, GroundTruth({}), params, end, start_utime);
 }
 
+LinkJudgement judge_links(const ExperienceMap& map, const GroundTruth& gt, const EvalParams& params) {
+  LinkJudgement j;
+  const ExperienceIndex index(map);
+  for (const MapLink& l : map.links) {
+    const MapExperience* a = index.find(l.from_id);
+    const MapExperience* b = index.find(l.to_id);
+    if (a == nullptr || b == nullptr) continue;
+    const std::optional<Pose2> ta = gt.at(a->utime_created), tb = gt.at(b->utime_created);
+    if (!ta || !tb) continue;
+    ++j.judged;
+    const Pose2 claimed = compose(*ta, l.delta);
+    const double position_m = std::hypot(claimed.x - tb->x, claimed.y - tb->y);
+    const double angle_rad = std::abs(angle_diff(claimed.theta, tb->theta));
+    const bool wrong = position_m > params.false_closure_position_m || angle_rad > params.false_closure_angle_rad;
+    if (wrong) ++j.wrong;
+    if (wrong && !l.revoked) ++j.wrong_kept;
+    if (!wrong && l.revoked) ++j.right_revoked;
+    if (!l.revoked) j.worst_kept_m = std::max(j.worst_kept_m.value_or(0.0), position_m);
+  }
+  return j;
+}
+
 EvalResult evaluate(const EvalInput& input, const EvalParams& params) {
   EvalResult r;
   if (input.ground_truth.empty()) {
@@ -831,6 +853,7 @@ EvalResult evaluate(const EvalInput& input, const EvalParams& params) {
   r.ate = compute_ate(input.estimate, input.states, gt, params.ate_window_laps);
   r.exm = exm(input.events, input.map, gt, params, base_set_end(own, params), own.begin_utime());
   r.enm = compute_enm(input.map, gt);
+  r.links = judge_links(input.map, gt, params);
   const std::vector<LocalisationInstant> instants = localisation_instants(input, params);
   if (!instants.empty()) {
     r.localisation = compute_localisation(input.events, input.map, gt, own, instants, input.states, params);

@@ -78,6 +78,14 @@ nlohmann::json stats_json(const ErrorStats& s) {
   return {{"rmse", s.rmse}, {"mean_abs", s.mean_abs}, {"std_abs", s.std_abs}};
 }
 
+nlohmann::json links_json(const LinkJudgement& l) {
+  return {{"judged", l.judged},
+          {"wrong", l.wrong},
+          {"wrong_kept", l.wrong_kept},
+          {"right_revoked", l.right_revoked},
+          {"worst_kept_m", opt_json(l.worst_kept_m)}};
+}
+
 nlohmann::json ate_json(const AteResult& a) {
   nlohmann::json windows = nlohmann::json::array();
   for (const AteWindow& w : a.windows) {
@@ -344,6 +352,10 @@ std::string format_table(const std::vector<RunReport>& runs, const EvalParams& p
       continue;
     }
     ate_block(out, e.ate);
+    const LinkJudgement& lj = e.links;
+    out << "  links against the truth (alignment-free): " << lj.judged << " judged, " << lj.wrong
+        << " wrong (beyond the false-closure tolerance), " << lj.wrong_kept << " of them kept; " << lj.right_revoked
+        << " right ones revoked; worst kept " << opt(lj.worst_kept_m, "%.3f") << " m\n";
     if (e.alignment.valid) {
       const Pose2& t = e.alignment.T_world_map;
       out << "  the paper's LEM: alignment (first experience onto ground truth) T_world_map = (" << fmt("%.4f", t.x)
@@ -427,6 +439,7 @@ nlohmann::json to_json(const std::vector<RunReport>& runs, const EvalParams& par
                          {"unavailable", e.ground_truth ? nlohmann::json(nullptr)
                                                         : nlohmann::json("no ground truth: no GROUND_TRUTH in the log")},
                          {"exm", exm_json(e.exm, e.ground_truth)},
+                         {"links", e.ground_truth ? links_json(e.links) : nlohmann::json(nullptr)},
                          {"localisation", localisation_json(e.localisation, r.start_utime)},
                          {"enm", e.ground_truth ? enm_json(e.enm)
                                                 : nlohmann::json({{"enm", nullptr},

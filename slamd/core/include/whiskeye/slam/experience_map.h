@@ -10,7 +10,9 @@
 // (ExperienceMapParams, "the back end"): an odometry measurement between two places where the robot
 // was is precise; an end the robot only recognised (a re-localisation put it at that experience,
 // up to half the experience spacing from where the experience was made) is not, and such a link is
-// also robust: dynamic covariance scaling turns it off when the rest of the map disagrees with it.
+// also robust: it has no pull while its residual exceeds the drift budget it was made within (a
+// consistency test: the map disagrees with it), and within that, dynamic covariance scaling weakens it
+// as the rest of the map disagrees with it.
 // Headings are kept as unit complex numbers (cos, sin) and turned by multiplication with a
 // Taylor-series rotation, so the loop needs no trigonometry or square root; arrays are contiguous
 // (no pointer chasing).
@@ -21,6 +23,7 @@
 #include "whiskeye/slam/types.h"
 
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 namespace whiskeye::slam {
@@ -106,6 +109,10 @@ struct Link {
   int recognised_ends = 0;
   double sigma2 = 1.0;  // m²: the link's σ² (its weight is 1 / sigma2, times scale for a robust one)
   double scale = 1.0;   // DCS's s² after the last relaxation (1 for a link that is not robust)
+  // m: a robust link whose position residual exceeds this is inconsistent with the map and has no
+  // pull at all (scale 0) until the map comes within it again: the odometry-consistency gate's budget
+  // when the link was made, which every closure the front end makes is within (infinite: no gate).
+  double gate_m = std::numeric_limits<double>::infinity();
   bool revoked() const { return scale < kRevokedScale; }
 };
 
@@ -137,9 +144,14 @@ class ExperienceMap {
 
   // Building blocks (public for tests and the benchmark).
   int add_experience(const Pose2& pose, const Experience& meta);
-  // `recognised_ends`: Link::recognised_ends; its σ² follows from the parameters.
-  void add_link(int from, int to, const Pose2& delta, int64_t utime, int recognised_ends = 0);
+  // `recognised_ends`, `gate_m`: Link's; its σ² follows from the parameters.
+  void add_link(int from, int to, const Pose2& delta, int64_t utime, int recognised_ends = 0,
+                double gate_m = std::numeric_limits<double>::infinity());
   void set_current(int id, const Pose2& offset = {});
+  // The link a re-localisation onto `to` makes: from the current experience, measured as the odometry
+  // since it (the robot, at offset() from it, is at `to`), `to` a recognised end; none if the two are
+  // linked already or there is no current experience (false). The current experience does not change.
+  bool link_current_to(int to, int64_t utime);
   // Moves the base to `offset` from experience `id` without a link (the odometry since the current
   // experience says nothing about the way there: a localisation after a kidnap or a restart).
   void jump_to(int id, const Pose2& offset);
@@ -184,6 +196,7 @@ class ExperienceMap {
   std::vector<double> lw_;       // 1 / σ² of every link
   std::vector<uint8_t> lrobust_;  // whether it is scaled by DCS
   std::vector<double> lscale_;   // its scale s² after the last relaxation
+  std::vector<double> lgate2_;   // its gate², m² (Link::gate_m)
   std::vector<double> inv_;      // scratch: 1 / (a node's weight sum) in the current loop
   std::vector<double> ax_, ay_, as_, aw_;  // scratch: per-loop weighted sums of errors, and of weights
   int current_ = -1;

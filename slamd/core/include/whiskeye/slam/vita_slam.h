@@ -17,15 +17,16 @@
 // restores exactly: a restored instance produces byte-identical results.
 //
 // Checkpoint format (all little-endian):
-//   magic "VITASLAM" (8 bytes) | u32 version (5; 1 to 4 are still read) | u8 mode | i64 last odometry utime | u8 has it |
+//   magic "VITASLAM" (8 bytes) | u32 version (7; 1 to 6 are still read) | u8 mode | i64 last odometry utime | u8 has it |
 //   5 × i64 stats | template store | pose cells | experience map | localiser (version ≥ 4) | u32 FNV-1a of all previous bytes
 //   template store: i32 w, i32 h, then arrays (u64 count + elements): visual u8, visual mean f32,
 //     has_visual u8, pfh u16, sda f32, has_tactile u8, num_contacts i32, pc (x,y,θ) f64, decay f64,
 //     sensed whiskers u32 (bit w: whisker w had data; version ≥ 5, before: all)
 //   pose cells: i32 dim_xy, i32 dim_theta, u64 count + f32 activity [θ][y][x]
 //   experience map: u64 n, n × (f64 x, y, cos θ, sin θ, pc_x, pc_y, pc_θ, i64 utime, i32 template,
-//     visual, tactile id, u8 dense, i32 view shift (version ≥ 2), u8 retired (version ≥ 4)) | u64 links, each (i32 from, to, f64 dx, dy, dθ, i64 utime) |
-//     i32 current | f64 offset x, y, θ | f64 distance travelled since the last re-localisation (version ≥ 3)
+//     visual, tactile id, u8 dense, i32 view shift (version ≥ 2), u8 retired (version ≥ 4)) | u64 links, each (i32 from, to, f64 dx, dy, dθ, i64 utime,
+//     u8 recognised ends, f64 scale (version ≥ 6), f64 gate m (version ≥ 7, may be +inf)) |
+//     i32 current | u8 current recognised (version ≥ 6) | f64 offset x, y, θ | f64 distance travelled since the last re-localisation (version ≥ 3)
 //   localiser: u8 state | u32 n, n × (u8 refused, i32 first experience made since) of the last recognitions |
 //     i32 first experience not evidence | f64 m localising | i64 kidnaps detected | i64 localisations |
 //     u64 n, n × (f64 correction x, y, θ, i32 anchor, i32 score, u8 prior)
@@ -40,6 +41,7 @@
 #include "whiskeye/slam/template_store.h"
 #include "whiskeye/slam/types.h"
 #include "whiskeye/slam/visual_template.h"
+#include "whiskeye/slam/wrong_closures.h"
 
 #include <cstdint>
 #include <optional>
@@ -80,8 +82,8 @@ class VitaSlam {
   // The checkpoint format written (the version above); older ones down to 1 are read.
   // 2: experiences carry their view shift; 3: the map its travelled distance; 4: the localiser's
   // state; 5: each template the whiskers it sensed; 6: each link its recognised ends and scale, the
-  // map whether the robot recognised its current experience.
-  static constexpr uint32_t kCheckpointFormat = 6;
+  // map whether the robot recognised its current experience; 7: each link its gate.
+  static constexpr uint32_t kCheckpointFormat = 7;
 
   VitaSlam(const SlamParams& params, const RobotGeometry& geometry);
 
@@ -112,6 +114,11 @@ class VitaSlam {
   // (or its time went back, or the checkpoint had none). Not part of the state: a property of the run.
   void localise_if_moved_for(double gap_s) { resume_gap_s_ = gap_s; }
   const Localiser& localiser() const { return localiser_; }
+
+  // Adds wrong closures to the map as the front end makes its own (wrong_closures.h): a test of the
+  // back end, for replays and studies. Not part of the state.
+  void inject_wrong_closures(const WrongClosureParams& p) { wrong_closures_.emplace(p); }
+  int64_t wrong_closures_added() const { return wrong_closures_ ? wrong_closures_->added() : 0; }
 
   // The decoder of a compressed camera format (MJPEG), injected by the daemon's edge; without it such
   // a frame is refused (counted in bad_images) like any format the core does not read.
@@ -160,6 +167,7 @@ class VitaSlam {
   bool have_odometry_time_ = false;
   bool localise_only_ = false;  // not serialised: a property of the run, not of the map
   std::optional<FrameDecoder> decoder_;  // not serialised either
+  std::optional<WrongClosures> wrong_closures_;  // nor this
 };
 
 }  // namespace whiskeye::slam

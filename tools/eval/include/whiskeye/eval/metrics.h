@@ -52,6 +52,7 @@ struct MapLink {
   int32_t from_id = -1;
   int32_t to_id = -1;
   bool revoked = false;  // the back end turned it off (VITA_MAP link_t.revoked)
+  Pose2 delta;           // what it claims: `to` in `from`'s frame
 };
 
 struct ExperienceMap {
@@ -420,6 +421,20 @@ GroundTruth truth_of(const EvalInput& input);
 // its map has an experience created before its first ground truth.
 std::vector<LocalisationInstant> localisation_instants(const EvalInput& input, const EvalParams& params);
 
+// The final map's links against the truth, alignment-free: a link claims that `to` was made at
+// `from` ∘ delta, and where the robot was when each end was made says whether it was (the ends' first
+// ground truth). Wrong: off by more than the false-closure tolerance, either bound (a false closure's
+// link, odometry across an undetected kidnap, a wrong closure injected on purpose). The back end is
+// right when it keeps the right links and revokes the wrong ones.
+struct LinkJudgement {
+  std::size_t judged = 0;          // links with truth at both ends' creation
+  std::size_t wrong = 0;
+  std::size_t wrong_kept = 0;      // wrong and not revoked: the map is bent by them
+  std::size_t right_revoked = 0;   // right but revoked: a constraint lost
+  std::optional<double> worst_kept_m;  // the largest position error of a link kept
+};
+LinkJudgement judge_links(const ExperienceMap& map, const GroundTruth& gt, const EvalParams& params);
+
 struct EvalResult {
   // False for a log without GROUND_TRUTH (a real robot's run): then nothing that needs truth is
   // computed — no alignment, LEM, EnM, correctness (ARCR, valid fraction) — and ExM only counts
@@ -430,6 +445,7 @@ struct EvalResult {
   AteResult ate;                          // the accuracy figure (best-fit alignment)
   ExmResult exm;
   EnmResult enm;
+  LinkJudgement links;
   std::optional<LocalisationReport> localisation;  // when the run has a localisation instant
 };
 
