@@ -218,7 +218,7 @@ TEST(ExperienceMap, ActionRuleCreatesLinksAndRelocalises) {
   const PoseCells cells{PoseCellParams{}};
   ExperienceMap m(pose_cell_rule());
   // Cycle 1: template 0 at pc (10, 10, 0) → first experience.
-  Event e = m.on_cycle(0, 0, -1, false, 10, 10, 0, cells, 1000);
+  Event e = m.on_cycle({.template_id = 0, .visual_template_id = 0, .pc_x = 10, .pc_y = 10, .utime = 1000}, cells);
   EXPECT_EQ(e.type, EventType::NewExperience);
   EXPECT_EQ(e.from_id, -1);
   EXPECT_EQ(e.to_id, 0);
@@ -227,7 +227,7 @@ TEST(ExperienceMap, ActionRuleCreatesLinksAndRelocalises) {
   EXPECT_EQ(m.experiences()[0].tactile_template_id, -1);
   // Move 1 m; a new template → new experience linked from the first.
   m.integrate(1.0, 0.0, 0.0, 1.0);
-  e = m.on_cycle(1, 1, 1, true, 15, 10, 0, cells, 2000);
+  e = m.on_cycle({.template_id = 1, .visual_template_id = 1, .tactile_template_id = 1, .dense = true, .pc_x = 15, .pc_y = 10, .utime = 2000}, cells);
   EXPECT_EQ(e.type, EventType::NewExperience);
   EXPECT_EQ(e.from_id, 0);
   EXPECT_EQ(e.to_id, 1);
@@ -235,16 +235,16 @@ TEST(ExperienceMap, ActionRuleCreatesLinksAndRelocalises) {
   EXPECT_TRUE(m.experiences()[1].dense);
   // The same template with the pose cells still there: nothing changes.
   m.integrate(0.1, 0.0, 0.0, 1.0);
-  e = m.on_cycle(1, 1, 1, true, 15.5, 10, 0, cells, 2500);
+  e = m.on_cycle({.template_id = 1, .visual_template_id = 1, .tactile_template_id = 1, .dense = true, .pc_x = 15.5, .pc_y = 10, .utime = 2500}, cells);
   EXPECT_EQ(e.type, EventType::SameExperience);
   // A third place.
   m.integrate(1.0, 0.0, 0.0, 1.0);
-  e = m.on_cycle(2, 2, 2, true, 20, 10, 0, cells, 2800);
+  e = m.on_cycle({.template_id = 2, .visual_template_id = 2, .tactile_template_id = 2, .dense = true, .pc_x = 20, .pc_y = 10, .utime = 2800}, cells);
   EXPECT_EQ(e.type, EventType::NewExperience);
   // Template 0 seen again with the pose cells back near its cells → re-localise onto experience 0
   // with a new link carrying the odometry.
   m.integrate(-2.0, 0.0, 0.0, 1.0);
-  e = m.on_cycle(0, 0, -1, false, 10.5, 10, 0, cells, 3000);
+  e = m.on_cycle({.template_id = 0, .visual_template_id = 0, .pc_x = 10.5, .pc_y = 10, .utime = 3000}, cells);
   EXPECT_EQ(e.type, EventType::Relocalise);
   EXPECT_EQ(e.from_id, 2);
   EXPECT_EQ(e.to_id, 0);
@@ -255,7 +255,7 @@ TEST(ExperienceMap, ActionRuleCreatesLinksAndRelocalises) {
   EXPECT_NEAR(m.links()[2].delta.x, -2.0, 1e-12);
   EXPECT_EQ(m.offset(), Pose2{});
   // Template 0 seen where the pose cells are far from its experience → a new experience.
-  e = m.on_cycle(0, 0, -1, false, 2, 3, 18, cells, 4000);
+  e = m.on_cycle({.template_id = 0, .visual_template_id = 0, .pc_x = 2, .pc_y = 3, .pc_theta = 18, .utime = 4000}, cells);
   EXPECT_EQ(e.type, EventType::NewExperience);
   EXPECT_EQ(m.size(), 4);
 }
@@ -265,23 +265,23 @@ TEST(ExperienceMap, ActionRuleCreatesLinksAndRelocalises) {
 TEST(ExperienceMap, ADegradedCycleReLocalisesButNeverCreates) {
   const PoseCells cells{PoseCellParams{}};
   ExperienceMap m(pose_cell_rule());
-  m.on_cycle(0, 0, 0, true, 10, 10, 0, cells, 1000);
+  m.on_cycle({.template_id = 0, .visual_template_id = 0, .tactile_template_id = 0, .dense = true, .pc_x = 10, .pc_y = 10, .utime = 1000}, cells);
   m.integrate(1.0, 0.0, 0.0, 1.0);
-  m.on_cycle(1, 1, 1, true, 15, 10, 0, cells, 2000);
+  m.on_cycle({.template_id = 1, .visual_template_id = 1, .tactile_template_id = 1, .dense = true, .pc_x = 15, .pc_y = 10, .utime = 2000}, cells);
   // A template without experiences, and one whose experience is beyond the pose cells' reach.
   m.integrate(1.0, 0.0, 0.0, 1.0);
-  EXPECT_EQ(m.on_cycle(2, 2, 2, true, 20, 10, 0, cells, 3000, 0, true).type, EventType::SameExperience);
-  EXPECT_EQ(m.on_cycle(0, 0, 0, true, 20, 10, 0, cells, 3100, 0, true).type, EventType::SameExperience);
+  EXPECT_EQ(m.on_cycle({.template_id = 2, .visual_template_id = 2, .tactile_template_id = 2, .dense = true, .pc_x = 20, .pc_y = 10, .utime = 3000, .degraded = true}, cells).type, EventType::SameExperience);
+  EXPECT_EQ(m.on_cycle({.template_id = 0, .visual_template_id = 0, .tactile_template_id = 0, .dense = true, .pc_x = 20, .pc_y = 10, .utime = 3100, .degraded = true}, cells).type, EventType::SameExperience);
   EXPECT_EQ(m.size(), 2);
   EXPECT_EQ(m.links().size(), 1u);
   EXPECT_EQ(m.current_id(), 1);
   EXPECT_NEAR(m.current_pose().x, 2.0, 1e-12);  // the odometry goes on
   // A known place within reach: re-localised as by a full cycle.
-  const Event e = m.on_cycle(0, 0, 0, true, 10.4, 10, 0, cells, 3200, 0, true);
+  const Event e = m.on_cycle({.template_id = 0, .visual_template_id = 0, .tactile_template_id = 0, .dense = true, .pc_x = 10.4, .pc_y = 10, .utime = 3200, .degraded = true}, cells);
   EXPECT_EQ(e.type, EventType::Relocalise);
   EXPECT_EQ(e.to_id, 0);
   // Without the flag the same unseen template makes an experience.
-  EXPECT_EQ(m.on_cycle(2, 2, 2, true, 20, 10, 0, cells, 3300).type, EventType::NewExperience);
+  EXPECT_EQ(m.on_cycle({.template_id = 2, .visual_template_id = 2, .tactile_template_id = 2, .dense = true, .pc_x = 20, .pc_y = 10, .utime = 3300}, cells).type, EventType::NewExperience);
 }
 
 TEST(ExperienceMap, ViewTurnedBeyondMaxViewShiftIsANewExperienceOfTheSameTemplate) {
@@ -290,38 +290,38 @@ TEST(ExperienceMap, ViewTurnedBeyondMaxViewShiftIsANewExperienceOfTheSameTemplat
   p.max_view_shift = 2;
   p.distinct_places = 0;  // every template counts as aliased: max_view_shift applies throughout
   ExperienceMap m(pose_cell_rule(p));
-  m.on_cycle(0, 0, -1, false, 10, 10, 0, cells, 1000);  // experience 0, template 0, shift 0
+  m.on_cycle({.template_id = 0, .visual_template_id = 0, .pc_x = 10, .pc_y = 10, .utime = 1000}, cells);  // experience 0, template 0, shift 0
   m.integrate(0.5, 0.0, 0.0, 1.0);
-  m.on_cycle(1, 1, -1, false, 15, 10, 0, cells, 2000);  // experience 1
+  m.on_cycle({.template_id = 1, .visual_template_id = 1, .pc_x = 15, .pc_y = 10, .utime = 2000}, cells);  // experience 1
   // Template 0 again, pose cells at its experience, but the view is turned by 4 columns: the same
   // place from another pose → a new experience of template 0 that remembers the shift.
   m.integrate(-0.5, 0.0, 0.0, 1.0);
-  Event e = m.on_cycle(0, 0, -1, false, 10.2, 10, 0, cells, 3000, 4);
+  Event e = m.on_cycle({.template_id = 0, .visual_template_id = 0, .pc_x = 10.2, .pc_y = 10, .utime = 3000, .view_shift = 4}, cells);
   EXPECT_EQ(e.type, EventType::NewExperience);
   EXPECT_EQ(e.to_id, 2);
   EXPECT_EQ(m.experiences()[2].template_id, 0);
   EXPECT_EQ(m.experiences()[2].view_shift, 4);
   m.integrate(0.5, 0.0, 0.0, 1.0);
-  m.on_cycle(1, 1, -1, false, 15, 10, 0, cells, 4000);  // back to experience 1
+  m.on_cycle({.template_id = 1, .visual_template_id = 1, .pc_x = 15, .pc_y = 10, .utime = 4000}, cells);  // back to experience 1
   // Seen again with shift 3: within 2 of experience 2's shift (4), not of experience 0's (0), so it
   // re-localises onto experience 2 although experience 0 is as near in the pose cells.
   m.integrate(-0.5, 0.0, 0.0, 1.0);
-  e = m.on_cycle(0, 0, -1, false, 10.1, 10, 0, cells, 5000, 3);
+  e = m.on_cycle({.template_id = 0, .visual_template_id = 0, .pc_x = 10.1, .pc_y = 10, .utime = 5000, .view_shift = 3}, cells);
   EXPECT_EQ(e.type, EventType::Relocalise);
   EXPECT_EQ(e.to_id, 2);
   // Within the limit of experience 0's shift: onto experience 0.
   m.integrate(0.5, 0.0, 0.0, 1.0);
-  m.on_cycle(1, 1, -1, false, 15, 10, 0, cells, 6000);
+  m.on_cycle({.template_id = 1, .visual_template_id = 1, .pc_x = 15, .pc_y = 10, .utime = 6000}, cells);
   m.integrate(-0.5, 0.0, 0.0, 1.0);
-  e = m.on_cycle(0, 0, -1, false, 10.0, 10, 0, cells, 7000, -1);
+  e = m.on_cycle({.template_id = 0, .visual_template_id = 0, .pc_x = 10.0, .pc_y = 10, .utime = 7000, .view_shift = -1}, cells);
   EXPECT_EQ(e.type, EventType::Relocalise);
   EXPECT_EQ(e.to_id, 0);
   // Frozen (localisation only): the shift does not matter, nothing is created.
   m.set_frozen(true);
   m.integrate(0.5, 0.0, 0.0, 1.0);
-  m.on_cycle(1, 1, -1, false, 15, 10, 0, cells, 8000);
+  m.on_cycle({.template_id = 1, .visual_template_id = 1, .pc_x = 15, .pc_y = 10, .utime = 8000}, cells);
   m.integrate(-0.5, 0.0, 0.0, 1.0);
-  e = m.on_cycle(0, 0, -1, false, 10.0, 10, 0, cells, 9000, 5);
+  e = m.on_cycle({.template_id = 0, .visual_template_id = 0, .pc_x = 10.0, .pc_y = 10, .utime = 9000, .view_shift = 5}, cells);
   EXPECT_EQ(e.type, EventType::Relocalise);
   EXPECT_EQ(m.size(), 3);
 }
@@ -334,35 +334,35 @@ TEST(ExperienceMap, ADistinctiveTemplateReLocalisesFromAWiderViewShiftThanAnAlia
   p.distinct_places = 1;
   ExperienceMap m(pose_cell_rule(p));
   // Template 0 at one place (distinctive), template 1 at two places (aliased), template 2 elsewhere.
-  m.on_cycle(0, 0, -1, false, 10, 10, 0, cells, 1000);  // experience 0, template 0
+  m.on_cycle({.template_id = 0, .visual_template_id = 0, .pc_x = 10, .pc_y = 10, .utime = 1000}, cells);  // experience 0, template 0
   m.integrate(0.5, 0.0, 0.0, 1.0);
-  m.on_cycle(1, 1, -1, false, 15, 10, 0, cells, 2000);  // experience 1, template 1
+  m.on_cycle({.template_id = 1, .visual_template_id = 1, .pc_x = 15, .pc_y = 10, .utime = 2000}, cells);  // experience 1, template 1
   m.integrate(0.5, 0.0, 0.0, 1.0);
-  m.on_cycle(2, 2, -1, false, 20, 10, 0, cells, 3000);  // experience 2, template 2
+  m.on_cycle({.template_id = 2, .visual_template_id = 2, .pc_x = 20, .pc_y = 10, .utime = 3000}, cells);  // experience 2, template 2
   m.integrate(0.5, 0.0, 0.0, 1.0);
-  m.on_cycle(1, 1, -1, false, 10, 18, 9, cells, 4000);  // experience 3: template 1 again, far away
+  m.on_cycle({.template_id = 1, .visual_template_id = 1, .pc_x = 10, .pc_y = 18, .pc_theta = 9, .utime = 4000}, cells);  // experience 3: template 1 again, far away
   ASSERT_EQ(m.size(), 4);
   // Back near experience 0 with the view turned by 4 columns: distinctive, so it re-localises.
   m.integrate(-0.5, 0.0, 0.0, 1.0);
-  Event e = m.on_cycle(0, 0, -1, false, 10.1, 10, 0, cells, 5000, 4);
+  Event e = m.on_cycle({.template_id = 0, .visual_template_id = 0, .pc_x = 10.1, .pc_y = 10, .utime = 5000, .view_shift = 4}, cells);
   EXPECT_EQ(e.type, EventType::Relocalise);
   EXPECT_EQ(e.to_id, 0);
   // 5 columns is beyond even the distinctive limit: a new experience of template 0.
   m.integrate(0.5, 0.0, 0.0, 1.0);
-  m.on_cycle(2, 2, -1, false, 20, 10, 0, cells, 6000);
+  m.on_cycle({.template_id = 2, .visual_template_id = 2, .pc_x = 20, .pc_y = 10, .utime = 6000}, cells);
   m.integrate(-0.5, 0.0, 0.0, 1.0);
-  e = m.on_cycle(0, 0, -1, false, 10.1, 10, 0, cells, 7000, 5);
+  e = m.on_cycle({.template_id = 0, .visual_template_id = 0, .pc_x = 10.1, .pc_y = 10, .utime = 7000, .view_shift = 5}, cells);
   EXPECT_EQ(e.type, EventType::NewExperience);
   ASSERT_EQ(m.size(), 5);  // experience 4; template 0 now has two places
   // Template 1 (two places: aliased) at experience 1 with 3 columns: beyond max_view_shift → new.
   m.integrate(0.5, 0.0, 0.0, 1.0);
-  e = m.on_cycle(1, 1, -1, false, 15, 10, 0, cells, 8000, 3);
+  e = m.on_cycle({.template_id = 1, .visual_template_id = 1, .pc_x = 15, .pc_y = 10, .utime = 8000, .view_shift = 3}, cells);
   EXPECT_EQ(e.type, EventType::NewExperience);
   // ... and with 2 columns it re-localises onto experience 1.
   m.integrate(0.5, 0.0, 0.0, 1.0);
-  m.on_cycle(2, 2, -1, false, 20, 10, 0, cells, 9000);
+  m.on_cycle({.template_id = 2, .visual_template_id = 2, .pc_x = 20, .pc_y = 10, .utime = 9000}, cells);
   m.integrate(-0.5, 0.0, 0.0, 1.0);
-  e = m.on_cycle(1, 1, -1, false, 15, 10, 0, cells, 10000, 2);
+  e = m.on_cycle({.template_id = 1, .visual_template_id = 1, .pc_x = 15, .pc_y = 10, .utime = 10000, .view_shift = 2}, cells);
   EXPECT_EQ(e.type, EventType::Relocalise);
   EXPECT_EQ(e.to_id, 1);
 }
@@ -375,7 +375,7 @@ ExperienceMap line_of_experiences(const ExperienceMapParams& p, int n, double sp
   ExperienceMap m(p);
   for (int i = 0; i < n; ++i) {
     if (i > 0) m.integrate(spacing, 0.0, 0.0, 1.0);
-    m.on_cycle(i, i, -1, false, 0, 0, 0, cells, 1000 * (i + 1));
+    m.on_cycle({.template_id = i, .visual_template_id = i, .utime = 1000 * (i + 1)}, cells);
   }
   return m;
 }
@@ -392,13 +392,13 @@ TEST(ExperienceMap, ALookAlikePlaceFartherThanOdometryCanHaveDriftedIsNotClosedO
   m.integrate(0.1, 0.0, 0.0, 1.0);
   // 2.1 m from experience 0 after 2.1 m of travel: the budget is 0.25 + 0.21 m.
   EXPECT_NEAR(m.drift_budget(), 0.46, 1e-12);
-  const Event e = m.on_cycle(0, 0, -1, false, 0, 0, 0, cells, 9000);
+  const Event e = m.on_cycle({.template_id = 0, .visual_template_id = 0, .utime = 9000}, cells);
   EXPECT_EQ(e.type, EventType::NewExperience);
   EXPECT_EQ(m.experiences()[5].template_id, 0);
   // The RatSLAM rule (pose cells alone) closes that loop.
   ExperienceMap r = line_of_experiences(pose_cell_rule(p), 5, 0.5, cells);
   r.integrate(0.1, 0.0, 0.0, 1.0);
-  EXPECT_EQ(r.on_cycle(0, 0, -1, false, 0, 0, 0, cells, 9000).type, EventType::Relocalise);
+  EXPECT_EQ(r.on_cycle({.template_id = 0, .visual_template_id = 0, .utime = 9000}, cells).type, EventType::Relocalise);
 }
 
 TEST(ExperienceMap, TheDriftBudgetGrowsWithTheDistanceTravelledAndRestartsAtAReLocalisation) {
@@ -412,7 +412,7 @@ TEST(ExperienceMap, TheDriftBudgetGrowsWithTheDistanceTravelledAndRestartsAtAReL
   m.integrate(0.0, 0.6, 0.0, 1.0);                                     // plus 0.6 m of drift
   EXPECT_GT(m.drift_budget(), 0.6);
   // Template 0 (experience 0, 0.5 m behind the start, 0.78 m from here).
-  const Event e = m.on_cycle(0, 0, -1, false, 0, 0, 0, cells, 9000);
+  const Event e = m.on_cycle({.template_id = 0, .visual_template_id = 0, .utime = 9000}, cells);
   EXPECT_EQ(e.type, EventType::Relocalise);
   EXPECT_EQ(e.to_id, 0);
   EXPECT_DOUBLE_EQ(m.travel_since_relocalisation(), 0.0);
@@ -424,25 +424,25 @@ TEST(ExperienceMap, ReLocalisesOntoTheNearestOfTheTemplatesExperiencesInTheMap) 
   ExperienceMapParams p;
   p.drift_per_m = 1.0;
   ExperienceMap m(p);
-  m.on_cycle(0, 0, -1, false, 0, 0, 0, cells, 1000);  // experience 0, template 0, at x = 0
+  m.on_cycle({.template_id = 0, .visual_template_id = 0, .utime = 1000}, cells);  // experience 0, template 0, at x = 0
   m.integrate(0.5, 0.0, 0.0, 1.0);
-  m.on_cycle(1, 1, -1, false, 0, 0, 0, cells, 2000);  // experience 1, template 1, at 0.5
+  m.on_cycle({.template_id = 1, .visual_template_id = 1, .utime = 2000}, cells);  // experience 1, template 1, at 0.5
   m.integrate(0.5, 0.0, 0.0, 1.0);
-  m.on_cycle(0, 0, -1, false, 0, 0, 0, cells, 3000);  // template 0 again at 1.0: budget 0.25 + 1 → ...
+  m.on_cycle({.template_id = 0, .visual_template_id = 0, .utime = 3000}, cells);  // template 0 again at 1.0: budget 0.25 + 1 → ...
   ASSERT_EQ(m.current_id(), 0);                        // ... closed onto experience 0 (1 m back)
   m.integrate(1.0, 0.0, 0.0, 1.0);
-  m.on_cycle(2, 2, -1, false, 0, 0, 0, cells, 4000);   // experience 2 at 1.0 (from experience 0)
+  m.on_cycle({.template_id = 2, .visual_template_id = 2, .utime = 4000}, cells);   // experience 2 at 1.0 (from experience 0)
   m.integrate(0.1, 0.0, 0.0, 1.0);
   // Template 1 is at experience 1 only; template 0 at experience 0. Add a second experience of
   // template 0 next to here, by the view-shift rule (another pose of the same place).
-  m.on_cycle(0, 0, -1, false, 0, 0, 0, cells, 5000, 5);
+  m.on_cycle({.template_id = 0, .visual_template_id = 0, .utime = 5000, .view_shift = 5}, cells);
   ASSERT_EQ(m.size(), 4);
   EXPECT_NEAR(m.experiences()[3].pose.x, 1.1, 1e-9);
   m.integrate(0.05, 0.0, 0.0, 1.0);
-  m.on_cycle(2, 2, -1, false, 0, 0, 0, cells, 6000);  // back onto experience 2 (0.15 m away)
+  m.on_cycle({.template_id = 2, .visual_template_id = 2, .utime = 6000}, cells);  // back onto experience 2 (0.15 m away)
   ASSERT_EQ(m.current_id(), 2);
   m.integrate(0.12, 0.0, 0.0, 1.0);                   // at 1.12: experience 3 is 2 cm away, 0 is 1.12 m
-  const Event e = m.on_cycle(0, 0, -1, false, 0, 0, 0, cells, 7000, 4);
+  const Event e = m.on_cycle({.template_id = 0, .visual_template_id = 0, .utime = 7000, .view_shift = 4}, cells);
   EXPECT_EQ(e.type, EventType::Relocalise);
   EXPECT_EQ(e.to_id, 3);
 }
@@ -455,19 +455,19 @@ TEST(ExperienceMap, ThePoseCellsChooseWhileTheRobotRecognisesPlacesAndTheMapAfte
   p.packet_trust_m = 1.0;
   // Experience 0 at the origin (pose cells at (10, 10)), experience 1 at 0.3 m (cells (13, 10)).
   ExperienceMap m(p);
-  m.on_cycle(0, 0, -1, false, 10, 10, 0, cells, 1000);
+  m.on_cycle({.template_id = 0, .visual_template_id = 0, .pc_x = 10, .pc_y = 10, .utime = 1000}, cells);
   m.integrate(0.3, 0.0, 0.0, 1.0);
-  m.on_cycle(1, 1, -1, false, 13, 10, 0, cells, 2000);
+  m.on_cycle({.template_id = 1, .visual_template_id = 1, .pc_x = 13, .pc_y = 10, .utime = 2000}, cells);
   // Template 0 again 0.3 m on, with the packet 5 cells from experience 0's: within the map's budget,
   // but the robot has travelled less than packet_trust_m, so the packet decides: a new experience.
   m.integrate(0.3, 0.0, 0.0, 1.0);
-  Event e = m.on_cycle(0, 0, -1, false, 15, 10, 0, cells, 3000);
+  Event e = m.on_cycle({.template_id = 0, .visual_template_id = 0, .pc_x = 15, .pc_y = 10, .utime = 3000}, cells);
   EXPECT_EQ(e.type, EventType::NewExperience);
   // The same after 2 m without recognising anything (the packet may have drifted away): the map
   // decides, and experience 0 is within its budget (0.5 + 0.2 m).
   for (int i = 0; i < 4; ++i) m.integrate(0.5, 0.0, 0.0, 1.0);
   m.integrate(-2.6, 0.05, 0.0, 1.0);  // back near the origin, 2.6 m more travelled
-  e = m.on_cycle(0, 0, -1, false, 15, 10, 0, cells, 4000);
+  e = m.on_cycle({.template_id = 0, .visual_template_id = 0, .pc_x = 15, .pc_y = 10, .utime = 4000}, cells);
   EXPECT_EQ(e.type, EventType::Relocalise);
   EXPECT_EQ(e.to_id, 0);
 }
@@ -475,7 +475,7 @@ TEST(ExperienceMap, ThePoseCellsChooseWhileTheRobotRecognisesPlacesAndTheMapAfte
 TEST(ExperienceMap, ReadsOlderCheckpointsWithoutViewShiftsTravelOrRetiredFlags) {
   const PoseCells cells{PoseCellParams{}};
   ExperienceMap m;
-  m.on_cycle(0, 0, 0, true, 10, 10, 0, cells, 1);
+  m.on_cycle({.template_id = 0, .visual_template_id = 0, .tactile_template_id = 0, .dense = true, .pc_x = 10, .pc_y = 10, .utime = 1}, cells);
   std::vector<uint8_t> now;
   m.serialise(now);
   const std::vector<uint8_t> v4 = testing::map_as_format_5(now);
@@ -521,15 +521,15 @@ TEST(ExperienceMap, ReadsOlderCheckpointsWithoutViewShiftsTravelOrRetiredFlags) 
 TEST(ExperienceMap, ReadsLinksOfAnOlderCheckpointAsOdometryOrAReLocalisationsByTheirTimes) {
   const PoseCells cells{PoseCellParams{}};
   ExperienceMap m;
-  m.on_cycle(0, 0, -1, false, 0, 0, 0, cells, 1000);  // experience 0
+  m.on_cycle({.template_id = 0, .visual_template_id = 0, .utime = 1000}, cells);  // experience 0
   m.integrate(0.1, 0.0, 0.0, 1.0);
-  m.on_cycle(1, 1, -1, false, 0, 0, 0, cells, 2000);  // experience 1, link 0 -> 1
+  m.on_cycle({.template_id = 1, .visual_template_id = 1, .utime = 2000}, cells);  // experience 1, link 0 -> 1
   m.integrate(0.1, 0.0, 0.0, 1.0);
-  m.on_cycle(2, 2, -1, false, 0, 0, 0, cells, 3000);  // experience 2, link 1 -> 2
+  m.on_cycle({.template_id = 2, .visual_template_id = 2, .utime = 3000}, cells);  // experience 2, link 1 -> 2
   m.integrate(-0.15, 0.0, 0.0, 1.0);
-  ASSERT_EQ(m.on_cycle(0, 0, -1, false, 0, 0, 0, cells, 4000).type, EventType::Relocalise);  // back onto 0
+  ASSERT_EQ(m.on_cycle({.template_id = 0, .visual_template_id = 0, .utime = 4000}, cells).type, EventType::Relocalise);  // back onto 0
   m.integrate(0.1, 0.0, 0.0, 1.0);
-  const Event next = m.on_cycle(3, 3, -1, false, 0, 0, 0, cells, 5000);  // experience 3 from a recognised one
+  const Event next = m.on_cycle({.template_id = 3, .visual_template_id = 3, .utime = 5000}, cells);  // experience 3 from a recognised one
   ASSERT_EQ(next.type, EventType::NewExperience);
   ASSERT_EQ(m.links().size(), 4u);
   EXPECT_EQ(m.links()[0].recognised_ends, 0);
@@ -572,9 +572,9 @@ TEST(ExperienceMap, ARetiredExperienceIsNeverACandidateAndStaysRetiredInACheckpo
   ExperienceMapParams p;
   p.drift_per_m = 1.0;
   ExperienceMap m(p);
-  m.on_cycle(0, 0, -1, false, 0, 0, 0, cells, 1000);  // experience 0, template 0
+  m.on_cycle({.template_id = 0, .visual_template_id = 0, .utime = 1000}, cells);  // experience 0, template 0
   m.integrate(0.1, 0.0, 0.0, 1.0);
-  m.on_cycle(1, 1, -1, false, 0, 0, 0, cells, 2000);  // experience 1, template 1
+  m.on_cycle({.template_id = 1, .visual_template_id = 1, .utime = 2000}, cells);  // experience 1, template 1
   ASSERT_EQ(m.experiences_of(1), std::vector<int>{1});
   EXPECT_TRUE(m.mapped_near({0.1, 0.0, 0.0}, 0.05, 0.5, m.size()));
   m.retire(1, 2);
@@ -592,7 +592,7 @@ TEST(ExperienceMap, ARetiredExperienceIsNeverACandidateAndStaysRetiredInACheckpo
   EXPECT_TRUE(r.experiences_of(1).empty());
   // Template 1 recognised again: its only experience is retired, so this is a new place of it.
   m.integrate(0.05, 0.0, 0.0, 1.0);
-  const Event e = m.on_cycle(1, 1, -1, false, 0, 0, 0, cells, 3000);
+  const Event e = m.on_cycle({.template_id = 1, .visual_template_id = 1, .utime = 3000}, cells);
   EXPECT_EQ(e.type, EventType::NewExperience);
   EXPECT_EQ(m.experiences_of(1), std::vector<int>{2});
 }
@@ -606,26 +606,26 @@ TEST(ExperienceMap, ARecognitionIsGateRefusedOnlyWhenTheGateAloneRefusedIt) {
   p.drift_base = 0.25;
   p.drift_per_m = 0.15;
   ExperienceMap m(p);
-  m.on_cycle(0, 0, -1, false, 0, 0, 0, cells, 1000);  // experience 0 of template 0 at the origin, shift 0
+  m.on_cycle({.template_id = 0, .visual_template_id = 0, .utime = 1000}, cells);  // experience 0 of template 0 at the origin, shift 0
   m.integrate(1.0, 0.0, 0.0, 1.0);
-  m.on_cycle(1, 1, -1, false, 0, 0, 0, cells, 2000);  // experience 1 of template 1 at 1 m
+  m.on_cycle({.template_id = 1, .visual_template_id = 1, .utime = 2000}, cells);  // experience 1 of template 1 at 1 m
   // Template 0 again 1 m from its only experience (budget 0.25 + 0.15 · 1 m): refused by the gate.
   m.integrate(0.05, 0.0, 0.0, 1.0);
-  Event e = m.on_cycle(0, 0, -1, false, 0, 0, 0, cells, 3000);
+  Event e = m.on_cycle({.template_id = 0, .visual_template_id = 0, .utime = 3000}, cells);
   EXPECT_EQ(e.type, EventType::NewExperience);
   EXPECT_TRUE(e.gate_refused);
   // Template 1 here, its experience 5 cm away but seen 10 columns turned: the same place from another
   // pose (a new experience by the view-shift rule), not a disagreement.
   m.integrate(0.05, 0.0, 0.0, 1.0);
-  e = m.on_cycle(1, 1, -1, false, 0, 0, 0, cells, 4000, 10);
+  e = m.on_cycle({.template_id = 1, .visual_template_id = 1, .utime = 4000, .view_shift = 10}, cells);
   EXPECT_EQ(e.type, EventType::NewExperience);
   EXPECT_FALSE(e.gate_refused);
   // Template 0 1 m from its only experience but seen 10 columns turned from it: set aside by the
   // view-shift rule as well, so not the gate's refusal alone.
   ExperienceMap far(p);
-  far.on_cycle(0, 0, -1, false, 0, 0, 0, cells, 1000);
+  far.on_cycle({.template_id = 0, .visual_template_id = 0, .utime = 1000}, cells);
   far.integrate(1.0, 0.0, 0.0, 1.0);
-  e = far.on_cycle(0, 0, -1, false, 0, 0, 0, cells, 2000, 10);
+  e = far.on_cycle({.template_id = 0, .visual_template_id = 0, .utime = 2000, .view_shift = 10}, cells);
   EXPECT_EQ(e.type, EventType::NewExperience);
   EXPECT_FALSE(e.gate_refused);
 }
@@ -633,9 +633,9 @@ TEST(ExperienceMap, ARecognitionIsGateRefusedOnlyWhenTheGateAloneRefusedIt) {
 TEST(ExperienceMap, SerialisationRoundTripsExactly) {
   const PoseCells cells{PoseCellParams{}};
   ExperienceMap m;
-  m.on_cycle(0, 0, 0, true, 10, 10, 0, cells, 1);
+  m.on_cycle({.template_id = 0, .visual_template_id = 0, .tactile_template_id = 0, .dense = true, .pc_x = 10, .pc_y = 10, .utime = 1}, cells);
   m.integrate(0.3, 0.1, 0.2, 1.0);
-  m.on_cycle(1, 1, 1, false, 13, 11, 2, cells, 2);
+  m.on_cycle({.template_id = 1, .visual_template_id = 1, .tactile_template_id = 1, .pc_x = 13, .pc_y = 11, .pc_theta = 2, .utime = 2}, cells);
   m.integrate(0.05, 0.0, 0.0, 1.0);
   std::vector<uint8_t> a, b;
   m.serialise(a);

@@ -272,6 +272,38 @@ TEST(TemplateMatch, RecogniserTellsRecognisedFromSeenOnlyFromNeither) {
   EXPECT_EQ(TemplateStore::Recogniser(s, {&v, &touched}, fused, p, p.threshold_vita)(m.id), Recognition::Recognised);
 }
 
+// One routine computes a template's terms for both: the Recogniser takes a template exactly when
+// match()'s error for it is within τ, to the last bit (its visual term was divided by σ where
+// match() multiplied by 1/σ, and the two disagreed at τ), and it refuses a query of another size as
+// match() does (it answered "none").
+TEST(TemplateMatch, TheRecogniserAgreesWithTheMatchToTheLastBitAndRefusesWhatItRefuses) {
+  MatchParams p;
+  p.sigma_visual = 0.123;  // x / 0.123 and x · (1/0.123) differ in the last bit for about half of all x
+  p.sigma_pfh = 0.7;
+  p.sigma_sda = 1.3;
+  const VisualTemplate query = random_template(1000);
+  const TactileTemplate felt = random_tactile(1001);
+  for (const Terms terms : {Terms{true, false, false}, Terms{false, true, false}, Terms{true, true, false}}) {
+    for (uint32_t k = 0; k < 40; ++k) {
+      TemplateStore s(64, 40);
+      const VisualTemplate v = random_template(k);
+      const TactileTemplate t = random_tactile(500 + k);
+      s.add({&v, &t}, 0, 0, 0);
+      const Query q{&query, &felt};
+      const BestMatch m = s.match(q, terms, p);
+      ASSERT_EQ(m.id, 0);
+      EXPECT_EQ(TemplateStore::Recogniser(s, q, terms, p, m.error)(0), Recognition::Recognised) << k;
+      EXPECT_EQ(TemplateStore::Recogniser(s, q, terms, p, std::nextafter(m.error, 0.0))(0), Recognition::None) << k;
+    }
+  }
+  TemplateStore s(64, 40);
+  const VisualTemplate v = random_template(1);
+  s.add({&v, nullptr}, 0, 0, 0);
+  const VisualTemplate small = random_template(2, 32, 20);
+  EXPECT_THROW(s.match({&small, nullptr}, {true, false, false}, p), std::invalid_argument);
+  EXPECT_THROW(TemplateStore::Recogniser(s, {&small, nullptr}, {true, false, false}, p, 1.0), std::invalid_argument);
+}
+
 TEST(TemplateMatch, FusedAnEmptyTouchIsNotTakenForAContactNorAContactForAnEmptyTouch) {
   TemplateStore s(64, 40);
   const VisualTemplate v = random_template(60);

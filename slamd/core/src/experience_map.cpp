@@ -289,92 +289,103 @@ void ExperienceMap::relax(int loops) {
   poses_dirty_ = true;
 }
 
-Event ExperienceMap::on_cycle(int template_id, int visual_template_id, int tactile_template_id, bool dense,
-                              double pc_x, double pc_y, double pc_theta, const PoseCells& cells, int64_t utime,
-                              int view_shift, bool degraded) {
+MapDecision ExperienceMap::decide(const MapCycle& cycle, const PoseCells& cells) const {
+  using Action = MapDecision::Action;
+  MapDecision d;
+  if (cycle.template_id < 0) return d;
+  const std::vector<int>& candidates = experiences_of(cycle.template_id);
+  if (candidates.empty()) {
+    if (!frozen_ && !cycle.degraded) d.action = Action::Create;
+    return d;
+  }
+  int nearest = -1;
+  double dmin = 0.0;
+  const int max_shift = static_cast<int>(candidates.size()) <= params_.distinct_places ? params_.max_view_shift_distinct
+                                                                                      : params_.max_view_shift;
+  // With the odometry-consistency gate on, only experiences within the drift budget in the map
+  // count. While the robot recognised a place recently (travel ≤ packet_trust_m) the pose cells
+  // choose among them, as in RatSLAM: the packet is where the views put it and resolves
+  // neighbouring experiences better than the relaxed map. After a longer stretch without any,
+  // the packet may have drifted away with the odometry: the nearest in the map is taken (and
+  // VitaSlam moves the packet there). Frozen (localisation only): the same, whatever the view shift.
+  const bool gate = params_.drift_per_m < 100.0;
+  const bool by_map = gate && travel_ > params_.packet_trust_m;
+  const Pose2 here = gate ? current_pose() : Pose2{};  // the map's distances only matter with the gate
+  const double budget = drift_budget();
+  // Refused by the gate alone: no experience of the template within the budget, whatever its view
+  // shift (one within it seen from another pose is the same place), and one beyond it that the
+  // view-shift rule would take (the view is that place's, seen as it was then).
+  bool within_budget = !gate, refused_beyond = false;
+  for (int id : candidates) {
+    const Experience& e = meta_[static_cast<size_t>(id)];
+    const auto i = static_cast<size_t>(id);
+    const double dm = gate ? std::hypot(x_[i] - here.x, y_[i] - here.y) : 0.0;
+    within_budget = within_budget || dm <= budget;
+    if (!frozen_ && std::abs(cycle.view_shift - e.view_shift) > max_shift) continue;
+    if (gate && dm > budget) {
+      refused_beyond = true;
+      continue;
+    }
+    const double dist = by_map ? dm : cells.distance(e.pc_x, e.pc_y, e.pc_theta, cycle.pc_x, cycle.pc_y, cycle.pc_theta);
+    if (nearest < 0 || dist < dmin) {
+      nearest = id;
+      dmin = dist;
+    }
+  }
+  const double limit = by_map ? budget : params_.delta_pc_threshold;
+  // No candidate left by the view-shift rule (never when frozen, which ignores it), or none near.
+  if (nearest < 0 || (dmin > limit && !frozen_)) {
+    d.action = !cycle.degraded && !frozen_ ? Action::Create : Action::Unmatched;
+    d.gate_refused = !within_budget && refused_beyond;
+  } else {
+    d.action = nearest != current_ ? Action::Relocalise : Action::Stay;
+    d.target = nearest;
+  }
+  return d;
+}
+
+Event ExperienceMap::act(const MapDecision& decision, const MapCycle& cycle) {
+  using Action = MapDecision::Action;
   Event ev;
   ev.type = EventType::SameExperience;
   ev.from_id = ev.to_id = current_;
-  if (template_id < 0) return ev;
-
-  Experience meta;
-  meta.pc_x = pc_x;
-  meta.pc_y = pc_y;
-  meta.pc_theta = pc_theta;
-  meta.utime_created = utime;
-  meta.template_id = template_id;
-  meta.visual_template_id = visual_template_id;
-  meta.tactile_template_id = tactile_template_id;
-  meta.dense = dense;
-  meta.view_shift = view_shift;
-
-  auto create = [&]() {
-    const Pose2 pose = current_pose();
-    const int from = current_;
-    const int id = add_experience(pose, meta);
-    if (from >= 0) {
-      const double gate = current_recognised_ ? drift_budget() : std::numeric_limits<double>::infinity();
-      add_link(from, id, offset_, utime, current_recognised_ ? 1 : 0, gate);
-    }
-    set_current(id);
-    ev = {EventType::NewExperience, from, id};
-  };
-
-  const std::vector<int>* candidates =
-      static_cast<size_t>(template_id) < by_template_.size() ? &by_template_[static_cast<size_t>(template_id)] : nullptr;
-  if (candidates == nullptr || candidates->empty()) {
-    if (frozen_ || degraded) return ev;
-    create();
-  } else {
-    int nearest = -1;
-    double dmin = 0.0;
-    const int max_shift = static_cast<int>(candidates->size()) <= params_.distinct_places ? params_.max_view_shift_distinct
-                                                                                        : params_.max_view_shift;
-    // With the odometry-consistency gate on, only experiences within the drift budget in the map
-    // count. While the robot recognised a place recently (travel ≤ packet_trust_m) the pose cells
-    // choose among them, as in RatSLAM: the packet is where the views put it and resolves
-    // neighbouring experiences better than the relaxed map. After a longer stretch without any,
-    // the packet may have drifted away with the odometry: the nearest in the map is taken (and
-    // VitaSlam moves the packet there). Frozen (localisation only): the same, whatever the view shift.
-    const bool gate = params_.drift_per_m < 100.0;
-    const bool by_map = gate && travel_ > params_.packet_trust_m;
-    const Pose2 here = gate ? current_pose() : Pose2{};  // the map's distances only matter with the gate
-    const double budget = drift_budget();
-    // Refused by the gate alone: no experience of the template within the budget, whatever its view
-    // shift (one within it seen from another pose is the same place), and one beyond it that the
-    // view-shift rule would take (the view is that place's, seen as it was then).
-    bool within_budget = !gate, refused_beyond = false;
-    for (int id : *candidates) {
-      const Experience& e = meta_[static_cast<size_t>(id)];
-      const auto i = static_cast<size_t>(id);
-      const double dm = gate ? std::hypot(x_[i] - here.x, y_[i] - here.y) : 0.0;
-      within_budget = within_budget || dm <= budget;
-      if (!frozen_ && std::abs(view_shift - e.view_shift) > max_shift) continue;
-      if (gate && dm > budget) {
-        refused_beyond = true;
-        continue;
+  ev.gate_refused = decision.gate_refused;
+  const int from = current_;
+  switch (decision.action) {
+    case Action::None:
+      return ev;  // nothing to do, nor to relax
+    case Action::Unmatched:
+      break;
+    case Action::Stay:
+      travel_ = 0.0;  // recognised where it already is: as good as a re-localisation
+      break;
+    case Action::Create: {
+      Experience meta;
+      meta.pc_x = cycle.pc_x;
+      meta.pc_y = cycle.pc_y;
+      meta.pc_theta = cycle.pc_theta;
+      meta.utime_created = cycle.utime;
+      meta.template_id = cycle.template_id;
+      meta.visual_template_id = cycle.visual_template_id;
+      meta.tactile_template_id = cycle.tactile_template_id;
+      meta.dense = cycle.dense;
+      meta.view_shift = cycle.view_shift;
+      const int id = add_experience(current_pose(), meta);
+      if (from >= 0) {
+        const double gate = current_recognised_ ? drift_budget() : std::numeric_limits<double>::infinity();
+        add_link(from, id, offset_, cycle.utime, current_recognised_ ? 1 : 0, gate);
       }
-      const double d = by_map ? dm : cells.distance(e.pc_x, e.pc_y, e.pc_theta, pc_x, pc_y, pc_theta);
-      if (nearest < 0 || d < dmin) {
-        nearest = id;
-        dmin = d;
-      }
+      set_current(id);
+      ev = {EventType::NewExperience, from, id, decision.gate_refused};
+      break;
     }
-    const double limit = by_map ? budget : params_.delta_pc_threshold;
-    // No candidate left by the view-shift rule (never when frozen, which ignores it), or none near.
-    if (nearest < 0 || (dmin > limit && !frozen_)) {
-      if (!degraded && !frozen_) create();
-      ev.gate_refused = !within_budget && refused_beyond;
-    } else if (nearest != current_) {
-      const int from = current_;
-      if (!frozen_) link_current_to(nearest, utime);
-      set_current(nearest);
+    case Action::Relocalise:
+      if (!frozen_) link_current_to(decision.target, cycle.utime);
+      set_current(decision.target);
       current_recognised_ = true;
       travel_ = 0.0;
-      ev = {EventType::Relocalise, from, nearest};
-    } else {
-      travel_ = 0.0;  // recognised where it already is: as good as a re-localisation
-    }
+      ev = {EventType::Relocalise, from, decision.target};
+      break;
   }
   if (!frozen_) relax(params_.loops);
   return ev;

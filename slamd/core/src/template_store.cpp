@@ -314,20 +314,44 @@ double TemplateStore::visual_distance(const uint8_t* cur, const uint8_t* st, int
   return visual_distance_impl(cur, st, nullptr, w, h, shift_max, shift_step, &shifted, best_shift);
 }
 
+TemplateStore::TermScale TemplateStore::scale_of(const MatchParams& p) {
+  return {1.0 / p.sigma_visual, 1.0 / (65535.0 * p.sigma_pfh), 1.0 / p.sigma_sda};
+}
+
+void TemplateStore::check_query(const Query& q, const Terms& terms, const char* who) const {
+  if (terms.visual && q.visual != nullptr &&
+      (q.visual->width != width_ || q.visual->height != height_ || q.visual->pixels.size() != pixels())) {
+    throw std::invalid_argument(std::string(who) + ": visual template is " + std::to_string(q.visual->width) + "x" +
+                                std::to_string(q.visual->height) + ", the store holds " + std::to_string(width_) + "x" +
+                                std::to_string(height_));
+  }
+}
+
+bool TemplateStore::comparable(size_t i, const Query& q, const Terms& terms, const MatchParams& p) const {
+  if (terms.visual && (has_visual_[i] == 0 || std::abs(static_cast<double>(visual_mean_[i]) - q.visual->mean) > p.prefilter_mean_diff)) {
+    return false;
+  }
+  return !terms.tactile || has_tactile_[i] != 0;
+}
+
+TemplateStore::TactileTerms TemplateStore::tactile_terms(size_t i, const Query& q, const TermScale& scale) const {
+  // Touch adds evidence only where both cycles felt a shape (a PFH): one or two whiskers' slopes say
+  // too little to let a weak view count.
+  return {l1_u16(q.tactile->pfh.data(), pfh_.row(i), kPfhBins) * scale.pfh,
+          sda_distance(q.tactile->sda.data(), q.tactile->sensed, sda_.row(i), sensed_[i]) * scale.sda,
+          q.tactile->has_shape() && num_contacts_[i] >= kMinPfhPoints};
+}
+
 BestMatch TemplateStore::match(const Query& q, const Terms& terms, const MatchParams& p) const {
   BestMatch best;
   if ((!terms.visual && !terms.tactile) || (terms.visual && q.visual == nullptr) ||
       (terms.tactile && q.tactile == nullptr)) {
     return best;
   }
+  check_query(q, terms, "TemplateStore::match");
   const size_t np = pixels();
   std::vector<uint8_t> cur;
   if (terms.visual) {
-    if (q.visual->width != width_ || q.visual->height != height_ || q.visual->pixels.size() != np) {
-      throw std::invalid_argument("TemplateStore::match: visual template is " + std::to_string(q.visual->width) + "x" +
-                                  std::to_string(q.visual->height) + ", the store holds " + std::to_string(width_) + "x" +
-                                  std::to_string(height_));
-    }
     cur.resize(np);
     to_column_major(q.visual->pixels.data(), width_, height_, cur.data());
   }
@@ -346,12 +370,7 @@ BestMatch TemplateStore::match(const Query& q, const Terms& terms, const MatchPa
     cur_shifted.emplace(cur.data(), width_, height_, shifts.data(), n_shifts);
     if (bound) blocks_shifted.emplace(cur_blocks.data(), width_, blocks_per_column(height_), shifts.data(), n_shifts);
   }
-  const double inv_v = 1.0 / p.sigma_visual;
-  const double inv_pfh = 1.0 / (65535.0 * p.sigma_pfh);
-  const double inv_sda = 1.0 / p.sigma_sda;
-  // Touch adds evidence only where both cycles felt a shape (a PFH): one or two whiskers' slopes
-  // say too little to let a weak view count.
-  const bool query_shape = terms.tactile && q.tactile->has_shape();
+  const TermScale scale = scale_of(p);
   // One pass over the store for one or two rules: each rule's argmin (the first on ties), exactly
   // what a pass of its own would find, the visual term computed once for a template any rule still
   // needs. Each rule's error is non-decreasing in the visual term, so the visual term's lower bound
@@ -369,20 +388,13 @@ BestMatch TemplateStore::match(const Query& q, const Terms& terms, const MatchPa
     const int n = size();
     for (int i = 0; i < n; ++i) {
       const auto iu = static_cast<size_t>(i);
-      if (terms.visual && (has_visual_[iu] == 0 ||
-                           std::abs(static_cast<double>(visual_mean_[iu]) - q.visual->mean) > p.prefilter_mean_diff)) {
-        continue;
-      }
-      if (terms.tactile && has_tactile_[iu] == 0) continue;
-      double ev = 0.0, ep = 0.0, es = 0.0;
+      if (!comparable(iu, q, terms, p)) continue;
+      double ev = 0.0;
       int shift = 0;
-      const bool both_shapes = query_shape && num_contacts_[iu] >= kMinPfhPoints;
-      if (terms.tactile) {
-        ep = l1_u16(q.tactile->pfh.data(), pfh_.row(iu), kPfhBins) * inv_pfh;
-        es = sda_distance(q.tactile->sda.data(), q.tactile->sensed, sda_.row(iu), sensed_[iu]) * inv_sda;
-      }
+      const TactileTerms t = terms.tactile ? tactile_terms(iu, q, scale) : TactileTerms{};
+      const double ep = t.pfh, es = t.sda;
       const auto error = [&](size_t j, double visual) {
-        return rule_error(out.rules[j], visual, ep, es, both_shapes, p);
+        return rule_error(out.rules[j], visual, ep, es, t.both_shapes, p);
       };
       // A rule still needs this template unless it cannot apply, or cannot beat its best so far
       // whatever the visual term (≥ 0): the tactile terms alone may rule it out.
@@ -400,7 +412,7 @@ BestMatch TemplateStore::match(const Query& q, const Terms& terms, const MatchPa
         if (use_bound) {
           const double lower = shift_bounds(cur_blocks.data(), blocks_.row(iu), width_, height_, p.shift_max,
                                             p.shift_step, blocks_shifted ? &*blocks_shifted : nullptr, bounds) *
-                               inv_v;
+                               scale.visual;
           // With the bound: no rule can apply (the evidence rule's view limit) or beat its best.
           bool needed = false;
           for (size_t j = 0; j < out.count; ++j) {
@@ -415,7 +427,7 @@ BestMatch TemplateStore::match(const Query& q, const Terms& terms, const MatchPa
         // A fresh minimum per stored template (the original code carried it across templates).
         ev = visual_distance_impl(cur.data(), visual_.row(iu), use_bound ? bounds.data() : nullptr, width_, height_,
                                   p.shift_max, p.shift_step, cur_shifted ? &*cur_shifted : nullptr, &shift) *
-             inv_v;
+             scale.visual;
       }
       for (size_t j = 0; j < out.count; ++j) {
         if (!live[j]) continue;
@@ -441,8 +453,8 @@ BestMatch TemplateStore::match(const Query& q, const Terms& terms, const MatchPa
 TemplateStore::Recogniser::Recogniser(const TemplateStore& store, const Query& q, const Terms& terms,
                                      const MatchParams& p, double tau)
     : store_(store), q_(q), terms_(terms), p_(p), tau_(tau) {
-  if (terms_.visual && q_.visual != nullptr && q_.visual->width == store.width_ && q_.visual->height == store.height_ &&
-      q_.visual->pixels.size() == store.pixels()) {
+  store.check_query(q, terms, "TemplateStore::Recogniser");
+  if (terms_.visual && q_.visual != nullptr) {
     cur_.resize(store.pixels());
     to_column_major(q_.visual->pixels.data(), store.width_, store.height_, cur_.data());
   }
@@ -451,28 +463,20 @@ TemplateStore::Recogniser::Recogniser(const TemplateStore& store, const Query& q
 Recognition TemplateStore::Recogniser::operator()(int id) const {
   if (id < 0 || id >= store_.size() || (!terms_.visual && !terms_.tactile)) return Recognition::None;
   const auto iu = static_cast<size_t>(id);
-  if (terms_.visual && (cur_.empty() || store_.has_visual_[iu] == 0 ||
-                        std::abs(static_cast<double>(store_.visual_mean_[iu]) - q_.visual->mean) > p_.prefilter_mean_diff)) {
-    return Recognition::None;
-  }
-  if (terms_.tactile && (q_.tactile == nullptr || store_.has_tactile_[iu] == 0)) return Recognition::None;
-  double ev = 0.0, ep = 0.0, es = 0.0;
+  if ((terms_.visual && q_.visual == nullptr) || (terms_.tactile && q_.tactile == nullptr)) return Recognition::None;
+  if (!store_.comparable(iu, q_, terms_, p_)) return Recognition::None;
+  const TermScale scale = scale_of(p_);
+  double ev = 0.0;
   if (terms_.visual) {
     ev = visual_distance(cur_.data(), store_.visual_.row(iu), store_.width_, store_.height_, p_.shift_max, p_.shift_step,
-                         nullptr) /
-         p_.sigma_visual;
+                         nullptr) *
+         scale.visual;
   }
-  bool both_shapes = false;
-  if (terms_.tactile) {
-    ep = l1_u16(q_.tactile->pfh.data(), store_.pfh_.row(iu), kPfhBins) * (1.0 / (65535.0 * p_.sigma_pfh));
-    es = sda_distance(q_.tactile->sda.data(), q_.tactile->sensed, store_.sda_.row(iu), store_.sensed_[iu]) *
-         (1.0 / p_.sigma_sda);
-    both_shapes = q_.tactile->has_shape() && store_.num_contacts_[iu] >= kMinPfhPoints;
-  }
+  const TactileTerms t = terms_.tactile ? store_.tactile_terms(iu, q_, scale) : TactileTerms{};
   // Recognised if any of match()'s rules for this query takes it within τ.
   const Rules rules = rules_for(q_, terms_, p_);
   for (size_t j = 0; j < rules.count; ++j) {
-    if (rule_error(rules.rules[j], ev, ep, es, both_shapes, p_) <= tau_) return Recognition::Recognised;
+    if (rule_error(rules.rules[j], ev, t.pfh, t.sda, t.both_shapes, p_) <= tau_) return Recognition::Recognised;
   }
   // Not recognised; with the fusion, whether vision alone would have taken it.
   if (terms_.fused && terms_.visual && ev <= p_.threshold_visual) {

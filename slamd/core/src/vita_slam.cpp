@@ -40,7 +40,10 @@ VitaSlam::VitaSlam(const SlamParams& params, const RobotGeometry& geometry)
 
 void VitaSlam::start_localising(bool with_prior) {
   if (map_.size() == 0) return;
-  localiser_.start(with_prior && map_.current_id() >= 0, params_.localisation.commit_margin, map_.size());
+  // Where the robot was left is a candidate without a head start: after a long gap it may have been
+  // carried anywhere, and a look-alike near where it was left must not commit at once (with the
+  // kidnap's head start, one did: 11 false localisations where --map localised after 9 cycles).
+  localiser_.start(with_prior && map_.current_id() >= 0, 0, map_.size());
 }
 
 // The match threshold for the terms in use: a visual-only ε and a three-term ε differ in scale.
@@ -214,19 +217,19 @@ void VitaSlam::update_map(int64_t utime, const CycleTemplates& templates, PoseCe
   if (localiser_.localising()) {
     localise(utime, recognised, templates, pc, out);
   } else {
-    const int size_before = map_.size();
-    out.event = map_.on_cycle(tid, tid >= 0 && store_.has_visual(tid) ? tid : -1,
-                              tid >= 0 && store_.has_tactile(tid) ? tid : -1, out.dense, pc.x, pc.y, pc.theta, cells_,
-                              utime, m.visual_used && !m.is_new ? m.visual_shift : 0, out.degraded);
-    // A re-localisation the map accepted beyond the packet's reach (the pose cells drifted with the
-    // odometry): the packet follows the map, so that what is recognised next is looked for there.
-    if (out.event.type == EventType::Relocalise && out.event.to_id >= 0) move_packet_to(out.event.to_id, pc);
+    const MapCycle cycle = map_cycle(tid, utime, pc, m.visual_used && !m.is_new ? m.visual_shift : 0, out);
+    const MapDecision decision = map_.decide(cycle, cells_);
     // What the robot sees stopped agreeing with where it thinks it is: localise, this recognition
-    // the first evidence.
-    if (localiser_.on_tracking_recognition(out.event.gate_refused, recognised, size_before, map_)) {
+    // the first evidence, instead of acting on it (what the map would have made here was made where
+    // the robot only thought it was).
+    if (localiser_.on_tracking_recognition(decision.gate_refused, recognised, map_.size(), map_)) {
       localise(utime, recognised, templates, pc, out);
-    } else if (wrong_closures_ && !localise_only_) {
-      wrong_closures_->on_cycle(out.event, map_, utime);
+    } else {
+      out.event = map_.act(decision, cycle);
+      // A re-localisation the map accepted beyond the packet's reach (the pose cells drifted with
+      // the odometry): the packet follows the map, so that what is recognised next is looked for there.
+      if (out.event.type == EventType::Relocalise && out.event.to_id >= 0) move_packet_to(out.event.to_id, pc);
+      if (wrong_closures_ && !localise_only_) wrong_closures_->on_cycle(out.event, map_, utime);
     }
   }
   out.localising = localiser_.localising();
@@ -248,9 +251,7 @@ void VitaSlam::localise(int64_t utime, int recognised, const CycleTemplates& t, 
   const int from = map_.current_id();
   out.event = {EventType::SameExperience, from, from};
   if (localiser_.learning() && out.match.is_new && !localise_only_) {
-    const int tid = out.match.template_id;
-    out.event = map_.on_cycle(tid, store_.has_visual(tid) ? tid : -1, store_.has_tactile(tid) ? tid : -1, out.dense,
-                              pc.x, pc.y, pc.theta, cells_, utime, 0, false);
+    out.event = map_.on_cycle(map_cycle(out.match.template_id, utime, pc, 0, out), cells_);
   }
   // The view may be recognised as several templates (look-alikes learnt at other passes): any of
   // them is evidence for a place that holds it.
@@ -264,6 +265,22 @@ void VitaSlam::localise(int64_t utime, int recognised, const CycleTemplates& t, 
   map_.retire(c->retire_from, c->retire_to);
   if (c->experience != before) out.event = {EventType::Relocalise, before, c->experience};
   if (c->experience >= 0) move_packet_to(c->experience, pc);
+}
+
+MapCycle VitaSlam::map_cycle(int template_id, int64_t utime, const PoseCellBest& pc, int view_shift,
+                             const CycleResult& out) const {
+  MapCycle c;
+  c.template_id = template_id;
+  c.visual_template_id = template_id >= 0 && store_.has_visual(template_id) ? template_id : -1;
+  c.tactile_template_id = template_id >= 0 && store_.has_tactile(template_id) ? template_id : -1;
+  c.dense = out.dense;
+  c.pc_x = pc.x;
+  c.pc_y = pc.y;
+  c.pc_theta = pc.theta;
+  c.utime = utime;
+  c.view_shift = view_shift;
+  c.degraded = out.degraded;
+  return c;
 }
 
 void VitaSlam::move_packet_to(int experience, PoseCellBest& pc) {

@@ -116,6 +116,35 @@ struct Link {
   bool revoked() const { return scale < kRevokedScale; }
 };
 
+// What one cycle brings the action rule (VitaSlam fills it). template_id < 0: no template this
+// cycle (nothing to do). view_shift: the visual match's column shift (0 for a new template or
+// without vision). degraded: the cycle lacked a sense its mode uses; it may re-localise onto an
+// existing experience of the template by the usual rule, but never creates an experience or a link.
+struct MapCycle {
+  int template_id = -1;
+  int visual_template_id = -1;   // -1: the template has no visual part
+  int tactile_template_id = -1;  // -1: no tactile part
+  bool dense = false;            // tactile data present (contact)
+  double pc_x = 0.0, pc_y = 0.0, pc_theta = 0.0;  // the pose cells' best estimate, cells
+  int64_t utime = 0;
+  int view_shift = 0;
+  bool degraded = false;
+};
+
+// What the action rule decided for a cycle (ExperienceMap::decide), not yet done.
+struct MapDecision {
+  enum class Action : uint8_t {
+    None,        // no template this cycle, or a template the map has no experience of and may make none
+    Unmatched,   // no experience of the template taken, and none may be made (degraded, frozen)
+    Stay,        // recognised where the robot already is
+    Create,      // a new experience (and the link to it)
+    Relocalise,  // onto `target` (a loop closure)
+  };
+  Action action = Action::None;
+  int target = -1;
+  bool gate_refused = false;  // Event::gate_refused
+};
+
 class ExperienceMap {
  public:
   explicit ExperienceMap(const ExperienceMapParams& params = {});
@@ -134,13 +163,14 @@ class ExperienceMap {
 
   void integrate(double vx, double vy, double omega, double dt);
 
-  // The action rule for one cycle; template_id < 0 means no template this cycle (nothing to do).
-  // view_shift: the visual match's column shift (0 for a new template or without vision).
-  // degraded: the cycle lacked a sense its mode uses (VitaSlam); it may re-localise onto an existing
-  // experience of the template by the usual rule, but never creates an experience or a link to one.
-  Event on_cycle(int template_id, int visual_template_id, int tactile_template_id, bool dense, double pc_x,
-                 double pc_y, double pc_theta, const PoseCells& cells, int64_t utime, int view_shift = 0,
-                 bool degraded = false);
+  // The action rule for one cycle, decided, then carried out (on_cycle: both). Deciding changes
+  // nothing, so that the caller may act otherwise on what it says (VitaSlam localises instead when
+  // the decision's gate refusal reveals a kidnap).
+  MapDecision decide(const MapCycle& cycle, const PoseCells& cells) const;
+  // Carries out `decision` (decided on this map, unchanged since, for `cycle`): the experience made,
+  // the link, the current experience moved; then the relaxation (not when frozen).
+  Event act(const MapDecision& decision, const MapCycle& cycle);
+  Event on_cycle(const MapCycle& cycle, const PoseCells& cells) { return act(decide(cycle, cells), cycle); }
 
   // Building blocks (public for tests and the benchmark).
   int add_experience(const Pose2& pose, const Experience& meta);

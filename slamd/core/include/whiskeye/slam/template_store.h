@@ -179,6 +179,21 @@ class TemplateStore {
  private:
   size_t pixels() const { return static_cast<size_t>(width_) * static_cast<size_t>(height_); }
   size_t blocks() const;
+  // The one routine of each per-template quantity that match() and the Recogniser share, so that
+  // they agree bit for bit: the query's check (std::invalid_argument for a visual template of
+  // another size), the σ scaling, whether a stored template can be compared at all (the senses it
+  // has, the visual mean prefilter), and the tactile terms.
+  struct TermScale {
+    double visual = 1.0, pfh = 1.0, sda = 1.0;  // 1 / σ of each term (the PFH's over its 16-bit range)
+  };
+  static TermScale scale_of(const MatchParams& p);
+  void check_query(const Query& q, const Terms& terms, const char* who) const;
+  bool comparable(size_t i, const Query& q, const Terms& terms, const MatchParams& p) const;
+  struct TactileTerms {
+    double pfh = 0.0, sda = 0.0;
+    bool both_shapes = false;  // both felt a shape: touch may add evidence
+  };
+  TactileTerms tactile_terms(size_t i, const Query& q, const TermScale& scale) const;
 
   int width_ = 0;
   int height_ = 0;

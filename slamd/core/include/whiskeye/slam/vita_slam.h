@@ -107,7 +107,7 @@ class VitaSlam {
 
   // Holds the pose as unknown until a place wins (localiser.h): after loading a saved map
   // (with_prior false: the robot may be anywhere) or resuming a checkpoint (true: where it was
-  // left is one of the candidates). Nothing to do on an empty map.
+  // left is one of the candidates, with no head start). Nothing to do on an empty map.
   void start_localising(bool with_prior);
   // A resumed checkpoint: the first cycle with odometry starts localising, with where the robot was
   // left as a candidate, if its odometry comes more than `gap_s` after the checkpoint's last sample
@@ -152,6 +152,8 @@ class VitaSlam {
   void update_map(int64_t utime, const CycleTemplates& templates, PoseCellBest& pc, CycleResult& out);
   void localise(int64_t utime, int recognised, const CycleTemplates& templates, PoseCellBest& pc, CycleResult& out);
   void move_packet_to(int experience, PoseCellBest& pc);
+  // What this cycle brings the map's action rule.
+  MapCycle map_cycle(int template_id, int64_t utime, const PoseCellBest& pc, int view_shift, const CycleResult& out) const;
   double tau_of(const Terms& terms) const;
 
   SlamParams params_;
