@@ -1,7 +1,7 @@
 """Evaluates ViTa-SLAM over a suite of generated worlds (docs/evaluation.md, "The world suite").
 
   scripts/suite [--worlds N] [--suite-seed S] [--family aliased|stress] [--faults]
-                [--scenario normal|kidnap|restart|outliers] [--jobs J]
+                [--scenario normal|kidnap|restart|outliers|long] [--jobs J]
                 [--results DIR] [--quick] [--laps K] [--camera-format yuyv|grey|mjpeg] [--config FILE] [--check] [--bin DIR]
                 [--executor local|slurm] [--partition P] [--sbatch-args "..."] [--retry-failed]
 
@@ -28,6 +28,10 @@ for every closure the SLAM makes (slamd --inject-wrong-closures: random, far awa
 cycles onto an earlier pass elsewhere), and compared with the clean run: ATE against the clean run's,
 the wrong links kept (vita-eval's links against the truth); --check applies the back-end issue's
 outlier targets. With --quick: 1 world of 2 laps.
+--scenario long: every world driven 40 laps (--laps overrides), ATE per window of 4 laps (vita-eval
+--ate-window-laps) under the run's alignment; --check applies the back-end issue's long-run targets
+(the last window's ATE against the first's, ViTa's whole-run ATE against vision alone's). One simulator
+log per job on disk, deleted once replayed. With --quick: 1 world of 8 laps.
 --aggregate-only: rewrite suite.json/.md and the plots from the suite seed's worlds already in DIR.
 --executor slurm: the same worlds as one `sbatch --array` job (a task per world) and a dependent
 aggregation job; waits for them (at most --timeout seconds) unless --no-wait. DIR must be on a
@@ -42,7 +46,7 @@ import os
 import shlex
 import textwrap
 
-from .common import ROOT, SCENARIOS, fail
+from .common import LONG_RUN_LAPS, ROOT, SCENARIOS, fail
 from .targets import targets_help
 
 
@@ -61,7 +65,7 @@ def parse_args(argv):
     p.add_argument("--family", default="aliased", help="world family: aliased (default) or stress")
     p.add_argument("--faults", action="store_true", help="every world gets the standard sensor-fault set")
     p.add_argument("--scenario", default="normal", help="normal (default); kidnap: 3 kidnaps a world; restart: "
-                   "4 sessions localising in each world's saved map; outliers: wrong closures injected")
+                   "4 sessions localising in each world's saved map; outliers: wrong closures injected; long: 40 laps")
     p.add_argument("--jobs", type=int, default=None,
                    help="worlds run at once (default: every core; slurm: array tasks at once, default no limit)")
     p.add_argument("--results", default=None, help="results folder (default results/suite/<family>-s<seed>...)")
@@ -96,13 +100,15 @@ def parse_args(argv):
     if a.family not in ("aliased", "stress"):
         fail(f"--family: unknown family '{a.family}' (aliased or stress)")
     if a.scenario not in SCENARIOS:
-        fail(f"--scenario: unknown scenario '{a.scenario}' (normal, kidnap, restart or outliers)")
+        fail(f"--scenario: unknown scenario '{a.scenario}' (normal, kidnap, restart, outliers or long)")
     if a.executor not in ("local", "slurm"):
         fail(f"--executor: unknown executor '{a.executor}' (local or slurm)")
     if a.worlds is None:
         a.worlds = (1 if a.scenario != "normal" else 3) if a.quick else 24
     if a.quick and a.laps is None and a.scenario in ("normal", "outliers"):
         a.laps = 1 if a.scenario == "normal" else 2  # closures (and so wrong ones) need a second lap
+    if a.scenario == "long" and a.laps is None:
+        a.laps = 8 if a.quick else LONG_RUN_LAPS  # at least two windows of 4 laps
     if a.laps is not None and a.scenario == "kidnap":
         fail("--laps: a kidnap scenario runs each world's own laps (its kidnaps are drawn for them)")
     if not 1 <= a.worlds <= 10000:

@@ -10,7 +10,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 SCRIPT = os.path.join(ROOT, "scripts", "suite")  # the entry point the Slurm jobs call back into
 PROGRAMS = ("vita-sim", "slamd", "vita-eval")
 MODES = ("visual", "tactile", "vita")
-SCENARIOS = ("normal", "kidnap", "restart", "outliers")
+SCENARIOS = ("normal", "kidnap", "restart", "outliers", "long")
+LONG_RUN_LAPS = 40  # --scenario long: every world driven this many laps (--quick: 8)
 # --scenario outliers: each world's run replayed again with one wrong closure added per closure the SLAM
 # makes (slamd --inject-wrong-closures), of each kind, and compared with the clean run.
 WRONG_CLOSURE_KINDS = ("random", "group")

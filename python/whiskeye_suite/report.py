@@ -11,8 +11,8 @@ from .common import METRICS, MODES, ROOT, SCRIPT, WRONG_CLOSURE_KINDS, file_dige
 from .plots import write_plots
 from .stats import distribution, percentile
 from .targets import (FOOLED_ARCR, FOOLED_ENM_RATIO, check_localisation_targets, check_outlier_targets,
-                      check_targets, fooled, fooled_where_fusion_is_not, localisation_summary, miss_lines,
-                      outlier_ratio, outlier_summary, vita_conditions)
+                      check_long_targets, check_targets, fooled, fooled_where_fusion_is_not, localisation_summary,
+                      long_summary, miss_lines, outlier_ratio, outlier_summary, vita_conditions, window_ratio)
 
 
 def localisation_markdown(worlds, scenario):
@@ -76,6 +76,29 @@ def outliers_markdown(worlds, summary):
     return md
 
 
+def long_markdown(worlds, summary):
+    """The long-run section of suite.md: per mode the last window's ATE over the first's and each
+    window's ATE (median, 90th percentile, worst); each world's windows for ViTa and vision."""
+    md = ["", "## ATE per window of laps", "",
+          "ATE (position RMSE, m) in each window of 4 laps under the run's best-fit alignment; last/first: the last "
+          "window's over the first's (median, 90th percentile, worst).", "",
+          "| mode | last/first median | 90th pct | worst | " + " | ".join(
+              f"window {k + 1} median / worst" for k in range(len(summary["vita"]["windows"]))) + " |",
+          "|" + "---|" * (4 + len(summary["vita"]["windows"]))]
+    for m in MODES:
+        x = summary[m]
+        md.append(f"| {m} | {fmt(x['last_over_first']['median'], '.2f')} | {fmt(x['last_over_first']['p10'], '.2f')} | "
+                  f"{fmt(x['last_over_first']['worst'], '.2f')} | " + " | ".join(
+                      f"{fmt(d['median'], '.3f')} / {fmt(d['worst'], '.3f')}" for d in x["windows"]) + " |")
+    md += ["", "| world | seed | ViTa last/first | ViTa ATE | vision ATE | ViTa windows (m) |", "|---|---|---|---|---|---|"]
+    for w in worlds:
+        v = w["modes"]["vita"]
+        md.append(f"| {w['index']} | {w['world_seed']} | {fmt(window_ratio(w), '.2f')} | {fmt(v['ate'], '.3f')} | "
+                  f"{fmt(w['modes']['visual']['ate'], '.3f')} | "
+                  + " ".join(fmt(x, ".3f") for x in (v.get("ate_windows") or [])) + " |")
+    return md
+
+
 def ran_as(a):
     if a.slurm_array:
         return f"as Slurm array job {a.slurm_array}"
@@ -100,6 +123,9 @@ def aggregate(a, records, failed, wall_s):
         summary[m]["false_closures"]["worlds_with_any"] = sum(1 for w in worlds if (w["modes"][m]["false_closures"] or 0) > 0)
     if a.scenario == "normal":
         targets = check_targets(worlds, a.family, a.faults)
+    elif a.scenario == "long":
+        targets = check_long_targets(worlds) if a.family == "aliased" and worlds else []
+        summary["long"] = {m: long_summary(worlds, m) for m in MODES}
     elif a.scenario == "outliers":
         targets = check_outlier_targets(worlds, WRONG_CLOSURE_KINDS) if a.family == "aliased" and worlds else []
         summary["outliers"] = {k: {m: outlier_summary(worlds, k, m) for m in MODES} for k in WRONG_CLOSURE_KINDS}
@@ -171,12 +197,15 @@ def aggregate(a, records, failed, wall_s):
            f"vision on {fooled_counts['visual']} of {len(worlds)} worlds, touch on {fooled_counts['tactile']}.", ""]
     if a.scenario == "outliers" and worlds:
         md += outliers_markdown(worlds, summary["outliers"]) + [""]
+    elif a.scenario == "long" and worlds:
+        md += long_markdown(worlds, summary["long"]) + [""]
     elif a.scenario != "normal" and worlds:
         md += localisation_markdown(worlds, a.scenario) + [""]
     if not worlds:
         md += ["No world finished: no distribution and no target check.", ""]
     elif checked:
-        issue = {"normal": "robust-SLAM issue", "outliers": "back-end issue"}.get(a.scenario, "global-localisation issue")
+        issue = {"normal": "robust-SLAM issue", "outliers": "back-end issue", "long": "back-end issue"}.get(
+            a.scenario, "global-localisation issue")
         md += [f"## Targets ({issue})", "", "| target | measured | |", "|---|---|---|"]
         md += [f"| {t['target']} | {t['measured']} | {'met' if t['met'] else '**MISSED**'} |" for t in targets]
         md += ["", "Every target met." if not misses else "Missed:"] + [f"- {x}" for x in misses] + [""]

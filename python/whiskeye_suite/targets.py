@@ -28,6 +28,11 @@ LEM_AFTER_LOCALISATION_M = 0.10  # the mean position error from the localisation
 # every closure, ATE within this many times the clean run's on at least this share of worlds ...
 OUTLIER_ATE_RATIO, OUTLIER_ATE_SHARE = 1.2, 0.90
 OUTLIER_ATE_RATIO_MAX = 2.0  # ... and within this on every world
+# The back-end issue's long-run targets for ViTa: the last window's ATE (4 laps) at most this many
+# times the first window's on at least this share of worlds, and the whole run's ATE at most vision
+# alone's plus this on every world.
+LONG_LAST_OVER_FIRST, LONG_SHARE = 1.2, 0.90
+LONG_OVER_VISION_M = 0.01
 
 
 def targets_help():
@@ -212,6 +217,11 @@ def check_localisation_targets(worlds, scenario):
     return targets
 
 
+def times(v):
+    """A ratio as '1.23x' (n/a: 'n/a')."""
+    return "n/a" if v is None else f"{v:.2f}x"
+
+
 def outlier_ratio(w, kind, mode="vita"):
     """`mode`'s ATE with wrong closures of `kind` injected over its clean run's on world `w` (None: n/a)."""
     clean = w["modes"][mode]["ate"]
@@ -243,11 +253,51 @@ def check_outlier_targets(worlds, kinds):
                         "worlds_missed": [name(w) for w in worlds if w not in good]})
         bad = [w for w in worlds if ratios[w["index"]] is None or ratios[w["index"]] > OUTLIER_ATE_RATIO_MAX]
         worst = max(worlds, key=lambda w: (ratios[w["index"]] is None, ratios[w["index"]] or 0))
-        shown = f"worst {fmt(ratios[worst['index']], '.2f')}x on {name(worst)}"
+        shown = f"worst {times(ratios[worst['index']])} on {name(worst)}"
         targets.append({"target": f"ViTa with {kind} wrong closures: ATE <= {OUTLIER_ATE_RATIO_MAX:g}x the clean run's "
                                   "on every world",
                         "measured": shown if not bad else f"missed on {len(bad)} of {n} worlds; {shown}",
                         "met": not bad, "worlds_missed": [name(w) for w in bad]})
+    return targets
+
+
+def window_ratio(w, mode="vita"):
+    """`mode`'s ATE in its last window of laps over its first (None without two windows)."""
+    windows = w["modes"][mode].get("ate_windows") or []
+    return windows[-1] / windows[0] if len(windows) >= 2 and windows[0] else None
+
+
+def long_summary(worlds, mode):
+    """Over the worlds: the last window's ATE over the first's, and each window's ATE by position."""
+    n = max((len(w["modes"][mode].get("ate_windows") or []) for w in worlds), default=0)
+    return {"last_over_first": distribution([window_ratio(w, mode) for w in worlds], "low"),
+            "windows": [distribution([(w["modes"][mode].get("ate_windows") or [None] * n)[k]
+                                      if k < len(w["modes"][mode].get("ate_windows") or []) else None for w in worlds], "low")
+                        for k in range(n)]}
+
+
+def check_long_targets(worlds):
+    """The back-end issue's long-run targets for ViTa: a list of {target, measured, met, worlds_missed}
+    as check_targets(); n/a is a miss."""
+    n = len(worlds)
+    name = lambda w: f"world {w['index']} (seed {w['world_seed']})"  # noqa: E731
+    ratios = {w["index"]: window_ratio(w) for w in worlds}
+    good = [w for w in worlds if ratios[w["index"]] is not None and ratios[w["index"]] <= LONG_LAST_OVER_FIRST]
+    need = -(-round(LONG_SHARE * 100) * n // 100)
+    worst = max(worlds, key=lambda w: (ratios[w["index"]] is None, ratios[w["index"]] or 0))
+    targets = [{"target": f"ViTa: the last window's ATE <= {LONG_LAST_OVER_FIRST:g}x the first window's on "
+                          f">= {LONG_SHARE:.0%} of worlds",
+                "measured": f"{len(good)} of {n} worlds (need {need}); worst {times(ratios[worst['index']])} on "
+                            f"{name(worst)}",
+                "met": len(good) >= need, "worlds_missed": [name(w) for w in worlds if w not in good]}]
+    over = {w["index"]: None if w["modes"]["vita"]["ate"] is None or w["modes"]["visual"]["ate"] is None
+            else w["modes"]["vita"]["ate"] - w["modes"]["visual"]["ate"] for w in worlds}
+    bad = [w for w in worlds if over[w["index"]] is None or over[w["index"]] > LONG_OVER_VISION_M + 1e-12]
+    worst = max(worlds, key=lambda w: (over[w["index"]] is None, over[w["index"]] or 0))
+    shown = f"worst {fmt(over[worst['index']], '+.3f')} m on {name(worst)}"
+    targets.append({"target": f"ViTa's whole-run ATE <= vision alone's + {LONG_OVER_VISION_M:.2f} m on every world",
+                    "measured": shown if not bad else f"missed on {len(bad)} of {n} worlds; {shown}",
+                    "met": not bad, "worlds_missed": [name(w) for w in bad]})
     return targets
 
 

@@ -133,6 +133,28 @@ class Targets(unittest.TestCase):
         group = self.named(found, "ViTa with group wrong closures: ATE <= 2x")
         self.assertEqual(group["worlds_missed"], ["world 24 (seed 5024)"], "n/a is a miss")
 
+    def test_long_run_targets_judge_the_last_window_against_the_first_and_vita_against_vision(self):
+        worlds = []
+        for i in range(1, 25):
+            w = world(i)  # ViTa ATE 0.05, vision's 0.8
+            w["modes"]["vita"]["ate_windows"] = [0.04, 0.045]
+            w["modes"]["visual"]["ate"] = 0.045
+            worlds.append(w)
+        worlds[0]["modes"]["vita"]["ate_windows"] = [0.04, 0.06]   # 1.5x: one of 24 may
+        worlds[1]["modes"]["vita"]["ate_windows"] = [0.04]          # one window: n/a, a miss
+        found = targets.check_long_targets(worlds)
+        self.assertEqual(len(found), 2)
+        share = self.named(found, "ViTa: the last window's ATE <= 1.2x the first window's")
+        self.assertEqual(share["measured"], "22 of 24 worlds (need 22); worst n/a on world 2 (seed 5002)")
+        self.assertTrue(share["met"])
+        self.assertEqual(share["worlds_missed"], ["world 1 (seed 5001)", "world 2 (seed 5002)"])
+        vision = self.named(found, "ViTa's whole-run ATE <= vision alone's + 0.01 m on every world")
+        self.assertTrue(vision["met"], vision)  # 0.05 against 0.045: +0.005
+        worlds[5]["modes"]["visual"]["ate"] = 0.03
+        vision = self.named(targets.check_long_targets(worlds), "ViTa's whole-run ATE <= vision alone's")
+        self.assertFalse(vision["met"])
+        self.assertEqual(vision["worlds_missed"], ["world 6 (seed 5006)"])
+
     def test_no_target_on_stress(self):
         self.assertEqual(targets.check_targets([world(1)], "stress", False), [])
 

@@ -563,6 +563,22 @@ class QuickScenarios(unittest.TestCase):
             self.assertIn("## Wrong closures injected", read(os.path.join(d, "suite.md")))
             self.assertEqual([f for _, _, files in os.walk(d) for f in files if f.endswith(".lcmlog")], [])
 
+    def test_a_long_run_records_ate_per_window_of_laps_and_applies_the_long_run_targets(self):
+        with tempfile.TemporaryDirectory() as d:
+            r = suite("--quick", "--scenario", "long", "--check", "--no-plots", "--bin", BIN, "--results", d)
+            self.assertIn(r.returncode, (0, 1), r.stdout + r.stderr)
+            with open(os.path.join(d, "suite.json")) as f:
+                doc = json.load(f)
+            self.assertEqual(doc["laps_override"], 8)
+            [w] = doc["worlds"]
+            for mode in ("visual", "tactile", "vita"):
+                self.assertEqual(len(w["modes"][mode]["ate_windows"]), 2, mode)  # 8 laps, windows of 4
+            self.assertEqual([t["target"].split(" <=")[0] for t in doc["targets"]],
+                             ["ViTa: the last window's ATE", "ViTa's whole-run ATE"])
+            self.assertEqual(r.returncode, 0 if all(t["met"] for t in doc["targets"]) else 1)
+            self.assertIn("## ATE per window of laps", read(os.path.join(d, "suite.md")))
+            self.assertEqual([f for _, _, files in os.walk(d) for f in files if f.endswith(".lcmlog")], [])
+
     def test_a_kidnap_scenario_with_laps_is_refused(self):
         r = suite("--quick", "--scenario", "kidnap", "--laps", "2", "--bin", BIN, "--results", self.tmp)
         self.assertEqual(r.returncode, 2)
