@@ -154,14 +154,9 @@ void ExperienceMap::jump_to(int id, const Pose2& offset) {
 }
 
 bool ExperienceMap::mapped_near(const Pose2& pose, double radius, double heading, int below_id) const {
-  const double r2 = radius * radius;
-  const double c = std::cos(pose.theta), s = std::sin(pose.theta), min_cos = std::cos(heading);
-  const size_t n = std::min(x_.size(), static_cast<size_t>(std::max(below_id, 0)));
-  for (size_t i = 0; i < n; ++i) {
-    const double dx = x_[i] - pose.x, dy = y_[i] - pose.y;
-    if (dx * dx + dy * dy <= r2 && c_[i] * c + s_[i] * s >= min_cos && !meta_[i].retired) return true;
-  }
-  return false;
+  bool any = false;
+  for_each_near(pose, radius, heading, below_id, [&](int, double) { return !(any = true); });
+  return any;
 }
 
 void ExperienceMap::retire(int from_id, int to_id) {

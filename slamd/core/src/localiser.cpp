@@ -98,18 +98,15 @@ std::optional<Commit> Localiser::on_localising_cycle(int template_id, double tra
     const auto around = [&](const Pose2& p) {
       Around a;
       double dbest = params_.radius;
-      const size_t n = std::min(exps.size(), static_cast<size_t>(std::max(evidence_below_, 0)));
-      for (size_t i = 0; i < n; ++i) {
-        const Experience& e = exps[i];
-        const double d = std::hypot(e.pose.x - p.x, e.pose.y - p.y);
-        if (e.retired || d > params_.radius || std::abs(angle_diff(e.pose.theta, p.theta)) > params_.heading) continue;
-        const Recognition r = recognition(e.template_id);
+      map.for_each_near(p, params_.radius, params_.heading, evidence_below_, [&](int id, double d) {
+        const Recognition r = recognition(exps[static_cast<size_t>(id)].template_id);
         if (r == Recognition::Recognised && d <= dbest) {
-          a.recognised = static_cast<int>(i);
+          a.recognised = id;
           dbest = d;
         }
         a.seen_only = a.seen_only || r == Recognition::SeenOnly;
-      }
+        return true;
+      });
       return a;
     };
     for (Hypothesis& h : hyps_) {

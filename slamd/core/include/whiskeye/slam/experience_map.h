@@ -22,6 +22,8 @@
 #include "whiskeye/common/se2.h"
 #include "whiskeye/slam/types.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <vector>
@@ -189,6 +191,22 @@ class ExperienceMap {
   // from it: whether the place has been mapped at all.
   // Retired experiences and those from `below_id` on do not count.
   bool mapped_near(const Pose2& pose, double radius, double heading, int below_id) const;
+  // The one neighbourhood query (mapped_near, the localiser's search around a candidate): calls
+  // f(id, distance_m) for every experience within `radius` of `pose` and turned at most `heading`
+  // from it, in id order, neither retired nor from `below_id` on; f returns false to stop.
+  template <class F>
+  void for_each_near(const Pose2& pose, double radius, double heading, int below_id, F&& f) const {
+    const double r2 = radius * radius;
+    const double c = std::cos(pose.theta), s = std::sin(pose.theta), min_cos = std::cos(heading);
+    const size_t n = std::min(x_.size(), static_cast<size_t>(std::max(below_id, 0)));
+    for (size_t i = 0; i < n; ++i) {
+      const double dx = x_[i] - pose.x, dy = y_[i] - pose.y;
+      const double d2 = dx * dx + dy * dy;
+      if (d2 <= r2 && c_[i] * c + s_[i] * s >= min_cos && !meta_[i].retired) {
+        if (!f(static_cast<int>(i), std::sqrt(d2))) return;
+      }
+    }
+  }
   // Retires experiences [from_id, to_id) (Experience::retired).
   void retire(int from_id, int to_id);
   // The experiences of a template that are not retired (empty if it has none).
