@@ -202,6 +202,11 @@ bool ParamNode::has(const std::string& key) const {
   return n && !n.IsNull();
 }
 
+std::string ParamNode::text(const std::string& key) const {
+  const YAML::Node n = lookup(key);
+  return n && n.IsScalar() ? n.Scalar() : std::string();
+}
+
 std::string ParamNode::describe(const YAML::Node& node) {
   std::string text;
   if (node.IsScalar()) {

@@ -47,7 +47,7 @@ class Calibrate : public ::testing::TestWithParam<uint64_t> {
 };
 
 TEST_P(Calibrate, RestRecoversEveryOffsetWithinACount) {
-  const Result r = estimate_rest(record(session(sim::Session::kRest), truth), wired_as(truth), Bounds{});
+  const Result r = estimate_rest(record(session(sim::Session::kRest), truth), wired_as(truth), RestLimits{});
   ASSERT_TRUE(r.problems.empty()) << joined(r.problems);
   ASSERT_EQ(r.estimates.size(), 48u);
   for (int w = 0; w < kNumWhiskers; ++w) {
@@ -93,7 +93,7 @@ TEST(CalibrateRest, WorksOnClassicCanToo) {
   const sim::TrueCalibration truth = sim::draw_true_calibration(5);
   sim::SessionParams p = session(sim::Session::kRest);
   p.rate_hz = 100;
-  const Result r = estimate_rest(record(p, truth, wp::BusMode::kClassic), wired_as(truth), Bounds{});
+  const Result r = estimate_rest(record(p, truth, wp::BusMode::kClassic), wired_as(truth), RestLimits{});
   ASSERT_TRUE(r.problems.empty()) << joined(r.problems);
   EXPECT_NEAR(estimate(r, 7, "offset_x"), truth.calibration[7].offset_x, 1.0);
 }
@@ -102,7 +102,7 @@ TEST(CalibrateRest, ASilentBoardIsOneLineNamingIt) {
   const sim::TrueCalibration truth = sim::draw_true_calibration(1);
   sim::SessionParams p = session(sim::Session::kRest);
   p.silent_board = 4;
-  const Result r = estimate_rest(record(p, truth), wired_as(truth), Bounds{});
+  const Result r = estimate_rest(record(p, truth), wired_as(truth), RestLimits{});
   ASSERT_EQ(r.problems.size(), 1u) << joined(r.problems);
   EXPECT_THAT(r.problems[0], HasSubstr("board 4 (CAN node 5) sent no samples"));
 }
@@ -111,7 +111,7 @@ TEST(CalibrateRest, AStuckSensorIsNamed) {
   const sim::TrueCalibration truth = sim::draw_true_calibration(1);
   sim::SessionParams p = session(sim::Session::kRest);
   p.stuck = {9};
-  const Result r = estimate_rest(record(p, truth), wired_as(truth), Bounds{});
+  const Result r = estimate_rest(record(p, truth), wired_as(truth), RestLimits{});
   ASSERT_EQ(r.problems.size(), 1u) << joined(r.problems);
   EXPECT_THAT(r.problems[0], HasSubstr("whisker 9 (row 1, column 3)"));
   EXPECT_THAT(r.problems[0], HasSubstr("stuck"));
@@ -170,8 +170,7 @@ TEST(CalibrateBus, ASlowBoardFailsNamingItsRate) {
 }
 
 TEST(CalibrateBounds, AnImplausibleValueIsRefusedNamingTheWhiskerAndTheKey) {
-  const Problems p = check_bounds({{3, "offset_x", 0, 700, 0.1}, {4, "gain_y", 0, -0.0005, 0}, {5, "theta_gain", 0, 0.003, 0}},
-                                  Bounds{});
+  const Problems p = check_bounds({{3, "offset_x", 0, 700, 0.1}, {4, "gain_y", 0, -0.0005, 0}, {5, "theta_gain", 0, 0.003, 0}});
   ASSERT_EQ(p.size(), 2u);
   EXPECT_THAT(p[0], HasSubstr("whisker 3 (row 0, column 3): offset_x = 700 is outside the plausible ±512 counts"));
   EXPECT_THAT(p[1], HasSubstr("whisker 5 (row 0, column 5): theta_gain = 0.003"));

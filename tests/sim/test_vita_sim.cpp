@@ -479,10 +479,10 @@ std::string whiskerd_config() {
   const std::string path = temp_path("whiskerd.yaml");
   std::ofstream(path) << "can:\n  interface: vcan0\n"
                          "calibration:\n  whiskers:\n"
-                         "    - {index: 23, offset_x: 50, gain_x: 0.002}\n"
+                         "    - {index: 23, offset_x: 50, gain_x: 0.0009}\n"
                          "    - {index: 22, rotation: 1.5707963267948966}\n"
                          "    - {index: 3, offset_y: -40, gain_y: -0.0004, rotation: -0.3}\n"
-                         "    - {index: 9, theta_offset: 30, theta_gain: 0.0012}\n";
+                         "    - {index: 9, theta_offset: 30, theta_gain: 0.0013}\n";
   return path;
 }
 

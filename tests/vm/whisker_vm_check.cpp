@@ -422,8 +422,8 @@ int main(int argc, char** argv) {
         why = "theta of whisker " + std::to_string(w);
       }
     }
-    // config: whisker 23 offset_x 50, gain_x 0.002; whisker 22 rotated by 90 deg.
-    if (std::abs(m.deflection_x[23] - 0.002 * (value_x(23) - 50)) > 1e-6 ||
+    // config: whisker 23 offset_x 50, gain_x 0.0009; whisker 22 rotated by 90 deg.
+    if (std::abs(m.deflection_x[23] - 0.0009 * (value_x(23) - 50)) > 1e-6 ||
         std::abs(m.deflection_y[23] + value_x(23) / 2047.0) > 1e-6) {
       values_ok = false;
       why = "calibration offset/gain of whisker 23";

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <charconv>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <system_error>
@@ -12,29 +13,62 @@ namespace whiskeye::whiskerd {
 
 namespace {
 
-void load_calibration(const ParamNode& n, wp::WhiskerCalibration& c) {
-  n.get("offset_x", c.offset_x, -4096.0, 4096.0);
-  n.get("offset_y", c.offset_y, -4096.0, 4096.0);
-  n.get("gain_x", c.gain_x, -1.0, 1.0);
-  n.get("gain_y", c.gain_y, -1.0, 1.0);
-  n.get("rotation", c.rotation, -7.0, 7.0);
-  n.get("theta_offset", c.theta_offset, -1024.0, 1024.0);
-  n.get("theta_gain", c.theta_gain, -0.01, 0.01);
-  if (c.theta_gain == 0.0) throw ParamError(n.path_of("theta_gain") + " must not be 0");
+std::string shortest(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
 }
 
+// `key` of `n` into `value`, refused (naming the file and the key) outside kCalibrationBounds.
+void get_plausible(const ParamNode& n, const char* key, double& value) {
+  n.get(key, value);
+  if (!n.has(key)) return;
+  if (const std::string why = implausible_calibration(key, value); !why.empty()) n.fail(key, "= " + shortest(value) + " " + why);
+}
+
+void load_calibration(const ParamNode& n, wp::WhiskerCalibration& c) {
+  get_plausible(n, "offset_x", c.offset_x);
+  get_plausible(n, "offset_y", c.offset_y);
+  get_plausible(n, "gain_x", c.gain_x);
+  get_plausible(n, "gain_y", c.gain_y);
+  get_plausible(n, "rotation", c.rotation);
+  get_plausible(n, "theta_offset", c.theta_offset);
+  get_plausible(n, "theta_gain", c.theta_gain);
+}
+
+// A whisker's `index` (or its `channel`): 0..23 written in decimal. YAML reads 0x10 as 16 (and
+// yaml-cpp 010 as 8): a number spelt so is no whisker anyone counts to.
+int whisker_number(const ParamNode& n, const char* key, int value) {
+  n.get(key, value);
+  if (!n.has(key)) return value;
+  const std::string text = n.text(key);
+  const bool decimal = !text.empty() && text.size() <= 2 && (text.size() == 1 || text[0] != '0') &&
+                       std::all_of(text.begin(), text.end(), [](char ch) { return ch >= '0' && ch <= '9'; });
+  if (!decimal || value < 0 || value >= kN) {
+    n.fail(key, "= " + (text.empty() ? std::to_string(value) : text) + " must be 0..23, written in decimal");
+  }
+  return value;
+}
 
 // `calibration`: its `default` keys apply to every whisker, then `whiskers` entries to theirs. Keys
 // absent keep what `p` holds, so the same loader reads whiskerd.yaml and every drop-in over it.
 void load_calibration_section(const ParamNode& cal, CoreParams& p) {
   const ParamNode def = cal.section("default");
   for (wp::WhiskerCalibration& c : p.calibration) load_calibration(def, c);
+  std::array<int, kN> entry_of{};  // the entry that gave each whisker, -1: none
+  entry_of.fill(-1);
+  int entry = 0;
   for (const ParamNode& w : cal.list("whiskers")) {
-    int index = -1;
-    w.require("index", index);
-    if (index < 0 || index >= kN) w.fail("index", "= " + std::to_string(index) + " must be 0..23");
+    if (!w.has("index")) w.fail("index", "is required but missing");
+    const int index = whisker_number(w, "index", -1);
+    if (entry_of[index] >= 0) {
+      w.fail("index", "= " + std::to_string(index) + ": whisker " + std::to_string(index) + " has an entry already (" +
+                          cal.path_of("whiskers") + "[" + std::to_string(entry_of[index]) +
+                          "]): one entry per whisker in a file (merge them)");
+    }
+    entry_of[index] = entry++;
     load_calibration(w, p.calibration[index]);
-    w.get("channel", p.channel[index], 0, kN - 1);
+    p.channel[index] = whisker_number(w, "channel", p.channel[index]);
   }
 }
 
@@ -164,6 +198,30 @@ std::vector<std::filesystem::path> dropin_files(const std::filesystem::path& dir
   }
   std::sort(files.begin(), files.end());
   return files;
+}
+
+std::string implausible_calibration(const std::string& key, double v) {
+  const CalibrationBounds& b = kCalibrationBounds;
+  const auto outside = [](const std::string& range) { return "is outside the plausible " + range; };
+  if (key == "offset_x" || key == "offset_y") {
+    if (!(std::abs(v) <= b.max_offset_counts)) return outside("±" + shortest(b.max_offset_counts) + " counts");
+  } else if (key == "gain_x" || key == "gain_y") {
+    const double ratio = std::abs(v) / wp::WhiskerCalibration{}.gain_x;
+    if (!(ratio >= b.min_gain_ratio && ratio <= b.max_gain_ratio)) {
+      return outside(shortest(b.min_gain_ratio) + ".." + shortest(b.max_gain_ratio) + " x nominal (1/2047) in magnitude");
+    }
+  } else if (key == "rotation") {
+    if (!(std::abs(v) <= b.max_rotation)) return outside("±" + shortest(b.max_rotation) + " rad (±90 deg)");
+  } else if (key == "theta_offset") {
+    if (!(std::abs(v) <= b.max_theta_offset_counts)) return outside("±" + shortest(b.max_theta_offset_counts) + " counts");
+  } else if (key == "theta_gain") {
+    const double ratio = std::abs(v) / wp::kThetaRadPerCount;
+    if (!(ratio >= b.min_theta_gain_ratio && ratio <= b.max_theta_gain_ratio)) {
+      return outside(shortest(b.min_theta_gain_ratio) + ".." + shortest(b.max_theta_gain_ratio) +
+                     " x nominal (2 pi / 4096) in magnitude");
+    }
+  }
+  return "";
 }
 
 std::vector<std::pair<std::string, double>> calibration_keys(const CoreParams& p, int w) {

@@ -105,6 +105,13 @@ class WhiskerdDropins : public ::testing::Test {
       return e.what();
     }
   }
+  // A drop-in whiskerd.d/`file` of one whisker entry `{entry}` is refused with "<its path>: `why`".
+  void expect_refused(const std::string& file, const std::string& entry, const std::string& why) {
+    write("whiskerd.d/" + file, "calibration:\n  whiskers:\n    - {" + entry + "}\n");
+    Params p;
+    const std::string error = load_all(p);
+    EXPECT_NE(error.find((dir_ / "whiskerd.d" / file).string() + ": " + why), std::string::npos) << entry << ": " << error;
+  }
   std::filesystem::path dir_;
   mutable std::string printed_;
 };
@@ -172,6 +179,63 @@ TEST_F(WhiskerdDropins, AnOutOfRangeValueNamesTheFileAndTheKey) {
   const std::string error = load_all(p);
   EXPECT_NE(error.find("30-gain.yaml"), std::string::npos) << error;
   EXPECT_NE(error.find("calibration.whiskers[0].gain_x"), std::string::npos) << error;
+}
+
+// The bounds whiskeye-calibrate writes within (kCalibrationBounds): a dead whisker (gain 0), 2047x
+// nominal, a theta gain of 1e-300 or a rotation in degrees loaded with exit 0 before.
+TEST_F(WhiskerdDropins, AnImplausibleCalibrationIsRefusedNamingTheFileTheKeyAndTheValue) {
+  const std::pair<const char*, const char*> bad[] = {
+      {"gain_x: 0", "'calibration.whiskers[0].gain_x' = 0 is outside the plausible 0.5..2 x nominal (1/2047) in magnitude"},
+      {"gain_y: 1.0", "'calibration.whiskers[0].gain_y' = 1 is outside the plausible 0.5..2 x nominal"},
+      {"gain_x: -1.0", "'calibration.whiskers[0].gain_x' = -1 is outside the plausible"},
+      {"theta_gain: 1e-300", "'calibration.whiskers[0].theta_gain' = 1e-300 is outside the plausible 0.8..1.25 x nominal (2 pi / 4096)"},
+      {"rotation: 7", "'calibration.whiskers[0].rotation' = 7 is outside the plausible ±1.5708 rad (±90 deg)"},
+      {"offset_y: -600", "'calibration.whiskers[0].offset_y' = -600 is outside the plausible ±512 counts"},
+      {"theta_offset: 300", "'calibration.whiskers[0].theta_offset' = 300 is outside the plausible ±256 counts"}};
+  for (const auto& [entry, why] : bad) expect_refused("30-gain.yaml", std::string("index: 2, ") + entry, why);
+  // whiskerd.yaml's own calibration, its default for every whisker included, the same.
+  std::filesystem::remove(dir_ / "whiskerd.d/30-gain.yaml");
+  write("whiskerd.yaml", "calibration:\n  default: {gain_x: 0.0}\n");
+  Params q;
+  EXPECT_NE(load_all(q).find("whiskerd.yaml: 'calibration.default.gain_x' = 0 is outside the plausible"), std::string::npos);
+  // The edges are plausible: a mirrored board, twice nominal, a quarter turn.
+  write("whiskerd.yaml", "calibration:\n  whiskers:\n    - {index: 2, gain_x: -0.000977, gain_y: 0.000245, "
+                         "rotation: -1.5707963267948966, theta_gain: -0.0019, offset_x: 512}\n");
+  Params r;
+  EXPECT_EQ(load_all(r), "");
+  EXPECT_EQ(r.calibration[2].theta_gain, -0.0019);
+}
+
+// Which of two entries for one whisker was meant cannot be known: the later silently won before.
+TEST_F(WhiskerdDropins, AWhiskerGivenTwiceInOneFileIsRefused) {
+  write("whiskerd.d/20-rest.yaml", "calibration:\n  whiskers:\n    - {index: 3, offset_x: 12.5}\n"
+                                   "    - {index: 4, offset_x: 1}\n    - {index: 3, offset_x: -2}\n");
+  Params p;
+  const std::string error = load_all(p);
+  EXPECT_NE(error.find("20-rest.yaml: 'calibration.whiskers[2].index' = 3: whisker 3 has an entry already "
+                       "(calibration.whiskers[0])"),
+            std::string::npos)
+      << error;
+  // Two files may: the later one wins (that is how a drop-in corrects another).
+  write("whiskerd.d/20-rest.yaml", "calibration:\n  whiskers:\n    - {index: 3, offset_x: 12.5}\n");
+  write("whiskerd.d/21-rest.yaml", "calibration:\n  whiskers:\n    - {index: 3, offset_x: -2}\n");
+  Params q;
+  ASSERT_EQ(load_all(q), "");
+  EXPECT_EQ(q.calibration[3].offset_x, -2);
+}
+
+// YAML reads 0x10 as 16 (and yaml-cpp 010 as 8): a whisker is numbered in decimal.
+TEST_F(WhiskerdDropins, AWhiskerIndexOrChannelNotWrittenInDecimalIsRefused) {
+  const std::pair<const char*, const char*> bad[] = {{"index: 0x10", "'calibration.whiskers[0].index' = 0x10 must be 0..23, written in decimal"},
+                                                     {"index: 010", "'calibration.whiskers[0].index' = '010'"},
+                                                     {"index: 24", "'calibration.whiskers[0].index' = 24 must be 0..23"},
+                                                     {"index: -1", "'calibration.whiskers[0].index' = -1 must be 0..23"},
+                                                     {"index: 5, channel: 0x6", "'calibration.whiskers[0].channel' = 0x6 must be 0..23, written in decimal"}};
+  for (const auto& [entry, why] : bad) expect_refused("10-map.yaml", entry, why);
+  write("whiskerd.d/10-map.yaml", "calibration:\n  whiskers:\n    - {index: 0, channel: 0}\n    - {index: 23, offset_x: 2}\n");
+  Params q;
+  EXPECT_EQ(load_all(q), "");
+  EXPECT_EQ(q.calibration[23].offset_x, 2);
 }
 
 TEST_F(WhiskerdDropins, SwappedChannelsAreTakenAndAChannelWiredTwiceIsRefused) {

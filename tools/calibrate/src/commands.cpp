@@ -119,7 +119,7 @@ double record(const Options& o, const Setup& s, Recording& r) {
 // Prints the table; refuses (exit 1) on problems or implausible values; else writes the drop-in
 // (or prints it without -o).
 int finish(const char* what, const Options& o, const Setup& s, Result result) {
-  const Problems bounds = check_bounds(result.estimates, Bounds{});
+  const Problems bounds = check_bounds(result.estimates);
   result.problems.insert(result.problems.end(), bounds.begin(), bounds.end());
   std::cout << format_table(result.estimates);
   if (!result.problems.empty()) {
@@ -167,7 +167,7 @@ int run_rest(const Options& o) {
   check_output(o, s);
   Recording r(s.params.mode, s.params.ids);
   record(o, s, r);
-  return finish("rest", o, s, estimate_rest(r, s.params, Bounds{}));
+  return finish("rest", o, s, estimate_rest(r, s.params, RestLimits{}));
 }
 
 int run_map(const Options& o) {

@@ -115,34 +115,11 @@ std::string format_bus_report(const BusReport& rep) {
 
 // ---------------------------------------------------------------- bounds
 
-Problems check_bounds(const std::vector<Estimate>& estimates, const Bounds& b) {
+Problems check_bounds(const std::vector<Estimate>& estimates) {
   Problems problems;
-  const double nominal_gain = wp::WhiskerCalibration{}.gain_x;
-  const double nominal_theta_gain = wp::kThetaRadPerCount;
   for (const Estimate& e : estimates) {
-    const double v = e.new_value;
-    std::string range;
-    if (e.key == "offset_x" || e.key == "offset_y") {
-      if (!(std::abs(v) <= b.max_offset_counts)) range = "±" + fmt("%g", b.max_offset_counts) + " counts";
-    } else if (e.key == "gain_x" || e.key == "gain_y") {
-      const double ratio = std::abs(v) / nominal_gain;
-      if (!(ratio >= b.min_gain_ratio && ratio <= b.max_gain_ratio)) {
-        range = fmt("%g", b.min_gain_ratio) + ".." + fmt("%g", b.max_gain_ratio) + " x nominal (1/2047) in magnitude";
-      }
-    } else if (e.key == "rotation") {
-      if (!(std::abs(v) <= b.max_rotation)) range = "±" + fmt("%.2f", b.max_rotation) + " rad";
-    } else if (e.key == "theta_offset") {
-      if (!(std::abs(v) <= b.max_theta_offset_counts)) range = "±" + fmt("%g", b.max_theta_offset_counts) + " counts";
-    } else if (e.key == "theta_gain") {
-      const double ratio = std::abs(v) / nominal_theta_gain;
-      if (!(ratio >= b.min_theta_gain_ratio && ratio <= b.max_theta_gain_ratio)) {
-        range = fmt("%g", b.min_theta_gain_ratio) + ".." + fmt("%g", b.max_theta_gain_ratio) +
-                " x nominal (2 pi / 4096) in magnitude";
-      }
-    }
-    if (!range.empty()) {
-      problems.push_back(whisker_name(e.whisker) + ": " + e.key + " = " + fmt("%.6g", v) +
-                         " is outside the plausible " + range);
+    if (const std::string why = whiskerd::implausible_calibration(e.key, e.new_value); !why.empty()) {
+      problems.push_back(whisker_name(e.whisker) + ": " + e.key + " = " + fmt("%.6g", e.new_value) + " " + why);
     }
   }
   return problems;
@@ -150,7 +127,7 @@ Problems check_bounds(const std::vector<Estimate>& estimates, const Bounds& b) {
 
 // ---------------------------------------------------------------- rest
 
-Result estimate_rest(const Recording& r, const whiskerd::CoreParams& current, const Bounds& bounds) {
+Result estimate_rest(const Recording& r, const whiskerd::CoreParams& current, const RestLimits& limits) {
   Result res;
   silent_boards(r, res.problems);
   for (int w = 0; w < kNumWhiskers; ++w) {
@@ -174,9 +151,9 @@ Result estimate_rest(const Recording& r, const whiskerd::CoreParams& current, co
                              fmt("%.0f", s.front().x) + (mx.sd == 0.0 ? "" : " (varying)") + ", y = " +
                              fmt("%.0f", s.front().y) + (my.sd == 0.0 ? "" : " (varying)") +
                              " (sensor disconnected or dead)");
-    } else if (std::max(mx.sd, my.sd) > bounds.max_noise_counts) {
+    } else if (std::max(mx.sd, my.sd) > limits.max_noise_counts) {
       res.problems.push_back(who + ": noisy: sigma x " + fmt("%.1f", mx.sd) + ", y " + fmt("%.1f", my.sd) +
-                             " counts, more than " + fmt("%g", bounds.max_noise_counts) +
+                             " counts, more than " + fmt("%g", limits.max_noise_counts) +
                              " (touched during the recording, or a loose magnet)");
     }
     const double n = static_cast<double>(s.size());

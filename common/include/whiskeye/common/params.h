@@ -50,6 +50,9 @@ class ParamNode {
   // A list of maps (e.g. the walls of a world). A missing list is empty; a non-list is an error.
   std::vector<ParamNode> list(const std::string& key) const;
   bool has(const std::string& key) const;
+  // A scalar's text as written ("0x10", "010"; "" when absent or not a scalar), for a loader that
+  // checks how a value is spelt as well as what it is; get() still reads (and dump() lists) it.
+  std::string text(const std::string& key) const;
 
   // The value of `path` (dotted, from the root: "can.interface") is `value`, given by `option`
   // ("--interface"), whatever the file says. Read by get() as a scalar from the file would be, so the

@@ -10,6 +10,7 @@
 #include <whiskeye/common/params.h>
 
 #include <filesystem>
+#include <numbers>
 #include <string>
 #include <utility>
 #include <vector>
@@ -45,7 +46,9 @@ void load(const ParamNode& root, Params& p);
 
 // Applies one drop-in over `p`: its `calibration.default` keys to every whisker, then its
 // `calibration.whiskers` entries to theirs (keys absent keep their value). Any key outside
-// `calibration` is a ParamError naming the file and the key; so is a typo.
+// `calibration` is a ParamError naming the file and the key; so is a typo, a value outside
+// kCalibrationBounds, an index that is not a decimal 0..23, and a whisker given two entries in one
+// file (which one was meant cannot be known). whiskerd.yaml's `calibration` is read the same way.
 void load_dropin(const ParamNode& dropin, CoreParams& p);
 
 // The drop-in directory of a config file: /etc/whiskeye/whiskerd.yaml -> /etc/whiskeye/whiskerd.d.
@@ -53,6 +56,22 @@ std::filesystem::path dropin_dir(const std::filesystem::path& config);
 // Its *.yaml files in file-name order (the order they apply in, later files win); none if the
 // directory does not exist. A path there that is not a regular file is a ParamError.
 std::vector<std::filesystem::path> dropin_files(const std::filesystem::path& dir);
+
+// The calibration a WhiskEye's whisker can have: whiskerd's loader refuses a value outside these (in
+// whiskerd.yaml or a drop-in) and whiskeye-calibrate never writes one, so a dead sensor (gain 0), a
+// typo or a unit slip (a rotation in degrees) stops at the file, not in the map. Gains are bounded in
+// magnitude: a mirrored board's are negative.
+struct CalibrationBounds {
+  double max_offset_counts = 512;                                  // |offset_x|, |offset_y|: a quarter of the ADC range
+  double min_gain_ratio = 0.5, max_gain_ratio = 2.0;               // |gain_x|, |gain_y| / nominal (1/2047)
+  double max_rotation = std::numbers::pi / 2;                      // rad: map and gain find it in (-pi/2, pi/2]
+  double max_theta_offset_counts = 256;                            // 22.5 deg
+  double min_theta_gain_ratio = 0.8, max_theta_gain_ratio = 1.25;  // |theta_gain| / nominal (2 pi / 4096)
+};
+inline constexpr CalibrationBounds kCalibrationBounds{};
+// Why calibration key `key` (offset_x ... theta_gain) = `value` is implausible: "is outside the
+// plausible ±512 counts", or "" when it is within kCalibrationBounds (any other key: "").
+std::string implausible_calibration(const std::string& key, double value);
 
 // Whisker w's calibration as whiskerd.yaml names it: channel, offset_x, offset_y, gain_x, gain_y,
 // rotation, theta_offset, theta_gain.

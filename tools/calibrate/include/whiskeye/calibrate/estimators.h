@@ -1,7 +1,7 @@
 // whiskeye-calibrate's estimators (docs/bring-up.md): the bus check, and the calibration whiskerd
 // needs from a rest recording (offsets, noise), a tap test (wiring, axis orientation), jig
-// deflections (gains, rotation) and a θ sweep between the end stops (θ offset and gain); plausibility
-// bounds; the drop-in entries and the old/new table. Pure: a Recording and whiskerd's calibration
+// deflections (gains, rotation) and a θ sweep between the end stops (θ offset and gain); whiskerd's
+// plausibility bounds checked; the drop-in entries and the old/new table. Pure: a Recording and whiskerd's calibration
 // in use in, plain data out.
 #pragma once
 
@@ -53,19 +53,15 @@ struct BusReport {
 BusReport check_bus(const Recording& r, double rate_hz, double duration_s);
 std::string format_bus_report(const BusReport& report);
 
-// ---- plausibility: values outside these are refused, never written
-struct Bounds {
-  double max_offset_counts = 512;                        // |offset_x|, |offset_y|: a quarter of the ADC range
-  double min_gain_ratio = 0.5, max_gain_ratio = 2.0;     // |gain| / 1/2047
-  double max_rotation = kPi / 2;                         // rad
-  double max_theta_offset_counts = 256;                  // 22.5 deg
-  double min_theta_gain_ratio = 0.8, max_theta_gain_ratio = 1.25;  // |theta_gain| / 2 pi / 4096
-  double max_noise_counts = 40;                          // rest: a sensor noisier than this is refused
-};
-Problems check_bounds(const std::vector<Estimate>& estimates, const Bounds& bounds);
+// ---- plausibility: whiskerd's own bounds (whiskerd::kCalibrationBounds, which its loader enforces):
+// an estimate outside them is refused, never written
+Problems check_bounds(const std::vector<Estimate>& estimates);
 
 // ---- rest: offsets and noise; refuses a silent board, a stuck, saturated, faulty or noisy sensor
-Result estimate_rest(const Recording& r, const whiskerd::CoreParams& current, const Bounds& bounds);
+struct RestLimits {
+  double max_noise_counts = 40;  // a sensor noisier than this is refused
+};
+Result estimate_rest(const Recording& r, const whiskerd::CoreParams& current, const RestLimits& limits);
 
 // ---- pushes: a whisker pushed and released (a tap, a jig), found in a recording
 struct Push {
