@@ -1,6 +1,8 @@
 // LogReader (log_reader.h): an LCM log file read directly, mapped or streamed.
 #include "whiskeye/common/log_reader.h"
 
+#include "whiskeye/common/input_file.h"
+
 #include <fcntl.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
@@ -247,20 +249,9 @@ std::size_t header_bytes(std::size_t size, std::size_t at) { return std::min(kEv
 }  // namespace
 
 LogReader::LogReader(const std::string& path, Access access, std::size_t chunk_bytes) : path_(path) {
-  // O_NONBLOCK: opening a FIFO with no writer returns at once (and is refused below) instead of
-  // waiting for one; a regular file's reads ignore the flag.
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
-  if (fd < 0) throw std::runtime_error(path + ": cannot open the LCM log for reading: " + std::strerror(errno));
-  struct stat st {};
-  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-    ::close(fd);
-    throw std::runtime_error(path + ": cannot open the LCM log for reading: not a regular file");
-  }
-  const auto size = static_cast<std::size_t>(st.st_size);
-  if (uint8_t byte = 0; size == 0 && ::pread(fd, &byte, 1, 0) > 0) {  // a /proc or /sys file: sized as it is read
-    ::close(fd);
-    throw std::runtime_error(path + ": cannot open the LCM log for reading: not a regular file (it reports 0 bytes but holds data)");
-  }
+  const InputFile file = open_input_file(path, "LCM log");
+  const int fd = file.fd;
+  const auto size = static_cast<std::size_t>(file.size);
   if (access == Access::kStreamed) {
     ::posix_fadvise(fd, 0, 0, POSIX_FADV_SEQUENTIAL);
     source_ = std::make_unique<StreamSource>(fd, size, chunk_bytes, path);  // owns fd

@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,7 @@
 #include "private_tmpfs.h"
 #include "scratch.h"
 #include "subprocess.h"
+#include "whiskeye/can/candump.h"
 #include "whiskeye/whiskerd/config.h"
 #include "whiskeye/whiskerd/whiskerd_core.h"
 
@@ -260,6 +262,98 @@ TEST_F(CalibrateTool, AnOutputThatCannotBeReplacedOrIsAnInputIsRefusedBeforeAnyt
   EXPECT_EQ(std::string((std::istreambuf_iterator<char>(kept)), std::istreambuf_iterator<char>()), "kept");
   EXPECT_EQ(std::to_string(fs::file_size(log)), log_before);
   EXPECT_FALSE(fs::exists(d + "/missing"));
+}
+
+// whiskerd reads whiskerd.d/NAME.yaml only: a 20-rest.yml, or -o whiskerd.d itself with the directory
+// missing (a *file* named whiskerd.d was created), was written, "wrote", exit 0, and never loaded.
+TEST_F(CalibrateTool, AnOutputWhiskerdWouldNotReadIsRefusedBeforeAnythingIsRead) {
+  namespace fs = std::filesystem;
+  const std::string log = simulate("rest", "unread_rest", {"--bringup-duration", "1"});
+  const std::string d = path("unread");
+  fs::create_directories(d);
+  fs::copy_file(config(), d + "/whiskerd.yaml");
+  for (const std::string& out : {d + "/whiskerd.d", etc() + "/whiskerd.d/20-rest.yml", etc() + "/whiskerd.d/20-rest"}) {
+    Subprocess p({CALIBRATE_EXE, "rest", "--input", log, "-c", d + "/whiskerd.yaml", "-o", out});
+    EXPECT_EQ(p.wait(20), 2) << out << ": " << p.output();
+    EXPECT_EQ(p.output(), "whiskeye-calibrate: -o " + out + ": whiskerd would not read it: its drop-ins are NAME.yaml files in " +
+                              d + "/whiskerd.d/ (e.g. 20-rest.yaml)\n");
+    EXPECT_FALSE(fs::exists(out)) << out;
+  }
+}
+
+// A candump log is a regular file, read a line of at most 512 bytes at a time: /dev/zero and a 2 GB
+// sparse file (one endless line of NULs) took 2.1 GB, then said "no CAN frame in the log"; a FIFO
+// blocked in open(). Here under a 512 MB address-space limit.
+TEST_F(CalibrateTool, ALogThatIsNoRegularFileOrAnEndlessLineIsRefusedAtOnceInBoundedMemory) {
+  namespace fs = std::filesystem;
+  const std::string fifo = path("fifo.log"), sparse = path("sparse.log");
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0644), 0);
+  std::ofstream(sparse).close();
+  fs::resize_file(sparse, uint64_t{2} << 30);  // sparse: no block written
+  const std::pair<std::string, std::string> cases[] = {
+      {fifo, fifo + ": cannot open the candump log for reading: not a regular file"},
+      {"/dev/zero", "/dev/zero: cannot open the candump log for reading: not a regular file"},
+      {"/proc/self/status", "/proc/self/status: cannot open the candump log for reading: not a regular file (it reports 0 bytes but holds data)"},
+      {sparse, sparse + ":1: not a candump -l line: longer than 512 bytes"}};
+  for (const auto& [input, why] : cases) {
+    Subprocess p({"bash", "-c", "ulimit -v 524288 && exec \"$0\" \"$@\"", CALIBRATE_EXE, "bus", "--input", input, "-c", config()});
+    EXPECT_EQ(p.wait(20), 1) << input << ": " << p.output();
+    EXPECT_EQ(p.output(), "whiskeye-calibrate: " + why + "\n");
+  }
+  fs::remove(sparse);
+}
+
+// The bus check through the binary on logs a real day makes: CRLF line ends, extended-id and remote
+// frames between the whiskers' (live listening skips them: the log was refused), two sessions one
+// after the other, a frame 30 years late. Every board at its 500 Hz: the span was the first line's
+// time to the last's (0.0 Hz for every board). A log reversed spans what it does forwards
+// (CalibrateBus.TheSpanIsTheTimeBetweenFramesWhateverTheirOrder), but fails here: the assembler takes
+// every sample whose sequence number steps back for an old one.
+TEST_F(CalibrateTool, TheBusCheckRatesEveryBoardWhateverTheLogsOrderLineEndsAndForeignFrames) {
+  const std::string rest = simulate("rest", "order_rest", {"--bringup-duration", "2"});
+  std::vector<std::string> lines;
+  std::ifstream in(rest);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  ASSERT_GT(lines.size(), 1000u);
+  const auto shifted = [](const std::string& line, int64_t by_us) {
+    can::LoggedFrame f;
+    std::string interface;
+    EXPECT_TRUE(can::parse_candump_line(line, f, interface)) << line;
+    f.utime += by_us;
+    return can::format_candump_line(f, interface);
+  };
+  std::map<std::string, std::vector<std::string>> logs;
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    logs["crlf"].push_back(lines[i] + "\r");
+    logs["foreign"].push_back(lines[i]);
+    if (i % 50 == 0) {
+      const std::string stamp = lines[i].substr(0, lines[i].find(' '));
+      logs["foreign"].push_back(stamp + " can0 1ABCDEF0#0011");
+      logs["foreign"].push_back(stamp + " can0 123#R");
+      logs["foreign"].push_back(stamp + " can0 00000702#R8");
+    }
+    logs["wild"].push_back(i == lines.size() / 2 ? shifted(lines[i], int64_t{30} * 365 * 86400 * 1000000) : lines[i]);
+  }
+  logs["sessions"] = lines;
+  for (const std::string& line : lines) logs["sessions"].push_back(shifted(line, -int64_t{86400} * 1000000));
+  for (const auto& [name, log] : logs) {
+    const std::string file = path("order_" + name + ".log");
+    std::ofstream out(file);
+    for (const std::string& line : log) out << line << "\n";
+    out.close();
+    const auto [status, report] = run({CALIBRATE_EXE, "bus", "--input", file, "-c", config()});
+    EXPECT_EQ(status, 0) << name << ": " << report;
+    std::istringstream rows(report.substr(report.find('\n') + 1));
+    for (int b = 0; b < wp::kNumBoards; ++b) {
+      int board = -1, node = -1;
+      double samples_hz = 0;
+      rows >> board >> node >> samples_hz;
+      rows.ignore(1000, '\n');
+      EXPECT_EQ(board, b) << name << ": " << report;
+      EXPECT_NEAR(samples_hz, 500.0, 1.0) << name << ": board " << b;  // 2 s of samples over 2 s
+    }
+    EXPECT_THAT(report, HasSubstr("bus: ok")) << name;
+  }
 }
 
 TEST_F(CalibrateTool, ALogThatIsNotACandumpIsOneLineNamingTheLine) {

@@ -107,6 +107,25 @@ TEST(CalibrateRest, ASilentBoardIsOneLineNamingIt) {
   EXPECT_THAT(r.problems[0], HasSubstr("board 4 (CAN node 5) sent no samples"));
 }
 
+// One sample per board gave 24 offsets ±0: no noise can be measured from it, nor a stuck sensor told.
+TEST(CalibrateRest, ARecordingTooShortToEstimateTheNoiseIsRefusedPerBoard) {
+  const sim::TrueCalibration truth = sim::draw_true_calibration(1);
+  sim::SessionParams p = session(sim::Session::kRest);
+  p.rest_s = 0.002;  // one sample at 500 Hz
+  const Recording rec = record(p, truth);
+  ASSERT_GE(rec.board(0).samples, 1);
+  ASSERT_LT(rec.board(0).samples, 5);
+  const Result r = estimate_rest(rec, wired_as(truth), RestLimits{});
+  EXPECT_TRUE(r.estimates.empty());
+  ASSERT_EQ(r.problems.size(), std::size_t{wp::kNumBoards}) << joined(r.problems);
+  EXPECT_THAT(r.problems[0], HasSubstr("board 0 (CAN node 1) sent " + std::to_string(rec.board(0).samples)));
+  EXPECT_THAT(r.problems[0], HasSubstr("fewer than the 100 that estimate its channels' offsets and noise"));
+  p.rest_s = 0.2;  // 100 samples: enough
+  const Result enough = estimate_rest(record(p, truth), wired_as(truth), RestLimits{});
+  EXPECT_TRUE(enough.problems.empty()) << joined(enough.problems);
+  EXPECT_EQ(enough.estimates.size(), 48u);
+}
+
 TEST(CalibrateRest, AStuckSensorIsNamed) {
   const sim::TrueCalibration truth = sim::draw_true_calibration(1);
   sim::SessionParams p = session(sim::Session::kRest);

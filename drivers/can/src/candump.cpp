@@ -1,6 +1,7 @@
 // The `candump -l` text format (see candump.h).
 #include "whiskeye/can/candump.h"
 
+#include <cstdint>
 #include <cstdio>
 
 namespace whiskeye::can {
@@ -68,6 +69,7 @@ bool parse_stamp(std::string_view line, int64_t& utime, std::string_view& interf
   int64_t sec = 0, usec = 0;
   const std::string_view frac = line.substr(dot + 1, close - dot - 1);
   if (!parse_decimal(line.substr(1, dot - 1), sec) || frac.size() != 6 || !parse_decimal(frac, usec)) return false;
+  if (sec > (INT64_MAX - 999999) / 1000000) return false;  // beyond int64 microseconds (year 292,277)
   utime = sec * 1000000 + usec;
   rest = line.substr(close + 2);
   const std::size_t space = rest.find(' ');
@@ -121,6 +123,47 @@ bool parse_candump_error_line(std::string_view line, int64_t& utime) {
     id = id << 4 | static_cast<uint32_t>(v);
   }
   return (id & kCanErrFlag) != 0;
+}
+
+namespace {
+
+bool all_hex(std::string_view s) {
+  for (char c : s) {
+    if (hex_value(c) < 0) return false;
+  }
+  return true;
+}
+
+// An extended-id frame (8 hex digits, the error flag clear: data, FD or remote) or a standard remote
+// frame ("123#R", "123#R8": the optional length candump writes).
+bool other_frame_line(std::string_view line) {
+  int64_t utime = 0;
+  std::string_view name, rest;
+  if (!parse_stamp(line, utime, name, rest)) return false;
+  const std::size_t hash = rest.find('#');
+  if ((hash != 3 && hash != 8) || !all_hex(rest.substr(0, hash))) return false;
+  std::string_view body = rest.substr(hash + 1);
+  if (!body.empty() && body.front() == 'R') return body.size() == 1 || (body.size() == 2 && hex_value(body[1]) >= 0);
+  if (hash == 3) return false;  // a standard data frame is parse_candump_line()'s
+  uint32_t id = 0;
+  for (char c : rest.substr(0, hash)) id = id << 4 | static_cast<uint32_t>(hex_value(c));
+  if ((id & kCanErrFlag) != 0 || id > 0x1fffffff) return false;
+  if (!body.empty() && body.front() == '#') {
+    if (body.size() < 2 || hex_value(body[1]) < 0) return false;
+    body.remove_prefix(2);
+  }
+  return body.size() % 2 == 0 && body.size() <= 128 && all_hex(body);
+}
+
+}  // namespace
+
+CandumpLine classify_candump_line(std::string_view line, LoggedFrame& frame, std::string& interface) {
+  if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+  if (line.empty()) return CandumpLine::kBlank;
+  if (parse_candump_line(line, frame, interface)) return CandumpLine::kFrame;
+  if (parse_candump_error_line(line, frame.utime)) return CandumpLine::kErrorFrame;
+  if (other_frame_line(line)) return CandumpLine::kOther;
+  return CandumpLine::kInvalid;
 }
 
 }  // namespace whiskeye::can

@@ -187,12 +187,14 @@ std::filesystem::path dropin_dir(const std::filesystem::path& config) {
   return dir;
 }
 
+bool is_dropin_name(const std::filesystem::path& file) { return file.extension() == ".yaml"; }
+
 std::vector<std::filesystem::path> dropin_files(const std::filesystem::path& dir) {
   std::vector<std::filesystem::path> files;
   std::error_code ec;
   if (!std::filesystem::is_directory(dir, ec)) return files;
   for (const auto& entry : std::filesystem::directory_iterator(dir)) {
-    if (entry.path().extension() != ".yaml") continue;
+    if (!is_dropin_name(entry.path())) continue;
     if (!entry.is_regular_file()) throw ParamError(entry.path().string() + ": a drop-in must be a regular file");
     files.push_back(entry.path());
   }

@@ -3,13 +3,18 @@
 
 #include <whiskeye/common/cli.h>
 #include <whiskeye/common/config_path.h>
+#include <whiskeye/common/input_file.h>
 #include <whiskeye/common/output_file.h>
 #include <whiskeye/common/params.h>
+#include <whiskeye/common/printable.h>
+
+#include <unistd.h>
 
 #include <atomic>
+#include <cerrno>
 #include <chrono>
+#include <cstring>
 #include <ctime>
-#include <fstream>
 #include <functional>
 #include <iostream>
 #include <mutex>
@@ -43,38 +48,59 @@ Setup load_setup(const Options& o, std::string* printed = nullptr) {
 }
 
 // A subcommand that writes a drop-in refuses a bad -o before it listens or reads: one that is the log
-// or the config it reads, or that cannot be replaced atomically (a FIFO, a link, a missing directory).
+// or the config it reads, that cannot be replaced atomically (a FIFO, a link, a missing directory),
+// or that whiskerd would never read (20-rest.yml; whiskerd.d itself, its directory missing).
 void check_output(const Options& o, const Setup& s) {
   if (o.output.empty()) return;
   cli::refuse_output_onto_input("-o", o.output, {{"--input", o.input}, {"--config", s.config}});
   cli::refuse_unwritable_output("-o", o.output);
+  if (!whiskerd::is_dropin_name(o.output)) {
+    throw cli::UsageError("-o " + o.output + ": whiskerd would not read it: its drop-ins are NAME.yaml files in " +
+                          whiskerd::dropin_dir(s.config).string() + "/ (e.g. 20-rest.yaml)");
+  }
 }
 
-// The seconds a recording spans, first frame to last plus one sample period (`fallback` if empty).
+// The seconds a recording spans (Recording::span_us) plus one sample period (`fallback` if empty).
 double span_s(const Recording& r, double rate_hz, double fallback) {
   if (r.first_utime() < 0) return fallback;
-  return static_cast<double>(r.last_utime() - r.first_utime()) / 1e6 + 1.0 / rate_hz;
+  return static_cast<double>(r.span_us()) / 1e6 + 1.0 / rate_hz;
 }
 
-// A candump -l log into `r`; returns the seconds it spans. A line that is not a CAN frame of the
-// log format: runtime_error naming the file and the line.
+// A candump -l log into `r`; returns the seconds it spans. Only a regular file is read (a FIFO, a
+// device, a /proc file: open_input_file), and at most kMaxCandumpLineBytes of a line is held. A line
+// that is not a CAN frame of the log format, or is longer: runtime_error naming the file and the
+// line. Extended-id and remote frames are skipped, as listening on the bus skips them.
 double read_log(const std::string& path, Recording& r, double rate_hz) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot open the candump log");
-  std::string line, interface;
+  const InputFile file = open_input_file(path, "candump log");
+  struct Closer {
+    int fd;
+    ~Closer() { ::close(fd); }
+  } closer{file.fd};
+  can::CandumpLines lines;
   can::LoggedFrame f;
-  int64_t number = 0, utime = 0;
-  while (std::getline(in, line)) {
-    ++number;
-    if (line.empty()) continue;
-    if (can::parse_candump_line(line, f, interface)) {
-      r.add_frame(f.utime, f.id, f.fd, f.data);
-    } else if (can::parse_candump_error_line(line, utime)) {
-      r.add_error_frame(utime);
-    } else {
-      throw std::runtime_error(path + ":" + std::to_string(number) + ": not a candump -l line: '" + line.substr(0, 60) + "'");
+  std::string interface;
+  const auto take = [&](int64_t number, std::string_view line) {
+    switch (can::classify_candump_line(line, f, interface)) {
+      case can::CandumpLine::kFrame: r.add_frame(f.utime, f.id, f.fd, f.data); break;
+      case can::CandumpLine::kErrorFrame: r.add_error_frame(f.utime); break;
+      case can::CandumpLine::kOther:
+      case can::CandumpLine::kBlank: break;
+      case can::CandumpLine::kInvalid:
+        throw std::runtime_error(path + ":" + std::to_string(number) + ": not a candump -l line: " + printable(line));
+    }
+  };
+  std::vector<char> buffer(64 * 1024);
+  for (;;) {
+    const ssize_t got = ::read(file.fd, buffer.data(), buffer.size());
+    if (got < 0 && errno == EINTR) continue;
+    if (got < 0) throw std::runtime_error(path + ": cannot read the candump log: " + std::strerror(errno));
+    if (got == 0) break;
+    if (!lines.feed(std::string_view(buffer.data(), static_cast<std::size_t>(got)), take)) {
+      throw std::runtime_error(path + ":" + std::to_string(lines.too_long()) + ": not a candump -l line: longer than " +
+                               std::to_string(can::kMaxCandumpLineBytes) + " bytes");
     }
   }
+  lines.finish(take);
   if (r.first_utime() < 0) throw std::runtime_error(path + ": no CAN frame in the log");
   return span_s(r, rate_hz, 0.0);
 }

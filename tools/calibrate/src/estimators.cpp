@@ -130,10 +130,19 @@ Problems check_bounds(const std::vector<Estimate>& estimates) {
 Result estimate_rest(const Recording& r, const whiskerd::CoreParams& current, const RestLimits& limits) {
   Result res;
   silent_boards(r, res.problems);
+  for (int b = 0; b < wp::kNumBoards; ++b) {
+    const int64_t n = r.board(b).samples;
+    if (n > 0 && n < limits.min_samples) {
+      res.problems.push_back("board " + std::to_string(b) + " (CAN node " + std::to_string(b + 1) + ") sent " +
+                             std::to_string(n) + (n == 1 ? " sample" : " samples") + ", fewer than the " +
+                             std::to_string(limits.min_samples) + " that estimate its channels' offsets and noise " +
+                             "(record longer: --seconds)");
+    }
+  }
   for (int w = 0; w < kNumWhiskers; ++w) {
     const int ch = current.channel[static_cast<std::size_t>(w)];
     const std::vector<ChannelSample>& s = r.channel(ch);
-    if (s.empty()) continue;  // its board is reported above
+    if (static_cast<int64_t>(s.size()) < limits.min_samples) continue;  // its board is reported above
     const std::string who = whisker_name(w) + " (channel " + std::to_string(ch) + ")";
     const auto faults = std::count_if(s.begin(), s.end(), [](const ChannelSample& c) { return c.fault; });
     const Moments mx = moments(s, [](const ChannelSample& c) { return double(c.x); });
@@ -146,7 +155,7 @@ Result estimate_rest(const Recording& r, const whiskerd::CoreParams& current, co
                              std::to_string(s.size()) + " samples");
     } else if (saturated) {
       res.problems.push_back(who + ": saturated: the Hall sensor reads the ADC limit (±2047; magnet missing or too close?)");
-    } else if (s.size() > 1 && (mx.sd == 0.0 || my.sd == 0.0)) {
+    } else if (mx.sd == 0.0 || my.sd == 0.0) {
       res.problems.push_back(who + ": stuck: all " + std::to_string(s.size()) + " samples read x = " +
                              fmt("%.0f", s.front().x) + (mx.sd == 0.0 ? "" : " (varying)") + ", y = " +
                              fmt("%.0f", s.front().y) + (my.sd == 0.0 ? "" : " (varying)") +

@@ -6,7 +6,14 @@ namespace whiskeye::calibrate {
 Recording::Recording(wp::BusMode mode, const wp::ProtocolIds& ids) : mode_(mode), ids_(ids), assembler_(mode) {}
 
 void Recording::seen(int64_t utime) {
-  if (first_utime_ < 0) first_utime_ = utime;
+  if (first_utime_ < 0) {
+    first_utime_ = utime;
+  } else {
+    // Unsigned: the step between any two int64 times, never an overflow.
+    const uint64_t a = static_cast<uint64_t>(utime), b = static_cast<uint64_t>(last_utime_);
+    const uint64_t step = utime >= last_utime_ ? a - b : b - a;
+    if (step <= static_cast<uint64_t>(kMaxPauseUs)) span_us_ += static_cast<int64_t>(step);
+  }
   last_utime_ = utime;
 }
 

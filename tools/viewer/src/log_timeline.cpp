@@ -3,6 +3,7 @@
 
 #include "whiskeye/common/bus.h"
 #include "whiskeye/common/channels.h"
+#include "whiskeye/common/input_file.h"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -53,11 +54,9 @@ std::unique_ptr<LogTimeline> LogTimeline::from_file(const std::string& path, Vie
   auto timeline = std::make_unique<LogTimeline>(params);
   auto file = std::make_unique<File>();
   file->path = path;
-  // O_NONBLOCK: a FIFO with no writer would block open(); it is refused below as not a regular file.
-  file->fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
-  if (file->fd < 0) throw std::runtime_error(path + ": cannot open the LCM log for reading: " + std::strerror(errno));
-  if (::fstat(file->fd, &file->indexed) != 0 || !S_ISREG(file->indexed.st_mode)) {
-    throw std::runtime_error(path + ": cannot open the LCM log for reading: not a regular file");
+  file->fd = open_input_file(path, "LCM log").fd;
+  if (::fstat(file->fd, &file->indexed) != 0) {
+    throw std::runtime_error(path + ": cannot open the LCM log for reading: " + std::strerror(errno));
   }
   // Read in order with pread() (a file that gets shorter meanwhile is an error, not a fault). The
   // reader skips damage and counts the bytes skipped, so each event's place follows from the last.

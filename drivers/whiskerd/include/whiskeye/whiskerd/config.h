@@ -53,6 +53,9 @@ void load_dropin(const ParamNode& dropin, CoreParams& p);
 
 // The drop-in directory of a config file: /etc/whiskeye/whiskerd.yaml -> /etc/whiskeye/whiskerd.d.
 std::filesystem::path dropin_dir(const std::filesystem::path& config);
+// Whether whiskerd reads a file of this name in its drop-in directory: NAME.yaml (not NAME.yml, not
+// a directory's name).
+bool is_dropin_name(const std::filesystem::path& file);
 // Its *.yaml files in file-name order (the order they apply in, later files win); none if the
 // directory does not exist. A path there that is not a regular file is a ParamError.
 std::vector<std::filesystem::path> dropin_files(const std::filesystem::path& dir);

@@ -57,9 +57,13 @@ std::string format_bus_report(const BusReport& report);
 // an estimate outside them is refused, never written
 Problems check_bounds(const std::vector<Estimate>& estimates);
 
-// ---- rest: offsets and noise; refuses a silent board, a stuck, saturated, faulty or noisy sensor
+// ---- rest: offsets and noise; refuses a silent board, a recording too short to estimate them, a
+// stuck, saturated, faulty or noisy sensor
 struct RestLimits {
   double max_noise_counts = 40;  // a sensor noisier than this is refused
+  // Samples per board, at least: the noise (and so the stuck check and the offsets' ±) needs two;
+  // 100 (0.2 s at 500 Hz, 1 s at 100 Hz) give an offset to a tenth of the noise.
+  int64_t min_samples = 100;
 };
 Result estimate_rest(const Recording& r, const whiskerd::CoreParams& current, const RestLimits& limits);
 

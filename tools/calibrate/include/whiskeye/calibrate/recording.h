@@ -46,9 +46,18 @@ class Recording {
   int64_t error_frames() const { return error_frames_; }
   // Bus time of every frame received, worst-case stuffing at the nominal bit rates, microseconds.
   double busy_us() const { return busy_us_; }
-  // First and last frame time (-1 before any).
+  // First and last frame time in the order added (-1 before any).
   int64_t first_utime() const { return first_utime_; }
   int64_t last_utime() const { return last_utime_; }
+  // The bus time the frames span, microseconds: the steps between frames in the order added, in
+  // either direction, a step longer than kMaxPauseUs counting for nothing. A log in reverse spans
+  // what it does forwards, two sessions one after the other their sum, and a frame with a wild time
+  // (30 years late) nothing more, where "last minus first" made every rate 0 Hz.
+  int64_t span_us() const { return span_us_; }
+  // Longer than any pause of a bus whose boards stream (10 Hz at the least, heartbeats between): such
+  // a step is no time spent listening to the boards (between two sessions, a wild time). A whole bus
+  // silent for longer shows as sequence gaps, not as a lower rate.
+  static constexpr int64_t kMaxPauseUs = 1'000'000;
 
  private:
   void seen(int64_t utime);
@@ -60,6 +69,7 @@ class Recording {
   int64_t frames_ = 0, rejected_ = 0, error_frames_ = 0;
   double busy_us_ = 0;
   int64_t first_utime_ = -1, last_utime_ = -1;
+  int64_t span_us_ = 0;
 };
 
 }  // namespace whiskeye::calibrate
