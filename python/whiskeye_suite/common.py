@@ -2,6 +2,7 @@
 metrics, the one-line error exit, number formatting and the atomic JSON files of the results."""
 import hashlib
 import json
+import math
 import os
 import secrets
 import sys
@@ -61,11 +62,34 @@ def read_json(path):
         return None
 
 
+class NotJson(Exception):
+    """A document write_json refuses: str() is the one line "PATH: FIELD is nan: ..."."""
+
+
+def nonfinite_path(doc):
+    """The path of the first number in `doc` that standard JSON cannot hold (NaN, ±inf), or None."""
+    stack = [("", doc)]
+    while stack:
+        p, v = stack.pop()
+        if isinstance(v, float) and not math.isfinite(v):
+            return p or "the document", v
+        if isinstance(v, dict):
+            stack += reversed([(f"{p}.{k}" if p else str(k), x) for k, x in v.items()])
+        elif isinstance(v, (list, tuple)):
+            stack += reversed([(f"{p}[{n}]", x) for n, x in enumerate(v)])
+    return None
+
+
 def write_json(path, doc):
-    """Atomically: a reader (another node, the aggregation) sees the old file or the whole new one. The
+    """Standard JSON (RFC 8259): a non-finite number, which Python's json would write as NaN or
+    Infinity that no other reader takes, is refused naming its field (NotJson), before anything is
+    written. Atomically: a reader (another node, the aggregation) sees the old file or the whole new one. The
     temp file beside it is this writer's own (created exclusive, a random name: two suites writing one
     results folder no longer share one, which tore the file and made the second rename fail), synced
     before the rename and the folder after it, so a node that crashes leaves one of the two as well."""
+    bad = nonfinite_path(doc)
+    if bad is not None:
+        raise NotJson(f"{path}: {bad[0]} is {bad[1]}: not a finite number, which JSON cannot hold; nothing written")
     d = os.path.dirname(path) or "."
     while True:
         tmp = os.path.join(d, f".{os.path.basename(path)}.{secrets.token_hex(8)}.tmp")
@@ -76,7 +100,7 @@ def write_json(path, doc):
             continue
     try:
         with os.fdopen(fd, "w") as f:
-            json.dump(doc, f, indent=1, sort_keys=True)
+            json.dump(doc, f, indent=1, sort_keys=True, allow_nan=False)
             f.flush()
             os.fsync(f.fileno())
         os.replace(tmp, path)

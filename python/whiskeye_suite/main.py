@@ -6,9 +6,10 @@ import sys
 import time
 
 from .cli import parse_args
-from .common import PROGRAMS, ROOT, fail
+from .common import PROGRAMS, ROOT, NotJson, fail
 from .local import run_local, run_one
 from .pipeline import collect, world_keys, world_state
+from .records import BadRecord
 from .report import Progress, aggregate, report
 from .slurm import run_slurm
 from .study import aggregate_study, derive_sweep
@@ -37,6 +38,15 @@ def summarise(a, keys, wall_s):
 
 
 def main(argv):
+    """A results file that is no record of the suite's (BadRecord), or a summary that JSON cannot
+    hold (NotJson): one line naming the file and the field, exit 1, nothing summarised from it."""
+    try:
+        return run(argv)
+    except (BadRecord, NotJson) as e:
+        fail(str(e), 1)
+
+
+def run(argv):
     a = parse_args(argv)
     os.makedirs(a.results, exist_ok=True)
     started_at = a.started_at or time.time()

@@ -11,6 +11,7 @@ import time
 from .common import (KIDNAPS_PER_WORLD, MODES, PROGRAMS, RESTART_SESSION_LAPS, RESTART_SESSION_UTIME,
                      RESTART_SESSION_UTIME_STEP, RESTART_SESSIONS, WRONG_CLOSURE_KINDS, file_digest, read_json,
                      world_seed, write_json)
+from .records import read_record
 
 
 class WorldFailed(Exception):
@@ -112,10 +113,11 @@ def world_keys(a, bins):
 def world_state(a, index, key, label=None):
     """('done', record), ('failed', failure) or ('todo', None) for world `index` under config `label`
     in DIR. A record or failure counts only for this world (the seed) and, given a key, for the same
-    options and programs."""
+    options and programs. One that is no such record (records.read_record) raises BadRecord: the
+    suite stops naming it rather than resume or summarise from it."""
     seed = world_seed(a.suite_seed, index)
     for state, name in (("done", "world.json"), ("failed", "failed.json")):
-        doc = read_json(os.path.join(variant_dir(a, index, label), name))
+        doc = read_record(os.path.join(variant_dir(a, index, label), name), index, "world" if state == "done" else "failed")
         if doc and doc.get("world_seed") == seed and (key is None or doc.get("key") == key):
             return state, doc
     return "todo", None

@@ -356,6 +356,139 @@ class StudyComparison(InTempDir):
         self.assertIn("| 2 | 5002 | 0.850 | 1.000 | 0.050 | 0 | — | — | — | — |", md)
 
 
+class HostileRecords(InTempDir):
+    """scripts/suite --aggregate-only on a results folder one of whose records is hostile: one line
+    naming the file and the field, exit 1, no traceback and no summary from it. Before: a traceback
+    (KeyError, TypeError, OverflowError, RecursionError, AttributeError), or NaN and Infinity written
+    into suite.json, which no standard JSON reader takes."""
+
+    def results(self, edit=None, name="world.json"):
+        """Three worlds of suite seed 5; `edit(text)` rewrites world 2's file as text."""
+        for i in (1, 2, 3):
+            d = os.path.join(self.tmp, f"world-{i:03d}")
+            os.makedirs(d, exist_ok=True)
+            text = json.dumps(world(i))
+            if i == 2 and edit is not None:
+                text = edit(text)
+            for old in ("world.json", "failed.json"):
+                if os.path.lexists(os.path.join(d, old)):
+                    os.remove(os.path.join(d, old))
+            with open(os.path.join(d, name if i == 2 else "world.json"), "wb") as f:
+                f.write(text.encode("utf-8", "surrogateescape"))
+        return os.path.join(self.tmp, "world-002", name)
+
+    ARGS = ["--aggregate-only", "--worlds", "3", "--suite-seed", "5", "--no-plots"]
+
+    def aggregate(self):
+        """The suite in this process (an exception other than its exit fails the test): its exit
+        status and stderr."""
+        import contextlib
+        import io
+        from whiskeye_suite import main
+        err = io.StringIO()
+        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(err):
+            try:
+                code = main.main(self.ARGS + ["--results", self.tmp])
+            except SystemExit as e:
+                code = e.code
+        return subprocess.CompletedProcess([], code, "", err.getvalue())
+
+    def script(self):
+        """scripts/suite itself, with a time limit (a FIFO opened for reading blocks)."""
+        return subprocess.run([sys.executable, os.path.join(SOURCE, "scripts", "suite"), *self.ARGS,
+                               "--results", self.tmp], capture_output=True, text=True, timeout=60)
+
+    def assertRefused(self, edit, line, name="world.json"):
+        path = self.results(edit, name)
+        r = self.aggregate()
+        self.assertEqual(r.returncode, 1, r.stderr)
+        self.assertNotIn("Traceback", r.stderr)
+        self.assertEqual(r.stderr.splitlines(), [f"suite: {path}: {line}"])
+        self.assertFalse(os.path.exists(os.path.join(self.tmp, "suite.json")))
+
+    @staticmethod
+    def field(key, value):
+        """world 2's JSON with modes.vita[key] written as `value` (text, as in the file)."""
+        return lambda text: text.replace(f'"{key}": {json.dumps(world(2)["modes"]["vita"][key])},', f'"{key}": {value},', 1)
+
+    def test_a_good_folder_is_summarised_as_standard_json(self):
+        self.results()
+        r = self.aggregate()
+        self.assertEqual(r.returncode, 0, r.stderr)
+        with open(os.path.join(self.tmp, "suite.json")) as f:
+            doc = json.load(f, parse_constant=lambda c: self.fail(f"suite.json holds {c}"))
+        self.assertEqual(len(doc["worlds"]), 3)
+
+    def test_a_missing_key_or_a_wrong_type_is_refused_naming_the_field(self):
+        def drop(text):
+            doc = json.loads(text)
+            del doc["modes"]["vita"]["ate"]
+            return json.dumps(doc)
+        self.assertRefused(drop, "modes.vita.ate is missing")
+        self.assertRefused(self.field("ate", '"0.05"'), 'modes.vita.ate is "0.05": not a number or null')
+        self.assertRefused(self.field("false_closures", "1.5"), "modes.vita.false_closures is 1.5: not an integer or null")
+        self.assertRefused(self.field("arr", "true"), "modes.vita.arr is True: not a number or null")
+        self.assertRefused(lambda t: t.replace('"modes": {', '"modes": [1], "x": {', 1), "modes is [1]: not an object")
+        self.assertRefused(lambda t: "[1, 2]", "the document is [1, 2]: not an object")
+        self.assertRefused(lambda t: t.replace('"index": 2', '"index": 7', 1), "index is 7, but the record is world 2's")
+        self.assertRefused(lambda t: t.replace('"key": "synthetic"', '"key": [1]', 1), "key is [1]: not a string or null")
+
+    def test_a_non_finite_or_huge_number_is_refused_naming_the_field(self):
+        self.results(self.field("ate", "NaN"))
+        r = self.script()
+        self.assertEqual(r.returncode, 1, r.stderr)
+        self.assertEqual(len(r.stderr.splitlines()), 1, r.stderr)
+        self.assertRefused(self.field("ate", "NaN"),
+                           "modes.vita.ate is NaN: not a finite number (a record holds finite numbers, null for n/a)")
+        self.assertRefused(self.field("enm", "-Infinity"),
+                           "modes.vita.enm is -Infinity: not a finite number (a record holds finite numbers, null for n/a)")
+        self.assertRefused(self.field("ate", "1e400"),
+                           "modes.vita.ate is 1e400: not a finite number (a record holds finite numbers, null for n/a)")
+        self.assertRefused(self.field("ate", "1" + "0" * 400),
+                           "modes.vita.ate is an integer of 401 digits: beyond the 64-bit range of any count a record holds")
+        self.assertRefused(self.field("ate", "1e300"), "modes.vita.ate is 1e+300: beyond 1e+100, no measure a record holds")
+        self.assertRefused(self.field("ate", "1" + "0" * 5000), "not a JSON record: an integer of thousands of digits")
+        failure = lambda t: '{"index": 2, "world_seed": NaN, "failed": "x", "log": "l"}'  # noqa: E731
+        self.assertRefused(failure, "world_seed is NaN: not a finite number (a record holds finite numbers, null for n/a)",
+                           name="failed.json")
+
+    def test_deep_nesting_is_refused_without_a_recursion_error(self):
+        nest = lambda n: lambda t: t.replace('"rerun": ', f'"deep": {"[" * n}{"]" * n}, "rerun": ', 1)  # noqa: E731
+        self.assertRefused(nest(100000), "not a JSON record: nested too deeply to read (a record nests a few levels)")
+        self.assertRefused(nest(500), "deep: nested more than 32 deep (a record nests a few levels)")
+
+    def test_a_file_that_is_no_record_is_refused(self):
+        self.assertRefused(lambda t: "", "empty (0 bytes): no record")
+        cut = lambda t: t[:-1]  # noqa: E731  (a writer cut short)
+        try:
+            json.loads(cut(json.dumps(world(2))))
+        except json.JSONDecodeError as e:
+            self.assertRefused(cut, f"not a JSON record: {e}")
+        self.assertRefused(lambda t: "\udcff{", "not a JSON record: not UTF-8 (byte 0)")
+        path = self.results()
+        os.remove(path)
+        os.mkfifo(path)  # opened, it would block the suite for ever
+        r = self.script()
+        self.assertEqual((r.returncode, r.stderr), (1, f"suite: {path}: not a regular file\n"))
+        os.remove(path)
+        os.symlink(path, path)
+        r = self.aggregate()
+        self.assertEqual((r.returncode, r.stderr), (1, f"suite: {path}: cannot be read: Too many levels of symbolic links\n"))
+
+    def test_a_summary_json_cannot_hold_is_refused_naming_the_field_and_nothing_is_written(self):
+        path = os.path.join(self.tmp, "suite.json")
+        with self.assertRaises(common.NotJson) as e:
+            common.write_json(path, {"summary": {"vita": [1.0, float("nan")]}})
+        self.assertEqual(str(e.exception), f"{path}: summary.vita[1] is nan: not a finite number, which JSON cannot "
+                                           "hold; nothing written")
+        self.assertEqual(os.listdir(self.tmp), [])
+        w = world(2)
+        w["modes"]["vita"]["ate"] = float("inf")  # a record read without the check
+        with self.assertRaises(common.NotJson):
+            report.aggregate(options(self.tmp), [world(1), w, world(3)], [], 1.0)
+        self.assertFalse(os.path.exists(path))
+
+
 class AtomicJson(InTempDir):
     WRITER = """
 import sys

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <system_error>
 #include <utility>
 
@@ -190,14 +191,40 @@ std::filesystem::path dropin_dir(const std::filesystem::path& config) {
 bool is_dropin_name(const std::filesystem::path& file) { return file.extension() == ".yaml"; }
 
 std::vector<std::filesystem::path> dropin_files(const std::filesystem::path& dir) {
-  std::vector<std::filesystem::path> files;
+  namespace fs = std::filesystem;
+  std::vector<fs::path> files;
+  // Absent: no drop-ins. Anything else that is not a directory whiskerd can list (a symbolic link
+  // loop, a link to nothing, a file, a directory it may not read) is a ParamError naming it (exit 2,
+  // no restart): the calibration it was meant to hold would otherwise be lost without a word, or end
+  // in an exit 1 that systemd restarts for ever.
+  const auto refuse = [&](const fs::path& path, const std::string& what) {
+    return ParamError(path.string() + ": " + what);
+  };
   std::error_code ec;
-  if (!std::filesystem::is_directory(dir, ec)) return files;
-  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+  const fs::file_status link = fs::symlink_status(dir, ec);
+  if (link.type() == fs::file_type::not_found) return files;
+  if (ec) throw refuse(dir, "the drop-in directory cannot be read: " + ec.message());
+  const fs::file_status target = fs::status(dir, ec);
+  if (target.type() == fs::file_type::not_found) {
+    throw refuse(dir, "the drop-in directory is a symbolic link to " + fs::read_symlink(dir, ec).string() +
+                          ", which does not exist");
+  }
+  if (ec) throw refuse(dir, "the drop-in directory cannot be read: " + ec.message());
+  if (target.type() != fs::file_type::directory) {
+    throw refuse(dir, "the drop-in directory is not a directory (whiskerd reads its *.yaml files; remove it if none)");
+  }
+  fs::directory_iterator it(dir, ec);
+  if (ec) throw refuse(dir, "the drop-in directory cannot be read: " + ec.message());
+  for (; it != fs::directory_iterator(); it.increment(ec)) {
+    if (ec) break;
+    const fs::directory_entry& entry = *it;
     if (!is_dropin_name(entry.path())) continue;
-    if (!entry.is_regular_file()) throw ParamError(entry.path().string() + ": a drop-in must be a regular file");
+    const fs::file_status st = entry.status(ec);  // a link followed
+    if (ec) throw refuse(entry.path(), "a drop-in that cannot be read: " + ec.message());
+    if (st.type() != fs::file_type::regular) throw refuse(entry.path(), "a drop-in must be a regular file");
     files.push_back(entry.path());
   }
+  if (ec) throw refuse(dir, "the drop-in directory cannot be read: " + ec.message());
   std::sort(files.begin(), files.end());
   return files;
 }

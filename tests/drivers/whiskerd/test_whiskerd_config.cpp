@@ -1,7 +1,10 @@
 // whiskerd's configuration (Params / load, config.h): unknown keys, rates, CAN id ranges, the
 // shipped config, calibration drop-ins.
 
+#include <grp.h>
 #include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -271,4 +274,84 @@ TEST_F(WhiskerdDropins, AWrittenDropinLoadsBackTheSameValues) {
   EXPECT_EQ(p.calibration[5].rotation, -0.1);
   EXPECT_EQ(p.channel[5], 6);
   EXPECT_EQ(p.channel[6], 5);
+}
+
+// The drop-in directory there but not one whiskerd can list: a ParamError naming it (exit 2, one line,
+// no restart), where a symbolic link loop or an unreadable directory was a std::filesystem error
+// ("filesystem error: ...", exit 1: systemd restarted it for ever) and a link to nothing or a file
+// named whiskerd.d left the calibration out without a word.
+TEST_F(WhiskerdDropins, ADropinDirectoryThatCannotBeListedIsRefusedNamingIt) {
+  const std::filesystem::path d = dir_ / "whiskerd.d";
+  std::filesystem::remove_all(d);
+  const auto refused = [&](const std::string& what) {
+    Params p;
+    std::string error;
+    EXPECT_NO_THROW(error = load_all(p)) << what;
+    EXPECT_EQ(error, d.string() + ": " + what);
+  };
+  std::filesystem::create_symlink(d, d);  // a loop
+  refused("the drop-in directory cannot be read: Too many levels of symbolic links");
+  std::filesystem::remove(d);
+  std::filesystem::create_symlink(dir_ / "calibration", d);
+  refused("the drop-in directory is a symbolic link to " + (dir_ / "calibration").string() + ", which does not exist");
+  std::filesystem::remove(d);
+  std::filesystem::create_symlink(dir_ / "whiskerd.yaml" / "sub", d);  // a path component that is a file
+  refused("the drop-in directory is a symbolic link to " + (dir_ / "whiskerd.yaml" / "sub").string() +
+          ", which does not exist");
+  std::filesystem::remove(d);
+  write("whiskerd.d", "calibration: {}\n");
+  refused("the drop-in directory is not a directory (whiskerd reads its *.yaml files; remove it if none)");
+  std::filesystem::remove(d);
+  Params p;
+  EXPECT_EQ(load_all(p), "");  // absent: no drop-ins
+}
+
+TEST_F(WhiskerdDropins, ADropinThatIsALinkLoopIsRefusedNamingIt) {
+  const std::filesystem::path f = dir_ / "whiskerd.d" / "20-rest.yaml";
+  std::filesystem::create_symlink(f, f);
+  Params p;
+  std::string error;
+  EXPECT_NO_THROW(error = load_all(p));
+  EXPECT_EQ(error, f.string() + ": a drop-in that cannot be read: Too many levels of symbolic links");
+}
+
+// whiskerd runs as its own user (systemd's User=whiskeye): a drop-in directory it may not read. The
+// test is root in CI, which reads any directory, so the load runs in a child that has dropped to
+// nobody (65534); not root, the test's own user is refused the same.
+TEST_F(WhiskerdDropins, ADropinDirectoryItMayNotReadIsRefusedNamingIt) {
+  const std::filesystem::path d = dir_ / "whiskerd.d";
+  std::filesystem::permissions(dir_, std::filesystem::perms::owner_all | std::filesystem::perms::group_read |
+                                         std::filesystem::perms::group_exec | std::filesystem::perms::others_read |
+                                         std::filesystem::perms::others_exec);
+  std::filesystem::permissions(dir_ / "whiskerd.yaml", std::filesystem::perms::owner_read |
+                                                           std::filesystem::perms::owner_write |
+                                                           std::filesystem::perms::others_read);
+  std::filesystem::permissions(d, std::filesystem::perms::none);
+  int fds[2];
+  ASSERT_EQ(pipe(fds), 0);
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    close(fds[0]);
+    if (geteuid() == 0 && (setgroups(0, nullptr) != 0 || setgid(65534) != 0 || setuid(65534) != 0)) _exit(3);
+    std::string error;
+    try {
+      Params p;
+      error = load_all(p);
+    } catch (const std::exception& e) {
+      error = std::string("not a ParamError: ") + e.what();
+    }
+    const ssize_t n = ::write(fds[1], error.data(), error.size());
+    _exit(n == static_cast<ssize_t>(error.size()) ? 0 : 4);
+  }
+  close(fds[1]);
+  std::string error;
+  char buf[512];
+  for (ssize_t n; (n = ::read(fds[0], buf, sizeof buf)) > 0;) error.append(buf, static_cast<std::size_t>(n));
+  close(fds[0]);
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  std::filesystem::permissions(d, std::filesystem::perms::owner_all);
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << status;
+  EXPECT_EQ(error, d.string() + ": the drop-in directory cannot be read: Permission denied");
 }

@@ -57,7 +57,9 @@ std::filesystem::path dropin_dir(const std::filesystem::path& config);
 // a directory's name).
 bool is_dropin_name(const std::filesystem::path& file);
 // Its *.yaml files in file-name order (the order they apply in, later files win); none if the
-// directory does not exist. A path there that is not a regular file is a ParamError.
+// directory does not exist. A ParamError naming the path: the directory there but not one whiskerd
+// can list (a symbolic link loop or to nothing, a file, unreadable), or a *.yaml in it that is not a
+// regular file or cannot be looked at (a link loop).
 std::vector<std::filesystem::path> dropin_files(const std::filesystem::path& dir);
 
 // The calibration a WhiskEye's whisker can have: whiskerd's loader refuses a value outside these (in
