@@ -8,7 +8,7 @@ import math
 import os
 import stat
 
-from .common import MODES
+from .common import MODES, WRONG_CLOSURE_KINDS
 
 MAX_RECORD_BYTES = 64 << 20  # a restart suite's world.json is tens of kB
 MAX_DEPTH = 32  # a record nests 5 deep
@@ -89,7 +89,8 @@ MODE_FIELDS = {"arr": NUMBER_OR_NULL, "arcr": NUMBER_OR_NULL, "ate": NUMBER_OR_N
 MODE_OPTIONAL = {"experiences": INT_OR_NULL, "links_revoked": INT_OR_NULL, "relocalisations": INT_OR_NULL,
                  "false_closure_worst_m": NUMBER_OR_NULL, "neighbour_misses": INT_OR_NULL,
                  "neighbour_miss_share": NUMBER_OR_NULL, "spacing_m": NUMBER_OR_NULL, "spacing_deg": NUMBER_OR_NULL,
-                 "ate_windows": LIST}
+                 "ate_windows": LIST, "links_wrong": INT_OR_NULL, "links_wrong_kept": INT_OR_NULL,
+                 "links_right_revoked": INT_OR_NULL}
 THRESHOLD_FIELDS = {k: NUMBER for k in ("correct_m", "correct_deg", "false_closure_m", "false_closure_deg")}
 # A localisation instant (pipeline.instants_of).
 INSTANT_FIELDS = {"t_s": NUMBER, "session": INT_OR_NULL, "localised": BOOL, "laps": NUMBER_OR_NULL,
@@ -119,19 +120,28 @@ def _object(obj, path, key, check=OBJECT):
     return obj[key]
 
 
+def check_modes(modes, path):
+    """Every mode's metrics (pipeline.metrics_of) under `path`."""
+    for m in MODES:
+        run = _object(modes, path, m)
+        _fields(run, f"{path}{m}.", MODE_FIELDS, MODE_OPTIONAL)
+        for n, x in enumerate(run.get("ate_windows") or []):
+            if not NUMBER_OR_NULL[0](x):
+                raise ValueError(f"{path}{m}.ate_windows[{n}] is {shown(x)}: not {NUMBER_OR_NULL[1]}")
+
+
 def check_world(doc):
     """world.json's fields the aggregation, the summary and the plots use."""
     _fields(doc, "", {"index": INT, "world_seed": INT, "rerun": STRING},
             {"key": STRING_OR_NULL, "config": STRING, "world": STRING})
     gen = _object(doc, "", "generation")
     _fields(gen, "generation.", {}, GENERATION_FIELDS)
-    modes = _object(doc, "", "modes")
-    for m in MODES:
-        run = _object(modes, "modes.", m)
-        _fields(run, f"modes.{m}.", MODE_FIELDS, MODE_OPTIONAL)
-        for n, x in enumerate(run.get("ate_windows") or []):
-            if not NUMBER_OR_NULL[0](x):
-                raise ValueError(f"modes.{m}.ate_windows[{n}] is {shown(x)}: not {NUMBER_OR_NULL[1]}")
+    check_modes(_object(doc, "", "modes"), "modes.")
+    outliers = doc.get("outliers")
+    if outliers is not None:  # --scenario outliers: every mode's metrics under each kind injected
+        _object(doc, "", "outliers", OBJECT_OR_NULL)
+        for kind in WRONG_CLOSURE_KINDS:
+            check_modes(_object(outliers, "outliers.", kind), f"outliers.{kind}.")
     if doc.get("thresholds") is not None:
         _fields(_object(doc, "", "thresholds", OBJECT_OR_NULL), "thresholds.", THRESHOLD_FIELDS)
     if doc.get("timings_s") is not None:

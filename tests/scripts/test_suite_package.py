@@ -419,6 +419,19 @@ class HostileRecords(InTempDir):
             doc = json.load(f, parse_constant=lambda c: self.fail(f"suite.json holds {c}"))
         self.assertEqual(len(doc["worlds"]), 3)
 
+    def test_an_outlier_runs_metrics_are_checked_as_the_clean_runs(self):
+        def outliers(bad_ate, drop_kind=False):
+            def edit(text):
+                doc = json.loads(text)
+                doc["outliers"] = {k: {m: dict(doc["modes"][m]) for m in doc["modes"]} for k in ("random", "group")}
+                doc["outliers"]["group"]["vita"]["ate"] = bad_ate
+                if drop_kind:
+                    del doc["outliers"]["random"]
+                return json.dumps(doc)
+            return edit
+        self.assertRefused(outliers("x"), 'outliers.group.vita.ate is "x": not a number or null')
+        self.assertRefused(outliers(0.05, drop_kind=True), "outliers.random is missing")
+
     def test_a_missing_key_or_a_wrong_type_is_refused_naming_the_field(self):
         def drop(text):
             doc = json.loads(text)
