@@ -308,7 +308,10 @@ TEST_F(ViewerBinary, LivePageRenderedInChromiumShowsTheMapsExperienceCountAndThe
   const std::string dom = browser.dom();
   EXPECT_THAT(dom, HasSubstr("data-name=\"slamd\"")) << "a status card per daemon";
   EXPECT_THAT(dom, HasSubstr("src=\"/api/camera.jpg?frame=")) << "the latest camera frame";
-  EXPECT_TRUE(browser.eval("document.getElementById('camera').naturalWidth").get<int>() == 320) << "a decoded JPEG";
+  // The frame is fetched after the DOM names it: its decoded width once loaded (read at once, it was 0
+  // now and then on a loaded machine).
+  EXPECT_TRUE(wait_until([&] { return browser.eval("document.getElementById('camera').naturalWidth").get<int>() == 320; }, 10))
+      << "a decoded JPEG";
 
   // Live: one more map, and the open page shows it without reloading.
   vita_map_t more = last_map;
