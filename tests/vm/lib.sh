@@ -92,3 +92,14 @@ setup_vcan() {
   ip link set "$1" mtu 72
   ip link set "$1" up
 }
+# whiskerd's config for the gpio scenarios: BASE (whiskerd_vm.yaml) with its lines on gpio-mockup's
+# chip A (enable 0, fault 1, e-stop 2) written to FILE.
+write_gpio_config() {
+  cat "$1" - > "$2" <<'YAML'
+gpio:
+  enabled: true
+  enable_line: gpio-mockup-A-0
+  fault_line: gpio-mockup-A-1
+  estop_line: gpio-mockup-A-2
+YAML
+}

@@ -26,13 +26,7 @@ exited_ok gpio_vm_check_exits_0 "$check_rc"
 setup_lcm_loopback
 setup_vcan vcan0
 config=/tmp/whiskerd_gpio.yaml
-cat "$BASE_CONFIG" - > "$config" <<'YAML'
-gpio:
-  enabled: true
-  enable_line: gpio-mockup-A-0
-  fault_line: gpio-mockup-A-1
-  estop_line: gpio-mockup-A-2
-YAML
+write_gpio_config "$BASE_CONFIG" "$config"
 sed 's/fault_line: gpio-mockup-A-1/fault_line: WHISKER_MOTOR_FAULT/' "$config" > /tmp/whiskerd_missing.yaml
 echo 1 > "$chip/1"  # fault and e-stop idle (active low)
 echo 1 > "$chip/2"

@@ -24,13 +24,7 @@ chip=$(ls -d /sys/kernel/debug/gpio-mockup/gpiochip* 2>/dev/null | head -1)
 setup_lcm_loopback
 setup_vcan vcan0
 config=/tmp/whiskerd_gpio.yaml
-cat "$BASE_CONFIG" - > "$config" <<'YAML'
-gpio:
-  enabled: true
-  enable_line: gpio-mockup-A-0
-  fault_line: gpio-mockup-A-1
-  estop_line: gpio-mockup-A-2
-YAML
+write_gpio_config "$BASE_CONFIG" "$config"
 echo 1 > "$chip/1"
 echo 1 > "$chip/2"
 poll_enable() {
