@@ -73,6 +73,33 @@ def vita_conditions(w):
     }
 
 
+def world_name(w):
+    return f"world {w['index']} (seed {w['world_seed']})"
+
+
+def worst_world(worlds, value, worse="high"):
+    """The world whose value(w) is worst (None: n/a, the worst of all; `worse` says which way)."""
+    sign = 1 if worse == "high" else -1
+    return max(worlds, key=lambda w: (value(w) is None, sign * (value(w) or 0)))
+
+
+def share_target(target, worlds, ok, num, den):
+    """A target met when ok(w) holds on at least num/den of the worlds: the count, the need and the
+    worlds missed."""
+    n, k = len(worlds), sum(1 for w in worlds if ok(w))
+    return {"target": target, "measured": f"{k} of {n} worlds (need {-(-num * n // den)})", "met": k * den >= num * n,
+            "worlds_missed": [world_name(w) for w in worlds if not ok(w)]}
+
+
+def every_target(target, worlds, ok, value, show, worse="high"):
+    """A target met when ok(w) holds on every world; the worst world's value(w) is shown by show()."""
+    missed = [w for w in worlds if not ok(w)]
+    worst = worst_world(missed or worlds, value, worse)
+    shown = f"worst {show(value(worst))} on {world_name(worst)}"
+    return {"target": target, "measured": shown if not missed else f"missed on {len(missed)} of {len(worlds)} worlds; {shown}",
+            "met": not missed, "worlds_missed": [world_name(w) for w in missed]}
+
+
 def check_targets(worlds, family, faults):
     """The robust-SLAM issue's targets over the suite (none are set on `stress`): a list of
     {target, measured, met, worlds_missed}, every target with its measured figure."""
@@ -81,26 +108,20 @@ def check_targets(worlds, family, faults):
     n = len(worlds)
     cond = {w["index"]: vita_conditions(w) for w in worlds}
     vita = lambda w, key: w["modes"]["vita"][key]  # noqa: E731
-    name = lambda w: f"world {w['index']} (seed {w['world_seed']})"  # noqa: E731
+    name = world_name
     targets = []
 
     def add(target, measured, met, missed=()):
         targets.append({"target": target, "measured": measured, "met": bool(met), "worlds_missed": list(missed)})
 
     def share(condition, num, den, target):
-        k = sum(1 for w in worlds if cond[w["index"]][condition])
-        add(target, f"{k} of {n} worlds (need {-(-num * n // den)})", k * den >= num * n,
-            [name(w) for w in worlds if not cond[w["index"]][condition]])
+        targets.append(share_target(target, worlds, lambda w: cond[w["index"]][condition], num, den))
 
     def every(condition, target, value, worse="high", spec=".3f"):
         """`value(w)`: the world's number behind the condition (None: n/a, the worst); the worst
         world's is shown, `worse` saying which way is worse."""
-        missed = [w for w in worlds if not cond[w["index"]][condition]]
-        sign = 1 if worse == "high" else -1
-        worst = max(missed or worlds, key=lambda w: (value(w) is None, sign * (value(w) or 0)))
-        shown = f"worst {fmt(value(worst), spec)} on {name(worst)}"
-        add(target, shown if not missed else f"missed on {len(missed)} of {n} worlds; {shown}", not missed,
-            [name(w) for w in missed])
+        targets.append(every_target(target, worlds, lambda w: cond[w["index"]][condition], value,
+                                    lambda v: fmt(v, spec), worse))
 
     def median(key, mode, floor, target):
         vals = [w["modes"][mode][key] for w in worlds if w["modes"][mode][key] is not None]
@@ -241,23 +262,16 @@ def check_outlier_targets(worlds, kinds):
     """The back-end issue's outlier targets for ViTa, per kind of injected closure: a list of
     {target, measured, met, worlds_missed} as check_targets(); n/a is a miss."""
     targets = []
-    name = lambda w: f"world {w['index']} (seed {w['world_seed']})"  # noqa: E731
-    n = len(worlds)
     for kind in kinds:
         ratios = {w["index"]: outlier_ratio(w, kind) for w in worlds}
-        good = [w for w in worlds if ratios[w["index"]] is not None and ratios[w["index"]] <= OUTLIER_ATE_RATIO]
-        need = -(-round(OUTLIER_ATE_SHARE * 100) * n // 100)
-        targets.append({"target": f"ViTa with {kind} wrong closures: ATE <= {OUTLIER_ATE_RATIO:g}x the clean run's on "
-                                  f">= {OUTLIER_ATE_SHARE:.0%} of worlds",
-                        "measured": f"{len(good)} of {n} worlds (need {need})", "met": len(good) >= need,
-                        "worlds_missed": [name(w) for w in worlds if w not in good]})
-        bad = [w for w in worlds if ratios[w["index"]] is None or ratios[w["index"]] > OUTLIER_ATE_RATIO_MAX]
-        worst = max(worlds, key=lambda w: (ratios[w["index"]] is None, ratios[w["index"]] or 0))
-        shown = f"worst {times(ratios[worst['index']])} on {name(worst)}"
-        targets.append({"target": f"ViTa with {kind} wrong closures: ATE <= {OUTLIER_ATE_RATIO_MAX:g}x the clean run's "
-                                  "on every world",
-                        "measured": shown if not bad else f"missed on {len(bad)} of {n} worlds; {shown}",
-                        "met": not bad, "worlds_missed": [name(w) for w in bad]})
+        ratio = lambda w: ratios[w["index"]]  # noqa: E731
+        targets.append(share_target(f"ViTa with {kind} wrong closures: ATE <= {OUTLIER_ATE_RATIO:g}x the clean run's on "
+                                    f">= {OUTLIER_ATE_SHARE:.0%} of worlds", worlds,
+                                    lambda w: ratio(w) is not None and ratio(w) <= OUTLIER_ATE_RATIO,
+                                    round(OUTLIER_ATE_SHARE * 100), 100))
+        targets.append(every_target(f"ViTa with {kind} wrong closures: ATE <= {OUTLIER_ATE_RATIO_MAX:g}x the clean run's "
+                                    "on every world", worlds,
+                                    lambda w: ratio(w) is not None and ratio(w) <= OUTLIER_ATE_RATIO_MAX, ratio, times))
     return targets
 
 
@@ -271,34 +285,32 @@ def long_summary(worlds, mode):
     """Over the worlds: the last window's ATE over the first's, and each window's ATE by position."""
     n = max((len(w["modes"][mode].get("ate_windows") or []) for w in worlds), default=0)
     return {"last_over_first": distribution([window_ratio(w, mode) for w in worlds], "low"),
-            "windows": [distribution([(w["modes"][mode].get("ate_windows") or [None] * n)[k]
-                                      if k < len(w["modes"][mode].get("ate_windows") or []) else None for w in worlds], "low")
-                        for k in range(n)]}
+            "windows": [distribution([window_at(w, mode, k) for w in worlds], "low") for k in range(n)]}
+
+
+def window_at(w, mode, k):
+    """`mode`'s ATE in window k of world `w` (None: the run has fewer windows)."""
+    windows = w["modes"][mode].get("ate_windows") or []
+    return windows[k] if k < len(windows) else None
 
 
 def check_long_targets(worlds):
     """The back-end issue's long-run targets for ViTa: a list of {target, measured, met, worlds_missed}
     as check_targets(); n/a is a miss."""
-    n = len(worlds)
-    name = lambda w: f"world {w['index']} (seed {w['world_seed']})"  # noqa: E731
     ratios = {w["index"]: window_ratio(w) for w in worlds}
-    good = [w for w in worlds if ratios[w["index"]] is not None and ratios[w["index"]] <= LONG_LAST_OVER_FIRST]
-    need = -(-round(LONG_SHARE * 100) * n // 100)
-    worst = max(worlds, key=lambda w: (ratios[w["index"]] is None, ratios[w["index"]] or 0))
-    targets = [{"target": f"ViTa: the last window's ATE <= {LONG_LAST_OVER_FIRST:g}x the first window's on "
-                          f">= {LONG_SHARE:.0%} of worlds",
-                "measured": f"{len(good)} of {n} worlds (need {need}); worst {times(ratios[worst['index']])} on "
-                            f"{name(worst)}",
-                "met": len(good) >= need, "worlds_missed": [name(w) for w in worlds if w not in good]}]
+    ratio = lambda w: ratios[w["index"]]  # noqa: E731
+    shape = share_target(f"ViTa: the last window's ATE <= {LONG_LAST_OVER_FIRST:g}x the first window's on "
+                         f">= {LONG_SHARE:.0%} of worlds", worlds,
+                         lambda w: ratio(w) is not None and ratio(w) <= LONG_LAST_OVER_FIRST, round(LONG_SHARE * 100), 100)
+    worst = worst_world(worlds, ratio)
+    shape["measured"] += f"; worst {times(ratio(worst))} on {world_name(worst)}"
     over = {w["index"]: None if w["modes"]["vita"]["ate"] is None or w["modes"]["visual"]["ate"] is None
             else w["modes"]["vita"]["ate"] - w["modes"]["visual"]["ate"] for w in worlds}
-    bad = [w for w in worlds if over[w["index"]] is None or over[w["index"]] > LONG_OVER_VISION_M + 1e-12]
-    worst = max(worlds, key=lambda w: (over[w["index"]] is None, over[w["index"]] or 0))
-    shown = f"worst {fmt(over[worst['index']], '+.3f')} m on {name(worst)}"
-    targets.append({"target": f"ViTa's whole-run ATE <= vision alone's + {LONG_OVER_VISION_M:.2f} m on every world",
-                    "measured": shown if not bad else f"missed on {len(bad)} of {n} worlds; {shown}",
-                    "met": not bad, "worlds_missed": [name(w) for w in bad]})
-    return targets
+    margin = lambda w: over[w["index"]]  # noqa: E731
+    vision = every_target(f"ViTa's whole-run ATE <= vision alone's + {LONG_OVER_VISION_M:.2f} m on every world", worlds,
+                          lambda w: margin(w) is not None and margin(w) <= LONG_OVER_VISION_M + 1e-12, margin,
+                          lambda v: f"{fmt(v, '+.3f')} m")
+    return [shape, vision]
 
 
 def miss_lines(targets):
